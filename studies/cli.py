@@ -1,0 +1,169 @@
+"""Command line: ``python -m studies COMMAND``.
+
+    run STUDY|--all        validate, run and record a study (catalogue name or TOML path)
+    check STUDY            validate only: list every problem, run nothing
+    list                   the shipped studies
+    scenes [NAME]          document scenes: parameters, settings, responses, curves (units)
+    analyze RESULTS.nc     range analysis + ANOVA tables and main-effect plots beside the file
+    runs [--study S]       the run registry, newest first
+    show RUN_ID            one run's record
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from studies.definition import StudyError, catalog_names, read_study
+
+EXIT_STUDY_ERROR = 2
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = _parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except StudyError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        print("(nothing was run or written; `python -m studies scenes` documents every name)",
+              file=sys.stderr)
+        return EXIT_STUDY_ERROR
+    except (FileNotFoundError, ValueError, KeyError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_STUDY_ERROR
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="python -m studies", description=__doc__,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = p.add_subparsers(required=True, metavar="COMMAND")
+
+    run = sub.add_parser("run", help="validate, run and record a study")
+    run.add_argument("study", nargs="?", help="catalogue name or path to a TOML file")
+    run.add_argument("--all", action="store_true", help="run every catalogue study")
+    run.add_argument("--outputs", type=Path, default=Path("outputs"), help="run-folder root")
+    run.add_argument("--chunk-size", type=int, default=2048, help="design points per chunk")
+    run.add_argument("--no-progress", action="store_true", help="no progress bar")
+    run.set_defaults(func=_cmd_run)
+
+    check = sub.add_parser("check", help="validate a study without running it")
+    check.add_argument("study")
+    check.set_defaults(func=_cmd_check)
+
+    lst = sub.add_parser("list", help="list the shipped studies")
+    lst.set_defaults(func=_cmd_list)
+
+    scenes = sub.add_parser("scenes", help="document the scenes")
+    scenes.add_argument("name", nargs="?")
+    scenes.set_defaults(func=_cmd_scenes)
+
+    analyze = sub.add_parser("analyze", help="tables and plots for a results.nc")
+    analyze.add_argument("results", type=Path)
+    analyze.add_argument("--response", action="append", help="only these responses")
+    analyze.set_defaults(func=_cmd_analyze)
+
+    runs = sub.add_parser("runs", help="list recorded runs")
+    runs.add_argument("--study")
+    runs.add_argument("--outputs", type=Path, default=Path("outputs"))
+    runs.set_defaults(func=_cmd_runs)
+
+    show = sub.add_parser("show", help="show one run's record")
+    show.add_argument("run_id")
+    show.add_argument("--outputs", type=Path, default=Path("outputs"))
+    show.set_defaults(func=_cmd_show)
+    return p
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from studies.plan import plan_study
+    from studies.study_run import run_plan
+
+    if args.all == bool(args.study):
+        print("error: name one study or use --all", file=sys.stderr)
+        return EXIT_STUDY_ERROR
+    names = catalog_names() if args.all else [args.study]
+    plans = [plan_study(n) for n in names]
+    for plan in plans:
+        result = run_plan(plan, args.outputs, args.chunk_size, progress=not args.no_progress)
+        t = result.record.timings
+        print(f"{plan.definition.name}: {plan.runs} design points ({plan.design.name}), "
+              f"compile {t['compile_s']:.2f} s, run {t['run_s']:.3f} s")
+        for f in result.files:
+            print(f"  {f}")
+    return 0
+
+
+def _cmd_check(args: argparse.Namespace) -> int:
+    from studies.plan import plan_study
+
+    plan = plan_study(args.study)
+    d = plan.definition
+    print(f"{d.name}: OK — scene {d.scene}, design {plan.design.name}, {plan.runs} runs, "
+          f"stages {', '.join(plan.stages)}")
+    return 0
+
+
+def _cmd_list(_: argparse.Namespace) -> int:
+    for name in catalog_names():
+        definition, _problems = read_study(name)
+        desc = definition.description.splitlines()[0] if definition else ""
+        print(f"{name:<24} {desc}")
+    return 0
+
+
+def _cmd_scenes(args: argparse.Namespace) -> int:
+    from studies.scenes import SCENES, describe_scene, get_scene
+
+    names = [args.name] if args.name else sorted(SCENES)
+    print("\n\n".join(describe_scene(get_scene(n)) for n in names))
+    return 0
+
+
+def _cmd_analyze(args: argparse.Namespace) -> int:
+    import xarray as xr
+
+    from studies.report import write_analysis
+
+    if not args.results.exists():
+        raise FileNotFoundError(f"no such results file: {args.results}")
+    with xr.open_dataset(args.results) as ds:
+        ds.load()
+    files = write_analysis(ds, args.results.parent, args.response)
+    print(files[0].read_text(encoding="utf-8"))
+    for f in files:
+        print(f"wrote {f}")
+    return 0
+
+
+def _cmd_runs(args: argparse.Namespace) -> int:
+    from studies.tracking import list_runs
+
+    rows = list_runs(args.outputs, args.study)
+    if not rows:
+        print(f"no runs recorded under {args.outputs}")
+        return 0
+    print(f"{'run id':<30} {'study':<20} {'status':<9} {'runs':>6} {'compile s':>10} "
+          f"{'run s':>8}  commit")
+    for r in rows:
+        dirty = "+dirty" if r["git_dirty"] else ""
+        print(f"{r['run_id']:<30} {r['study']:<20} {r['status']:<9} {r['runs']:>6} "
+              f"{_num(r['compile_s']):>10} {_num(r['run_s']):>8}  {r['git_commit'][:10]}{dirty}")
+    return 0
+
+
+def _cmd_show(args: argparse.Namespace) -> int:
+    from studies.tracking import find_run
+
+    row = find_run(args.outputs, args.run_id)
+    if row is None:
+        raise KeyError(f"no unique run matches {args.run_id!r} under {args.outputs}")
+    record = json.loads((Path(row["folder"]) / "run.json").read_text(encoding="utf-8"))
+    print(json.dumps(record, indent=2))
+    return 0
+
+
+def _num(x: float | None) -> str:
+    return "-" if x is None else f"{x:.3f}"

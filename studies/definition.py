@@ -1,0 +1,365 @@
+"""Study definitions: TOML text → a validated :class:`StudyDefinition`.
+
+A study is data first. This module reads the TOML file and checks everything that can be
+checked without the design (names, units, types, ranges, empty or duplicate levels), collecting
+*every* problem; :mod:`studies.plan` adds the design-fit and per-point physical checks and raises
+one :class:`StudyError` listing them all before anything runs.
+
+File layout (see ``studies/catalog/*.toml`` and the README)::
+
+    name = "isac_l9"                 # letters, digits, _ and -
+    scene = "cam"
+    description = "..."
+    responses = ["max_contact_stress", "max_jerk"]
+    curves = ["lift"]                # optional: per-angle results to store
+
+    [design]
+    type = "L9"                      # full_factorial | sweep | auto | an orthogonal array name
+    error_columns = ["D"]            # names of the array's unassigned columns (optional)
+
+    [settings]
+    angle_step = 0.1                 # accuracy settings of the scene, in its units
+
+    [parameters]                     # fixed values, in the scene's units ...
+    base_radius = 20.5
+    cam_width = { value = 2.0, units = "cm" }   # ... or with explicit units
+
+    [factors.seg2_width]
+    levels = [7, 9, 11]
+    units = "deg"                    # optional, defaults to the scene's units
+    column = 1                       # optional orthogonal-array column (1-based)
+    base = 9                         # optional base level of a sweep (default: middle level)
+"""
+
+from __future__ import annotations
+
+import re
+import tomllib
+from dataclasses import dataclass, field
+from difflib import get_close_matches
+from pathlib import Path
+from typing import Any
+
+from studies.scenes import SCENES, Scene, get_scene
+from studies.units import UNITS
+
+CATALOG = Path(__file__).parent / "catalog"
+TOP_LEVEL_KEYS = {
+    "name", "scene", "description", "responses", "curves", "design", "settings", "parameters",
+    "factors", "sense",
+}
+DESIGN_KEYS = {"type", "error_columns"}
+FACTOR_KEYS = {"levels", "units", "column", "base"}
+NAME_PATTERN = re.compile(r"^[A-Za-z0-9_-]+$")
+
+
+class StudyError(ValueError):
+    """A study that cannot run; ``problems`` lists every reason, one sentence each."""
+
+    def __init__(self, source: str, problems: list[str]) -> None:
+        self.source = source
+        self.problems = problems
+        lines = "\n".join(f"  - {p}" for p in problems)
+        n = len(problems)
+        super().__init__(f"study {source} has {n} problem{'s' if n != 1 else ''}:\n{lines}")
+
+
+@dataclass(frozen=True)
+class Factor:
+    """A varied parameter: its levels in ``units``, optional array column and sweep base."""
+
+    name: str
+    levels: tuple[Any, ...]
+    units: str
+    column: int | None = None
+    base: Any = None
+
+
+@dataclass(frozen=True)
+class StudyDefinition:
+    """A parsed study. Values are in the units written in the file (``units`` alongside)."""
+
+    name: str
+    scene: str
+    description: str
+    design: str
+    responses: tuple[str, ...]
+    curves: tuple[str, ...]
+    parameters: dict[str, tuple[Any, str]]
+    factors: tuple[Factor, ...]
+    settings: dict[str, Any]
+    error_columns: tuple[str, ...] = ()
+    sense: dict[str, str] = field(default_factory=dict)
+    text: str = ""
+    source: str = "<string>"
+
+
+def find_study(name_or_path: str | Path) -> Path:
+    """A study file by catalogue name (``isac_l9``) or by path."""
+    path = Path(name_or_path)
+    if path.exists():
+        return path
+    candidate = CATALOG / f"{name_or_path}.toml"
+    if candidate.exists():
+        return candidate
+    known = ", ".join(catalog_names()) or "none"
+    problem = (f"no study named {str(name_or_path)!r} in the catalogue (known: {known}) "
+               "and no such file")
+    raise StudyError(str(name_or_path), [problem])
+
+
+def catalog_names() -> list[str]:
+    return sorted(p.stem for p in CATALOG.glob("*.toml"))
+
+
+def read_study(name_or_path: str | Path) -> tuple[StudyDefinition | None, list[str]]:
+    """Parse a study file; return the definition (None if unusable) and the problems found."""
+    path = find_study(name_or_path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise StudyError(str(path), [f"cannot read the file: {exc.strerror}"]) from None
+    return parse_study(text, str(path))
+
+
+def parse_study(text: str, source: str = "<string>") -> tuple[StudyDefinition | None, list[str]]:
+    """Parse TOML text; return the definition (None if unusable) and every problem found."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        return None, [f"is not valid TOML: {exc}"]
+    return _Parser(data, text, source).parse()
+
+
+class _Parser:
+    def __init__(self, data: dict[str, Any], text: str, source: str) -> None:
+        self.data, self.text, self.source = data, text, source
+        self.problems: list[str] = []
+
+    def problem(self, msg: str) -> None:
+        self.problems.append(msg)
+
+    def parse(self) -> tuple[StudyDefinition | None, list[str]]:
+        d = self.data
+        for key in sorted(set(d) - TOP_LEVEL_KEYS):
+            self.problem(f"unknown top-level key {key!r}{_suggest(key, TOP_LEVEL_KEYS)}")
+        name = self._string("name", required=True)
+        if name and not NAME_PATTERN.match(name):
+            self.problem(f"name = {name!r} may only contain letters, digits, '_' and '-'")
+        scene_name = self._string("scene", required=True)
+        scene = None
+        if scene_name:
+            if scene_name in SCENES:
+                scene = get_scene(scene_name)
+            else:
+                known = ", ".join(sorted(SCENES))
+                self.problem(f"unknown scene {scene_name!r} (known scenes: {known})")
+        design, error_columns = self._design()
+        responses = self._names("responses", required=True)
+        curves = self._names("curves", required=False)
+        params = self._table("parameters")
+        factors_raw = self._table("factors")
+        settings_raw = self._table("settings")
+        sense = self._table("sense")
+        if scene is None:
+            return None, self.problems
+        self._check_responses(scene, responses, curves, sense)
+        parameters = self._parameters(scene, params)
+        factors = self._factors(scene, factors_raw, design)
+        for f in factors:
+            if f.name in parameters:
+                self.problem(f"{f.name} is both fixed in [parameters] and varied in [factors]")
+        settings = self._settings(scene, settings_raw)
+        if not factors and not self.problems:
+            self.problem("no [factors]: a study needs at least one varied parameter")
+        definition = StudyDefinition(
+            name=name or "", scene=scene.name, description=self._string("description") or "",
+            design=design, responses=tuple(responses), curves=tuple(curves),
+            parameters=parameters, factors=tuple(factors), settings=settings,
+            error_columns=tuple(error_columns), sense=dict(sense), text=self.text,
+            source=self.source,
+        )
+        return definition, self.problems
+
+    # --- pieces ---------------------------------------------------------------------------
+    def _string(self, key: str, required: bool = False) -> str | None:
+        value = self.data.get(key)
+        if value is None:
+            if required:
+                self.problem(f"missing required key {key!r}")
+            return None
+        if not isinstance(value, str) or not value.strip():
+            self.problem(f"{key} = {value!r} must be a non-empty string")
+            return None
+        return value
+
+    def _names(self, key: str, required: bool) -> list[str]:
+        value = self.data.get(key, [] if not required else None)
+        if value is None:
+            self.problem(f"missing required key {key!r} (a list of names)")
+            return []
+        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+            self.problem(f"{key} = {value!r} must be a list of names")
+            return []
+        if required and not value:
+            self.problem(f"{key} is empty: name at least one")
+        for dup in sorted({v for v in value if value.count(v) > 1}):
+            self.problem(f"{key} lists {dup!r} more than once")
+        return list(dict.fromkeys(value))
+
+    def _table(self, key: str) -> dict[str, Any]:
+        value = self.data.get(key, {})
+        if not isinstance(value, dict):
+            self.problem(f"[{key}] must be a table, got {value!r}")
+            return {}
+        return value
+
+    def _design(self) -> tuple[str, list[str]]:
+        design = self.data.get("design", {"type": "full_factorial"})
+        if isinstance(design, str):
+            design = {"type": design}
+        if not isinstance(design, dict):
+            self.problem(f"design = {design!r} must be a string or a [design] table")
+            return "full_factorial", []
+        for key in sorted(set(design) - DESIGN_KEYS):
+            self.problem(f"unknown key {key!r} in [design]{_suggest(key, DESIGN_KEYS)}")
+        kind = design.get("type", "full_factorial")
+        if not isinstance(kind, str):
+            self.problem(f"design type = {kind!r} must be a string")
+            kind = "full_factorial"
+        errors = design.get("error_columns", [])
+        if not isinstance(errors, list) or not all(
+            isinstance(e, str) and NAME_PATTERN.match(e) for e in errors
+        ):
+            self.problem(f"[design] error_columns = {errors!r} must be a list of simple names")
+            errors = []
+        return kind, errors
+
+    def _check_responses(
+        self, scene: Scene, responses: list[str], curves: list[str], sense: dict[str, Any]
+    ) -> None:
+        names = [r.name for r in scene.responses]
+        for r in responses:
+            if scene.response(r) is None:
+                self.problem(f"unknown response {r!r} for scene {scene.name!r}{_suggest(r, names)}")
+        curve_names = [c.name for c in scene.curves]
+        for c in curves:
+            if scene.curve(c) is None:
+                allowed = ", ".join(curve_names) or "none"
+                self.problem(f"unknown curve {c!r} for scene {scene.name!r} (allowed: {allowed})")
+        for r, s in sense.items():
+            if r not in responses:
+                self.problem(f"[sense] names {r!r}, which is not in responses")
+            if s not in ("smaller", "larger"):
+                self.problem(f"[sense] {r} = {s!r} must be 'smaller' or 'larger'")
+
+    def _parameters(self, scene: Scene, raw: dict[str, Any]) -> dict[str, tuple[Any, str]]:
+        out: dict[str, tuple[Any, str]] = {}
+        for name, value in raw.items():
+            param = scene.parameter(name)
+            if param is None:
+                known = [p.name for p in scene.parameters]
+                self.problem(
+                    f"unknown parameter {name!r} for scene {scene.name!r}{_suggest(name, known)}"
+                )
+                continue
+            units = param.units
+            if isinstance(value, dict):
+                extra = set(value) - {"value", "units"}
+                if extra or "value" not in value:
+                    self.problem(f"parameter {name} must be a number or {{value = …, units = …}}")
+                    continue
+                units = value.get("units", param.units)
+                value = value["value"]
+            if not self._units_ok(f"parameter {name}", param, units):
+                continue
+            problem = param.check(value, None if param.kind != "number" else units)
+            if problem:
+                self.problem(problem)
+                continue
+            out[name] = (value, units)
+        return out
+
+    def _units_ok(self, what: str, param: Any, units: Any) -> bool:
+        if param.kind != "number":
+            return True
+        if not isinstance(units, str) or units not in UNITS:
+            self.problem(f"{what}: unknown units {units!r} (expected {param.units!r})")
+            return False
+        if UNITS[units].dimension != UNITS[param.units].dimension:
+            compatible = sorted(
+                u for u, v in UNITS.items() if v.dimension == UNITS[param.units].dimension
+            )
+            self.problem(
+                f"{what}: units {units!r} are a {UNITS[units].dimension}, but {param.name} is a "
+                f"{UNITS[param.units].dimension} (use one of {', '.join(compatible)})"
+            )
+            return False
+        return True
+
+    def _factors(self, scene: Scene, raw: dict[str, Any], design: str) -> list[Factor]:
+        factors: list[Factor] = []
+        for name, spec in raw.items():
+            param = scene.parameter(name)
+            if param is None:
+                known = [p.name for p in scene.parameters]
+                self.problem(
+                    f"unknown factor {name!r}: scene {scene.name!r} has no such parameter"
+                    f"{_suggest(name, known)}"
+                )
+                continue
+            if not isinstance(spec, dict):
+                self.problem(f"factor {name} must be a table with 'levels' (got {spec!r})")
+                continue
+            for key in sorted(set(spec) - FACTOR_KEYS):
+                self.problem(f"unknown key {key!r} in factor {name}{_suggest(key, FACTOR_KEYS)}")
+            if param.kind in ("vector", "text"):
+                self.problem(f"{name} is a {param.kind} parameter and cannot be a factor")
+                continue
+            units = spec.get("units", param.units)
+            levels = spec.get("levels")
+            ok = self._units_ok(f"factor {name}", param, units)
+            if not isinstance(levels, list) or not levels:
+                self.problem(f"factor {name} has no levels: give a non-empty list 'levels'")
+                continue
+            dups = sorted({repr(v) for v in levels if levels.count(v) > 1})
+            if dups:
+                self.problem(f"factor {name} has duplicate levels: {', '.join(dups)}")
+            if ok:
+                for v in levels:
+                    problem = param.check(v, units if param.kind == "number" else None)
+                    if problem:
+                        self.problem(f"factor {name}: {problem}")
+            column = spec.get("column")
+            if column is not None and (not isinstance(column, int) or column < 1):
+                self.problem(f"factor {name}: column = {column!r} must be an integer ≥ 1")
+                column = None
+            base = spec.get("base")
+            if base is not None and base not in levels:
+                self.problem(f"factor {name}: base = {base!r} must be one of its levels {levels}")
+                base = None
+            if column is not None and design in ("full_factorial", "sweep"):
+                self.problem(f"factor {name}: 'column' only applies to orthogonal-array designs")
+            factors.append(Factor(name, tuple(levels), units, column, base))
+        return factors
+
+    def _settings(self, scene: Scene, raw: dict[str, Any]) -> dict[str, Any]:
+        settings = {s.name: s.default for s in scene.settings}
+        for name, value in raw.items():
+            setting = scene.setting(name)
+            if setting is None:
+                known = [s.name for s in scene.settings]
+                self.problem(f"unknown setting {name!r} for scene {scene.name!r}"
+                             f"{_suggest(name, known)}")
+                continue
+            problem = setting.check(value)
+            if problem:
+                self.problem(f"setting {problem}")
+                continue
+            settings[name] = value
+        return settings
+
+
+def _suggest(name: str, known: Any) -> str:
+    close = get_close_matches(name, list(known), n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""

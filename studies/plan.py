@@ -1,0 +1,117 @@
+"""A study made ready to run: validated definition + design + SI inputs per design point.
+
+:func:`plan_study` is the single gate before any computation: it gathers the definition's own
+problems, the design-fit problems and the scene's per-point physical checks into one
+:class:`~studies.definition.StudyError`. Nothing is written and no kernel runs unless the
+plan is clean.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from studies import designs
+from studies.definition import StudyDefinition, StudyError, parse_study, read_study
+from studies.scenes import Scene, get_scene
+
+
+@dataclass(frozen=True)
+class Plan:
+    """Everything the runner needs; ``points`` are SI values per parameter, one per run."""
+
+    definition: StudyDefinition
+    scene: Scene
+    design: designs.Design
+    factor_values: dict[str, np.ndarray]
+    points: dict[str, np.ndarray]
+    settings: dict[str, Any]
+    stages: tuple[str, ...]
+
+    @property
+    def runs(self) -> int:
+        return self.design.runs
+
+
+def plan_study(name_or_path: str | Path) -> Plan:
+    """Read, validate and plan a catalogue study or a TOML file (StudyError if not runnable)."""
+    definition, problems = read_study(name_or_path)
+    return _plan(definition, problems)
+
+
+def plan_text(text: str, source: str = "<string>") -> Plan:
+    """Like :func:`plan_study` for TOML text."""
+    definition, problems = parse_study(text, source)
+    return _plan(definition, problems)
+
+
+def _plan(definition: StudyDefinition | None, problems: list[str]) -> Plan:
+    source = definition.source if definition else "<string>"
+    if definition is None or problems and not definition.factors:
+        raise StudyError(source, problems)
+    scene = get_scene(definition.scene)
+    design = None
+    try:
+        design = _design(definition)
+    except designs.DesignError as exc:
+        problems = problems + exc.problems
+    if design is None or problems:
+        raise StudyError(source, problems)
+    factor_values = {
+        f.name: np.asarray(f.levels)[design.levels[f.name]] for f in definition.factors
+    }
+    points = _points(scene, definition, factor_values, design.runs)
+    settings = {
+        s.name: s.to_si(definition.settings[s.name]) if s.kind == "number"
+        else definition.settings[s.name]
+        for s in scene.settings
+    }
+    point_problems = scene.check_points(points, settings)
+    if point_problems:
+        raise StudyError(source, point_problems)
+    stages = scene.stages_for(list(definition.responses), list(definition.curves))
+    return Plan(definition, scene, design, factor_values, points, settings, tuple(stages))
+
+
+def _design(d: StudyDefinition) -> designs.Design:
+    counts = {f.name: len(f.levels) for f in d.factors}
+    if d.design == "full_factorial":
+        return designs.full_factorial(counts)
+    if d.design == "sweep":
+        base = {
+            f.name: f.levels.index(f.base) if f.base is not None else (len(f.levels) - 1) // 2
+            for f in d.factors
+        }
+        return designs.sweep(counts, base)
+    if d.design == "auto" or designs.is_orthogonal_array_name(d.design):
+        columns = {f.name: f.column for f in d.factors}
+        return designs.orthogonal(d.design, counts, columns, d.error_columns)
+    known = ", ".join(i.name.split("(")[0] for i in designs.list_orthogonal_arrays())
+    problem = (f"unknown design {d.design!r}: use full_factorial, sweep, auto or an orthogonal "
+               f"array ({known})")
+    raise designs.DesignError([problem])
+
+
+def _points(
+    scene: Scene, d: StudyDefinition, factor_values: dict[str, np.ndarray], runs: int
+) -> dict[str, np.ndarray]:
+    factors = {f.name: f for f in d.factors}
+    points: dict[str, np.ndarray] = {}
+    for p in scene.parameters:
+        if p.name in factors:
+            values = factor_values[p.name]
+            if p.kind == "number":
+                values = np.array([p.to_si(v, factors[p.name].units) for v in values])
+            points[p.name] = values
+            continue
+        value, units = d.parameters.get(p.name, (p.default, p.units))
+        if p.kind == "number":
+            points[p.name] = np.full(runs, p.to_si(value, units))
+        elif p.kind == "vector":
+            points[p.name] = np.tile(np.asarray(value, dtype=float) * p.to_si(1.0), (runs, 1))
+        else:
+            points[p.name] = np.full(runs, value, dtype=object)
+    return points

@@ -1,0 +1,42 @@
+"""What a run writes beside its results: ``analysis.txt`` and the figures.
+
+Orthogonal-array and full-factorial runs get range analysis and ANOVA per response and
+main-effect plots; sweeps get a table and a response-vs-factor plot per swept factor.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import xarray as xr
+
+from studies import analysis, plots
+
+
+def write_analysis(ds: xr.Dataset, folder: Path, responses: list[str] | None = None) -> list[Path]:
+    """Write ``analysis.txt`` and PNG figures into ``folder``; return the paths (text first)."""
+    names = responses or json.loads(ds.attrs.get("responses", "[]")) or list(ds.data_vars)
+    scalar = [r for r in names if r in ds and ds[r].dims == ("run",)]
+    missing = [r for r in names if r not in ds]
+    if missing:
+        raise KeyError(f"responses not in the results: {', '.join(missing)} "
+                       f"(available: {', '.join(map(str, ds.data_vars))})")
+    header = _header(ds)
+    if ds.attrs.get("design") == "sweep":
+        body = [analysis.format_sweep(ds, scalar)]
+        figures = plots.save_sweep_plots(ds, scalar, folder)
+    else:
+        body = [analysis.format_tables(ds, r) for r in scalar]
+        figures = plots.save_main_effects(ds, scalar, folder)
+    text_path = folder / "analysis.txt"
+    text_path.write_text("\n\n".join([header, *body]) + "\n", encoding="utf-8")
+    return [text_path, *figures]
+
+
+def _header(ds: xr.Dataset) -> str:
+    title = ds.attrs.get("title", "results")
+    run = ds.attrs.get("run_id", "")
+    return (f"{title}\nrun {run} — design {ds.attrs.get('design', '?')}, "
+            f"{ds.sizes['run']} design points, commit {ds.attrs.get('git_commit', '?')[:10]}"
+            f"{' (dirty)' if ds.attrs.get('git_dirty') else ''}")

@@ -1,0 +1,102 @@
+"""Labelled results: one ``xarray.Dataset`` per run, written to compressed netCDF4.
+
+Layout (dimension ``run`` = design point):
+
+* coordinates ``<factor>`` (physical value, ``units`` as written in the study) and
+  ``<factor>_level`` (0-based level index) for every factor; ``<name>_level`` alone for the
+  empty orthogonal-array columns (error columns); design labels such as ``swept_factor``;
+* scalar responses on ``run``; curves on ``run × <angle>`` only when the study asks;
+* ``units`` and ``long_name`` on every variable; the study text, design, provenance and
+  timings as global attributes (str/number only: dicts as JSON strings, booleans as ints).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from studies.plan import Plan
+from studies.runner import Evaluation
+
+COMPRESSION = {"zlib": True, "complevel": 4}
+
+
+def build_dataset(plan: Plan, ev: Evaluation, attrs: dict[str, Any]) -> xr.Dataset:
+    """The Dataset of a finished evaluation; ``attrs`` are added as global attributes."""
+    d, scene, design = plan.definition, plan.scene, plan.design
+    coords: dict[str, Any] = {"run": ("run", np.arange(plan.runs), {"long_name": "design point"})}
+    for f in d.factors:
+        param = scene.parameter(f.name)
+        long_name = param.long_name if param else f.name
+        coords[f.name] = ("run", plan.factor_values[f.name],
+                          {"units": f.units, "long_name": long_name})
+        coords[f"{f.name}_level"] = ("run", design.levels[f.name].astype(np.int32),
+                                     {"units": "1", "long_name": f"level index of {f.name}"})
+    for e in design.error_columns:
+        coords[f"{e}_level"] = ("run", design.levels[e].astype(np.int32),
+                                {"units": "1", "long_name": f"empty array column {e} (error)"})
+    for label, values in design.labels.items():
+        coords[label] = ("run", values.astype(str), {"long_name": label.replace("_", " ")})
+    data_vars: dict[str, Any] = {}
+    for name in d.responses:
+        r = scene.response(name)
+        assert r is not None
+        values = ev.scalars[name]
+        attrs_r = {"units": r.units, "long_name": r.long_name, "better": d.sense.get(name, r.sense)}
+        if r.flag:
+            values = values.astype(np.int8)
+            attrs_r |= {"flag_values": np.array([0, 1], dtype=np.int8),
+                        "flag_meanings": "fails passes"}
+        data_vars[name] = ("run", values, attrs_r)
+    if d.curves:
+        axis = scene.curve_axis
+        assert axis is not None
+        coords[axis.name] = (axis.name, scene.curve_coordinate(plan.settings),
+                             {"units": axis.units, "long_name": axis.long_name})
+        for name in d.curves:
+            c = scene.curve(name)
+            assert c is not None
+            data_vars[name] = (("run", axis.name), ev.curves[name],
+                               {"units": c.units, "long_name": c.long_name})
+    ds = xr.Dataset(data_vars, coords=coords)
+    ds.attrs = {
+        "title": f"{d.name}: {d.description}".strip(": "),
+        "study_name": d.name,
+        "scene": d.scene,
+        "design": design.name,
+        "factors": json.dumps([f.name for f in d.factors]),
+        "error_columns": json.dumps(list(design.error_columns)),
+        "responses": json.dumps(list(d.responses)),
+        "settings": json.dumps(d.settings),
+        "study_toml": d.text,
+        "Conventions": "CF-1.10",
+        **{k: (json.dumps(v) if isinstance(v, (dict, list)) else
+               int(v) if isinstance(v, bool) else v) for k, v in attrs.items()},
+    }
+    return ds
+
+
+def write_netcdf(ds: xr.Dataset, path: Path) -> Path:
+    """Write compressed netCDF4 (every numeric variable zlib-compressed)."""
+    encoding = {
+        name: dict(COMPRESSION)
+        for name in list(ds.data_vars) + list(ds.coords)
+        if ds[name].dtype.kind in "fiu"
+    }
+    path.parent.mkdir(parents=True, exist_ok=True)
+    ds.to_netcdf(path, engine="netcdf4", format="NETCDF4", encoding=encoding)
+    return path
+
+
+def unstack_factorial(ds: xr.Dataset) -> xr.Dataset:
+    """A full-factorial result with one dimension per factor instead of ``run``."""
+    if ds.attrs.get("design") != "full_factorial":
+        msg = f"unstack needs a full_factorial result, this one is {ds.attrs.get('design')!r}"
+        raise ValueError(msg)
+    factors = json.loads(ds.attrs["factors"])
+    levels = [f"{f}_level" for f in factors]
+    return ds.drop_vars(levels).set_index(run=factors).unstack("run")

@@ -1,0 +1,60 @@
+"""The scene registry: every physical system a study can evaluate.
+
+``SCENES`` maps a scene name to the class implementing it; :func:`get_scene` returns the (one,
+shared) instance. ``python -m studies scenes`` prints the documentation generated from the
+declarations here.
+"""
+
+from __future__ import annotations
+
+from functools import cache
+
+from studies.scenes.base import Curve, CurveAxis, Parameter, Response, Scene, SceneOutput
+from studies.scenes.cam import CamScene
+
+SCENES: dict[str, type[Scene]] = {
+    CamScene.name: CamScene,
+}
+
+
+@cache
+def get_scene(name: str) -> Scene:
+    """The scene called ``name`` (KeyError naming the known scenes otherwise)."""
+    try:
+        return SCENES[name]()
+    except KeyError:
+        msg = f"unknown scene {name!r}; known scenes: {', '.join(sorted(SCENES))}"
+        raise KeyError(msg) from None
+
+
+def describe_scene(scene: Scene) -> str:
+    """Plain-text documentation of a scene's parameters, settings, responses and curves."""
+    lines = [f"scene {scene.name}: {scene.description}", ""]
+    lines.append("  parameters (fix in [parameters] or vary in [factors]):")
+    for p in scene.parameters:
+        default = p.default if p.kind != "number" else f"{p.default:g}"
+        src = f"  [{p.source}]" if p.source else ""
+        lines.append(f"    {p.name:<28} {p.units:<9} default {default!s:<12} {p.allowed()}")
+        lines.append(f"    {'':<28} {p.long_name}{src}")
+    if scene.settings:
+        lines.append("  settings ([settings]):")
+        for s in scene.settings:
+            lines.append(f"    {s.name:<28} {s.units:<9} default {s.default!s:<12} {s.allowed()}")
+            lines.append(f"    {'':<28} {s.long_name}")
+    lines.append("  responses (scalar per design point; needs = stages that run):")
+    for r in scene.responses:
+        lines.append(f"    {r.name:<34} {r.units:<9} {r.long_name}  "
+                     f"[needs {', '.join(r.needs)}; {r.sense} is better]")
+    if scene.curves:
+        axis = scene.curve_axis
+        lines.append(f"  curves (per design point × {axis.name if axis else 'angle'}; stored only "
+                     "when listed in 'curves'):")
+        for c in scene.curves:
+            lines.append(f"    {c.name:<34} {c.units:<9} {c.long_name}  [needs {', '.join(c.needs)}]")
+    return "\n".join(lines)
+
+
+__all__ = [
+    "SCENES", "Curve", "CurveAxis", "Parameter", "Response", "Scene", "SceneOutput",
+    "describe_scene", "get_scene",
+]

@@ -1,0 +1,201 @@
+"""What a scene is: documented parameters, settings, responses and curves, and staged kernels.
+
+A scene wraps the compiled kernels of one physical system. It declares
+
+* its **parameters** (name, units, default, allowed range or choices) — the inputs a study can
+  fix or vary as factors;
+* its **settings** — accuracy knobs (angle step, integrator, smoothing) with the same shape;
+* its **responses** (scalar per design point) and **curves** (per design point and angle), each
+  naming the *stages* it needs.
+
+A stage is one compiled batch driver (kinematics, contact geometry, loads, dynamics, ...).
+:meth:`Scene.stages_for` turns a study's requests into the minimal set of stages, and
+:meth:`Scene.evaluate` runs only those: asking for a kinematic response never runs the dynamics.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from studies.units import UNITS
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """An input of a scene, in engineering units (``units``) as written in study files.
+
+    ``minimum``/``maximum`` bound the physically allowed values (``None`` = unbounded); with
+    ``exclusive_minimum`` the minimum itself is not allowed (e.g. a radius must be > 0).
+    A parameter with ``choices`` takes one of those strings; a ``vector`` parameter takes a list
+    of numbers and a ``text`` parameter a string (a file path); neither can be a factor.
+    """
+
+    name: str
+    units: str
+    default: Any
+    long_name: str
+    minimum: float | None = None
+    maximum: float | None = None
+    exclusive_minimum: bool = False
+    choices: tuple[str, ...] = ()
+    vector: bool = False
+    text: bool = False
+    source: str = ""
+
+    @property
+    def kind(self) -> str:
+        if self.choices:
+            return "choice"
+        if self.text:
+            return "text"
+        return "vector" if self.vector else "number"
+
+    def allowed(self) -> str:
+        """Human description of the allowed values."""
+        if self.choices:
+            return "one of " + ", ".join(repr(c) for c in self.choices)
+        if self.vector:
+            return "a list of numbers"
+        if self.text:
+            return "a string"
+        lo = "-inf" if self.minimum is None else f"{self.minimum:g}"
+        hi = "inf" if self.maximum is None else f"{self.maximum:g}"
+        bracket = "(" if self.exclusive_minimum or self.minimum is None else "["
+        return f"a number in {bracket}{lo}, {hi}] {self.units}"
+
+    def check(self, value: Any, units: str | None = None) -> str | None:
+        """Return a problem description for ``value`` (given in ``units``), or None if fine."""
+        if self.choices:
+            if not isinstance(value, str) or value not in self.choices:
+                return f"{self.name} = {value!r} is not allowed: use {self.allowed()}"
+            return None
+        if self.text:
+            return None if isinstance(value, str) else f"{self.name} = {value!r} must be a string"
+        if self.vector:
+            ok = isinstance(value, list) and all(_is_number(v) for v in value) and len(value) > 0
+            return None if ok else f"{self.name} = {value!r} is not allowed: use {self.allowed()}"
+        if not _is_number(value) or not math.isfinite(value):
+            return f"{self.name} = {value!r} is not a finite number (expected {self.allowed()})"
+        shown = value
+        if units is not None and units != self.units:
+            shown = value * UNITS[units].to_si / UNITS[self.units].to_si
+        too_low = self.minimum is not None and (
+            shown < self.minimum or (self.exclusive_minimum and shown <= self.minimum)
+        )
+        too_high = self.maximum is not None and shown > self.maximum
+        if too_low or too_high:
+            given = f"{value:g} {units or self.units}"
+            return f"{self.name} = {given} is physically impossible: must be {self.allowed()}"
+        return None
+
+    def to_si(self, value: float, units: str | None = None) -> float:
+        return float(value) * UNITS[units or self.units].to_si
+
+
+@dataclass(frozen=True)
+class Response:
+    """A scalar result per design point, in ``units``; ``needs`` lists the stages it uses.
+
+    ``sense`` says which direction is better for range analysis ("smaller" or "larger");
+    ``flag`` responses are 0/1 design-criterion verdicts stored beside their margins.
+    """
+
+    name: str
+    units: str
+    long_name: str
+    needs: tuple[str, ...]
+    sense: str = "smaller"
+    flag: bool = False
+
+
+@dataclass(frozen=True)
+class Curve:
+    """A result per design point and per angle, stored only when a study asks for it."""
+
+    name: str
+    units: str
+    long_name: str
+    needs: tuple[str, ...]
+
+
+@dataclass
+class SceneOutput:
+    """What :meth:`Scene.evaluate` returns for a chunk of design points (response units)."""
+
+    scalars: dict[str, np.ndarray]
+    curves: dict[str, np.ndarray] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class CurveAxis:
+    """The shared angle axis of a scene's curves (name, units, values)."""
+
+    name: str
+    units: str
+    long_name: str
+
+
+class Scene(ABC):
+    """Base class: subclasses fill the declarations and implement the stages."""
+
+    name: str = ""
+    description: str = ""
+    parameters: tuple[Parameter, ...] = ()
+    settings: tuple[Parameter, ...] = ()
+    responses: tuple[Response, ...] = ()
+    curves: tuple[Curve, ...] = ()
+    curve_axis: CurveAxis | None = None
+    stage_order: tuple[str, ...] = ()
+
+    def __init__(self) -> None:
+        self.stages: dict[str, Any] = {s: getattr(self, f"stage_{s}") for s in self.stage_order}
+
+    # --- lookups -------------------------------------------------------------------------
+    def parameter(self, name: str) -> Parameter | None:
+        return next((p for p in self.parameters if p.name == name), None)
+
+    def setting(self, name: str) -> Parameter | None:
+        return next((p for p in self.settings if p.name == name), None)
+
+    def response(self, name: str) -> Response | None:
+        return next((r for r in self.responses if r.name == name), None)
+
+    def curve(self, name: str) -> Curve | None:
+        return next((c for c in self.curves if c.name == name), None)
+
+    def stages_for(self, responses: list[str], curves: list[str]) -> list[str]:
+        """The stages needed for these responses and curves, in execution order."""
+        needed: set[str] = set()
+        for r in responses:
+            needed.update(self.response(r).needs)  # type: ignore[union-attr]
+        for c in curves:
+            needed.update(self.curve(c).needs)  # type: ignore[union-attr]
+        return [s for s in self.stage_order if s in needed]
+
+    # --- to be provided by each scene ---------------------------------------------------
+    def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+        """Cross-parameter physical checks over all design points (SI values); problems."""
+        return []
+
+    def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray:
+        """Values of the curve axis (in ``curve_axis.units``) for these settings."""
+        raise ValueError(f"scene {self.name!r} stores no curves")
+
+    @abstractmethod
+    def evaluate(
+        self,
+        points: dict[str, np.ndarray],
+        settings: dict[str, Any],
+        responses: list[str],
+        curves: list[str],
+    ) -> SceneOutput:
+        """Evaluate a chunk of design points (SI inputs) running only the needed stages."""
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)

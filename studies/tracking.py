@@ -1,0 +1,121 @@
+"""Run records: one folder per run and a row per run in a local SQLite registry.
+
+    outputs/
+      registry.sqlite              one row per run (id, study, status, commit, timings, folder)
+      <study>/<run-id>/
+        study.toml                 exact copy of the definition that ran
+        run.json                   id, status, git commit + dirty flag, versions, host,
+                                   start/end, compile vs run time, accuracy settings
+        results.nc                 the labelled results (see studies.results)
+        analysis.txt               range analysis and ANOVA tables
+        *.png                      figures
+
+The run id is ``<UTC timestamp>-<6 hex digits of the definition hash>``, so ids sort by time
+and runs of the same definition share a suffix.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import hashlib
+import json
+import sqlite3
+from contextlib import closing
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+REGISTRY = "registry.sqlite"
+COLUMNS = ("run_id", "study", "scene", "design", "runs", "status", "started", "finished",
+           "git_commit", "git_dirty", "compile_s", "run_s", "folder", "definition_sha256")
+
+
+@dataclass
+class RunRecord:
+    """What ``run.json`` holds and what the registry indexes."""
+
+    run_id: str
+    study: str
+    scene: str
+    design: str
+    runs: int
+    status: str
+    started: str
+    git_commit: str
+    git_dirty: bool
+    definition_sha256: str
+    folder: str
+    versions: dict[str, str] = field(default_factory=dict)
+    host: dict[str, str] = field(default_factory=dict)
+    settings: dict[str, Any] = field(default_factory=dict)
+    finished: str = ""
+    timings: dict[str, float] = field(default_factory=dict)
+    error: str = ""
+
+    def write(self) -> None:
+        path = Path(self.folder) / "run.json"
+        path.write_text(json.dumps(asdict(self), indent=2, default=str) + "\n", encoding="utf-8")
+
+
+def now() -> str:
+    return dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
+
+
+def definition_hash(text: str) -> str:
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def new_run_id(text: str) -> str:
+    stamp = dt.datetime.now(dt.timezone.utc).strftime("%Y%m%dT%H%M%S%f")[:-3]
+    return f"{stamp}-{definition_hash(text)[:6]}"
+
+
+def run_folder(outputs: Path, study: str, run_id: str) -> Path:
+    folder = outputs / study / run_id
+    folder.mkdir(parents=True, exist_ok=False)
+    return folder
+
+
+def register(outputs: Path, record: RunRecord) -> None:
+    """Insert or update the registry row of ``record``."""
+    row = {
+        **{k: getattr(record, k) for k in COLUMNS if hasattr(record, k)},
+        "git_dirty": int(record.git_dirty),
+        "compile_s": record.timings.get("compile_s"),
+        "run_s": record.timings.get("run_s"),
+    }
+    with closing(_connect(outputs)) as con, con:
+        placeholders = ", ".join("?" for _ in COLUMNS)
+        con.execute(f"INSERT OR REPLACE INTO runs ({', '.join(COLUMNS)}) VALUES ({placeholders})",
+                    [row.get(c) for c in COLUMNS])
+
+
+def list_runs(outputs: Path, study: str | None = None) -> list[dict[str, Any]]:
+    """Registry rows, newest first (optionally of one study)."""
+    if not (outputs / REGISTRY).exists():
+        return []
+    with closing(_connect(outputs)) as con:
+        con.row_factory = sqlite3.Row
+        query = "SELECT * FROM runs"
+        args: tuple[str, ...] = ()
+        if study:
+            query += " WHERE study = ?"
+            args = (study,)
+        return [dict(r) for r in con.execute(query + " ORDER BY started DESC, run_id DESC", args)]
+
+
+def find_run(outputs: Path, run_id: str) -> dict[str, Any] | None:
+    """The registry row whose id is ``run_id`` or starts with it (unique prefix)."""
+    rows = [r for r in list_runs(outputs) if r["run_id"].startswith(run_id)]
+    return rows[0] if len(rows) == 1 else None
+
+
+def _connect(outputs: Path) -> sqlite3.Connection:
+    outputs.mkdir(parents=True, exist_ok=True)
+    con = sqlite3.connect(outputs / REGISTRY)
+    con.execute(
+        "CREATE TABLE IF NOT EXISTS runs (run_id TEXT PRIMARY KEY, study TEXT, scene TEXT, "
+        "design TEXT, runs INTEGER, status TEXT, started TEXT, finished TEXT, git_commit TEXT, "
+        "git_dirty INTEGER, compile_s REAL, run_s REAL, folder TEXT, definition_sha256 TEXT)"
+    )
+    return con
