@@ -8,9 +8,9 @@ for every earlier combination a, the first coefficient varying fastest. This giv
 L8 column 3 = 1 ⊕ 2, 5 = 1 ⊕ 4, 6 = 2 ⊕ 4, 7 = 1 ⊕ 2 ⊕ 4, and L9 column 3 = c1 + c2,
 column 4 = 2·c1 + c2 (mod 3), exactly as the printed tables (1-based there).
 
-The other arrays are tabulated: L12 (Plackett–Burman), L18 and L32(2^1 4^9) row by row; the
+The other arrays are tabulated: L12 (Plackett-Burman), L18 and L32(2^1 4^9) row by row; the
 L36 and L54 arrays by their standard construction from a difference scheme D over GF(3): runs
-3i, 3i+1, 3i+2 repeat row i of a small array (L12, L4 × a 3-level block column, or L18) and
+3i, 3i+1, 3i+2 repeat row i of a small array (L12, L4 x a 3-level block column, or L18) and
 carry D[i] + 0, 1, 2 (mod 3) in the remaining 3-level columns. The tables follow the printed
 catalogues (G. Taguchi, *System of Experimental Design*, 1987; M. S. Phadke, *Quality
 Engineering Using Robust Design*, 1989, appendix C; Minitab's catalogue of Taguchi designs).
@@ -82,7 +82,7 @@ def _digits(text: str) -> np.ndarray:
 
 
 def _gf_tables(q: int) -> tuple[np.ndarray, np.ndarray]:
-    """Addition and multiplication tables of GF(q), q in {2, 3, 4, 5}; GF(4) = {0, 1, α, α²}."""
+    """Addition and multiplication tables of GF(q), q in {2, 3, 4, 5}; GF(4) = {0, 1, a, a^2}."""
     r = np.arange(q)
     if q == 4:
         return np.bitwise_xor.outer(r, r), _GF4_MUL
@@ -90,7 +90,7 @@ def _gf_tables(q: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _column_vectors(q: int, k: int) -> np.ndarray:
-    """Coefficient vectors of the (q^k − 1)/(q − 1) columns, in Taguchi's order."""
+    """Coefficient vectors of the (q^k - 1)/(q - 1) columns, in Taguchi's order."""
     vectors = [
         (*earlier[::-1], 1) + (0,) * (k - m - 1)
         for m in range(k)
@@ -111,17 +111,21 @@ def _linear_array(q: int, k: int) -> np.ndarray:
 
 def _from_difference_scheme(head: np.ndarray, scheme: np.ndarray) -> np.ndarray:
     """Runs 3i + s = (head[i], (scheme[i] + s) mod 3) for s = 0, 1, 2."""
-    rows = [np.concatenate([h, (d + s) % 3]) for h, d in zip(head, scheme) for s in range(3)]
+    rows = [
+        np.concatenate([h, (d + s) % 3])
+        for h, d in zip(head, scheme, strict=True)
+        for s in range(3)
+    ]
     return np.array(rows, dtype=np.int64)
 
 
 def _l36_3_13_head() -> np.ndarray:
-    """L4 in columns 1–3 repeated over a 3-level column 4 (the block)."""
+    """L4 in columns 1-3 repeated over a 3-level column 4 (the block)."""
     l4 = _linear_array(2, 2)
     return np.array([[*l4[i % 4], i // 4] for i in range(12)], dtype=np.int64)
 
 
-# Canonical name → (builder, (q, k) for the GF(q) arrays that have interaction tables).
+# GF(q) arrays (which also have interaction tables): canonical name → (q, k), runs = q^k.
 _LINEAR: dict[str, tuple[int, int]] = {
     "L4(2^3)": (2, 2),
     "L8(2^7)": (2, 3),
@@ -153,7 +157,7 @@ _BARE_DEFAULT = {"L16": "L16(2^15)", "L32": "L32(2^31)", "L36": "L36(2^11 3^12)"
 
 
 def _normalise(name: str) -> str:
-    return re.sub(r"[\s,×x*]", "", name.strip().lower())
+    return re.sub(r"[\s,\u00d7x*]", "", name.strip().lower())
 
 
 def _levels_from_name(name: str) -> tuple[int, ...]:
@@ -162,9 +166,7 @@ def _levels_from_name(name: str) -> tuple[int, ...]:
     return tuple(int(s) for s, n in parts for _ in range(int(n)))
 
 
-_INFO = {
-    n: OAInfo(n, int(n[1 : n.index("(")]), _levels_from_name(n)) for n in _CATALOGUE_ORDER
-}
+_INFO = {n: OAInfo(n, int(n[1 : n.index("(")]), _levels_from_name(n)) for n in _CATALOGUE_ORDER}
 
 _ALIASES: dict[str, str] = {_normalise(n): n for n in _CATALOGUE_ORDER}
 _ALIASES |= {_normalise(n[: n.index("(")]): n for n in _CATALOGUE_ORDER}
@@ -185,20 +187,17 @@ def _canonical(name: str) -> str:
 
 @functools.cache
 def _base(name: str) -> np.ndarray:
-    if name in _LINEAR:
-        table = _linear_array(*_LINEAR[name])
-    else:
-        table = _TABULATED[name]()
+    table = _linear_array(*_LINEAR[name]) if name in _LINEAR else _TABULATED[name]()
     table.setflags(write=False)
     return table
 
 
 def orthogonal_array(name: str) -> np.ndarray:
-    """The array ``name`` as an int array of shape (runs, columns), levels 0..s−1.
+    """The array ``name`` as an int array of shape (runs, columns), levels 0..s-1.
 
     ``name`` is a canonical name such as ``"L18(2^1 3^7)"`` or a bare ``"L9"``; bare ``"L16"``,
     ``"L32"`` and ``"L36"`` mean L16(2^15), L32(2^31) and L36(2^11 3^12). Spaces, case and
-    ``x``/``×`` separators are ignored. Returns a fresh, writable copy.
+    ``x``/``x`` separators are ignored. Returns a fresh, writable copy.
     """
     return _base(_canonical(name)).copy()
 
@@ -232,7 +231,7 @@ def smallest_array_for(level_counts: Sequence[int], interactions: int = 0) -> OA
     ``level_counts`` holds the number of levels of each factor. Arrays where every factor finds
     a column with its own level count are preferred; only when none exists may a factor take a
     column with more levels (dummy levels, e.g. a 2-level factor in a 3-level column).
-    ``interactions`` two-factor interactions need s − 1 extra columns each; they are supported
+    ``interactions`` two-factor interactions need s - 1 extra columns each; they are supported
     for factors of one level count s in the arrays with interaction tables (see
     :func:`interaction_columns`). The column count is necessary, not sufficient: check the
     assignment with :func:`interaction_columns`. Raises ValueError when nothing fits.
@@ -275,9 +274,9 @@ def interaction_columns(name: str, col_a: int, col_b: int) -> tuple[int, ...]:
     """0-based columns that carry the interaction of columns ``col_a`` and ``col_b``.
 
     Taguchi's triangular tables, from the GF(q) construction: the interaction of columns with
-    coefficient vectors u and v lies in the columns proportional to u + c·v, c = 1..q−1 (one
+    coefficient vectors u and v lies in the columns proportional to u + c·v, c = 1..q-1 (one
     column for 2-level arrays, two for L9/L27, ...). E.g. L8 (0-based) (0, 1) → (2,);
-    L27 (1, 4) → (7, 10), which is 2 × 5 → 8, 11 in the printed 1-based table.
+    L27 (1, 4) → (7, 10), which is 2 x 5 → 8, 11 in the printed 1-based table.
     """
     canonical = _canonical(name)
     if canonical not in _LINEAR:
@@ -297,8 +296,6 @@ def interaction_columns(name: str, col_a: int, col_b: int) -> tuple[int, ...]:
         msg = f"an interaction needs two different columns, got {col_a} twice"
         raise ValueError(msg)
     add, mul = _gf_tables(q)
-    by_multiple = {
-        tuple(mul[scale, v]): j for j, v in enumerate(vectors) for scale in range(1, q)
-    }
+    by_multiple = {tuple(mul[scale, v]): j for j, v in enumerate(vectors) for scale in range(1, q)}
     u, v = vectors[col_a], vectors[col_b]
     return tuple(sorted(by_multiple[tuple(add[u, mul[c, v]])] for c in range(1, q)))

@@ -1,0 +1,144 @@
+"""End to end: study → plan → stages → Dataset → netCDF → analysis → run record."""
+
+from __future__ import annotations
+
+import json
+import sqlite3
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from studies.plan import plan_text
+from studies.results import unstack_factorial
+from studies.study_run import run_plan, run_study
+
+SMALL = """
+name = "small"
+scene = "cam"
+responses = {responses}
+curves = {curves}
+[design]
+type = "{design}"
+[factors.base_radius]
+levels = [18.0, 20.5]
+units = "mm"
+[factors.cam_speed]
+levels = [1000.0, 1300.0, 1600.0]
+"""
+
+
+def small(responses=("max_jerk",), curves=(), design="full_factorial") -> str:
+    return SMALL.format(responses=json.dumps(list(responses)), curves=json.dumps(list(curves)),
+                        design=design)
+
+
+@pytest.fixture(scope="module")
+def isac(tmp_path_factory: pytest.TempPathFactory):
+    outputs = tmp_path_factory.mktemp("outputs")
+    return outputs, run_study("isac_l9", outputs=outputs, progress=False)
+
+
+def test_isac_results_layout(isac) -> None:
+    _, result = isac
+    with xr.open_dataset(result.folder / "results.nc") as ds:
+        assert ds.sizes["run"] == 9
+        for f, units in [("seg2_width", "deg"), ("seg6_amplitude", "mm/rad^2"),
+                         ("seg2_amplitude", "mm/rad^2")]:
+            assert ds[f].attrs["units"] == units
+            assert sorted(set(ds[f"{f}_level"].values)) == [0, 1, 2]
+        assert "D_level" in ds.coords and "D" not in ds.coords
+        expected_units = {"max_contact_stress": "MPa", "max_lubrication_coefficient_nose": "1",
+                          "max_jerk": "mm/rad^3"}
+        assert set(ds.data_vars) == set(expected_units)
+        for name, units in expected_units.items():
+            assert ds[name].attrs["units"] == units
+            assert ds[name].attrs["long_name"]
+            assert np.isfinite(ds[name]).all()
+        assert ds.attrs["design"].startswith("L9")
+        assert "seg2_width" in ds.attrs["study_toml"]
+        assert json.loads(ds.attrs["timings"])["run_s"] >= 0
+        assert ds.attrs["git_dirty"] in (0, 1)
+
+
+def test_isac_run_record(isac) -> None:
+    outputs, result = isac
+    names = {p.name for p in result.folder.iterdir()}
+    assert {"results.nc", "study.toml", "run.json", "analysis.txt"} <= names
+    assert {f"main_effects_{r}.png" for r in ["max_contact_stress", "max_jerk"]} <= names
+    record = json.loads((result.folder / "run.json").read_text())
+    assert record["status"] == "finished"
+    assert {"git_commit", "git_dirty", "versions", "host", "started", "finished",
+            "timings"} <= set(record)
+    assert set(record["timings"]) >= {"compile_s", "run_s"}
+    text = (result.folder / "analysis.txt").read_text()
+    assert "ANOVA" in text or "anova" in text.lower()
+    with sqlite3.connect(outputs / "registry.sqlite") as con:
+        rows = con.execute("SELECT study, status FROM runs").fetchall()
+    assert ("isac_l9", "finished") in rows
+
+
+def test_kinematic_response_runs_only_the_kinematics_stage() -> None:
+    plan = plan_text(small(responses=["max_jerk", "fullness"]))
+    assert plan.stages == ("kinematics",)
+    calls: list[str] = []
+
+    def spy(name, fn):
+        def wrapped(*args, **kwargs):
+            calls.append(name)
+            return fn(*args, **kwargs)
+
+        return wrapped
+
+    scene = plan.scene
+    original = dict(scene.stages)
+    try:
+        for name, fn in original.items():
+            scene.stages[name] = spy(name, fn)
+        from studies.runner import evaluate
+
+        evaluate(plan, progress=False)
+    finally:
+        scene.stages.update(original)
+    assert calls and set(calls) == {"kinematics"}
+
+
+def test_stress_response_needs_all_three_stages() -> None:
+    plan = plan_text(small(responses=["max_contact_stress"]))
+    assert plan.stages == ("kinematics", "geometry", "loads")
+
+
+def test_curves_only_when_asked(tmp_path: Path) -> None:
+    without = run_plan(plan_text(small()), tmp_path, progress=False).dataset
+    assert "cam_angle" not in without.dims
+    with_curves = run_plan(plan_text(small(curves=["lift", "radius_of_curvature"])), tmp_path,
+                           progress=False).dataset
+    assert with_curves["lift"].dims == ("run", "cam_angle")
+    assert with_curves["lift"].attrs["units"] == "mm"
+    assert with_curves["cam_angle"].attrs["units"] == "deg"
+
+
+def test_full_factorial_unstacks(tmp_path: Path) -> None:
+    ds = run_plan(plan_text(small()), tmp_path, progress=False).dataset
+    cube = unstack_factorial(ds)
+    assert cube["max_jerk"].dims == ("base_radius", "cam_speed")
+    assert cube["max_jerk"].shape == (2, 3)
+
+
+def test_runs_are_listed_by_cli(isac, capsys: pytest.CaptureFixture[str]) -> None:
+    from studies.cli import main
+
+    outputs, result = isac
+    assert main(["runs", "--outputs", str(outputs)]) == 0
+    assert result.record.run_id in capsys.readouterr().out
+
+
+def test_analyze_cli_writes_tables_and_plots(isac, capsys: pytest.CaptureFixture[str]) -> None:
+    from studies.cli import main
+
+    _, result = isac
+    assert main(["analyze", str(result.folder / "results.nc")]) == 0
+    out = capsys.readouterr().out
+    assert "max_contact_stress" in out
+    assert (result.folder / "main_effects_max_jerk.png").stat().st_size > 1000
