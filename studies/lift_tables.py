@@ -11,7 +11,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from scipy.interpolate import UnivariateSpline
 
 SPLINE_DEGREE = 5  # quintic: lift, velocity, acceleration and jerk all come from the spline
 MIN_POINTS = SPLINE_DEGREE + 2
@@ -53,6 +52,8 @@ def table_kinematics(
     theta     : evaluation grid [rad]; outside the table the tappet is on the base circle.
     Returns curves[4, m]: h [m], h' [m/rad], h'' [m/rad²], h''' [m/rad³].
     """
+    from scipy.interpolate import UnivariateSpline  # noqa: PLC0415  (slow import, rarely used)
+
     spline = UnivariateSpline(angle, lift, k=SPLINE_DEGREE, s=len(angle) * smoothing**2)
     inside = (theta >= angle[0]) & (theta <= angle[-1])
     curves = np.zeros((4, theta.size))

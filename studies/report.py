@@ -11,7 +11,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from studies import analysis, plots
+from studies import analysis, plots, scene_plots, scene_summaries
 
 
 def write_analysis(ds: xr.Dataset, folder: Path, responses: list[str] | None = None) -> list[Path]:
@@ -29,6 +29,8 @@ def write_analysis(ds: xr.Dataset, folder: Path, responses: list[str] | None = N
     else:
         body = [analysis.format_tables(ds, r) for r in scalar]
         figures = plots.save_main_effects(ds, scalar, folder)
+    body += scene_summaries.scene_summaries(ds)
+    figures += scene_plots.save_scene_figures(ds, folder)
     text_path = folder / "analysis.txt"
     text_path.write_text("\n\n".join([header, *body]) + "\n", encoding="utf-8")
     return [text_path, *figures]

@@ -6,12 +6,14 @@ physical values; :mod:`studies.plan` maps level indices to the factors' levels.
 
 Designs: :func:`full_factorial` (any level counts), :func:`sweep` (one factor at a time around a
 base point) and :func:`orthogonal` (a catalogue array with column assignment; ``"auto"`` picks
-the smallest array that fits).
+the smallest array that fits; requested two-factor interactions reserve their columns from the
+triangular tables of the GF(q) arrays, e.g. L8, L16, L27).
 """
 
 from __future__ import annotations
 
 import itertools
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -33,15 +35,26 @@ class DesignError(ValueError):
         super().__init__("; ".join(problems))
 
 
+# Column placements tried when searching for room for the interaction columns.
+INTERACTION_SEARCH_LIMIT = 20_000
+
+
 @dataclass(frozen=True)
 class Design:
-    """Level indices per run: ``levels[name]`` is an int array of length ``runs``."""
+    """Level indices per run: ``levels[name]`` is an int array of length ``runs``.
+
+    Orthogonal designs also hold ``columns`` (name → 1-based array column, for factors,
+    interaction and error columns) and ``interactions`` (interaction column name → the two
+    factors whose interaction it carries).
+    """
 
     name: str
     factors: tuple[str, ...]
     levels: dict[str, np.ndarray]
     error_columns: tuple[str, ...] = ()
     labels: dict[str, np.ndarray] = field(default_factory=dict)
+    columns: dict[str, int] = field(default_factory=dict)
+    interactions: dict[str, tuple[str, str]] = field(default_factory=dict)
 
     @property
     def runs(self) -> int:
@@ -79,69 +92,287 @@ def orthogonal(
     level_counts: dict[str, int],
     columns: dict[str, int | None],
     error_names: tuple[str, ...] = (),
+    interactions: Sequence[Sequence[str]] = (),
 ) -> Design:
     """Assign factors to columns of a catalogue orthogonal array.
 
-    ``array`` is a catalogue name or ``"auto"`` (smallest array that fits). ``columns`` maps a
-    factor to its 1-based column or None (next free column with a matching level count).
-    A factor with fewer levels than its column uses dummy levels (the column's extra levels
-    repeat the factor's first levels). Unassigned columns stay as error columns named from
+    ``array`` is a catalogue name or ``"auto"`` (smallest array that fits, interaction columns
+    included). ``columns`` maps a factor to its 1-based column or None (next free column with a
+    matching level count). A factor with fewer levels than its column uses dummy levels (the
+    column's extra levels repeat the factor's first levels: level = column level mod the
+    factor's level count). ``interactions`` lists pairs of factors whose interaction is to be
+    estimated: the pair's columns from the triangular table (:func:`interaction_columns`) are
+    kept free of factors and named ``A_x_B`` (then ``A_x_B_2``, ... when q-level columns carry
+    an interaction in q - 1 columns); factors without a given column are placed so that every
+    interaction gets its own columns. Unassigned columns stay as error columns named from
     ``error_names`` in order, then ``e<column>``.
     """
-    problems: list[str] = []
-    if array == "auto":
-        try:
-            info = smallest_array_for(list(level_counts.values()))
-        except ValueError as exc:
-            raise DesignError([str(exc)]) from None
-    else:
-        try:
-            info = _info(array)
-        except ValueError as exc:
-            raise DesignError([str(exc)]) from None
+    pairs = [tuple(p) for p in interactions]
+    problems = _pair_problems(pairs, level_counts)
+    if problems:
+        raise DesignError(problems)
+    try:
+        info = _auto(level_counts, columns, pairs) if array == "auto" else _info(array)
+    except ValueError as exc:
+        raise DesignError([str(exc)]) from None
     table = orthogonal_array(info.name)
-    ncols = table.shape[1]
+    taken, reserved, problems = _assign(info, level_counts, columns, pairs)
+    used = set(taken) | {c for cols in reserved.values() for c in cols}
+    free = [c for c in range(info.columns) if c not in used]
+    if len(error_names) > len(free):
+        problems.append(
+            f"{len(error_names)} error column names given but {info.name} leaves "
+            f"{len(free)} column(s) free"
+        )
+    if problems:
+        raise DesignError(problems)
+    levels = {name: table[:, c] % level_counts[name] for c, name in sorted(taken.items())}
+    ordered = {name: levels[name] for name in level_counts}
+    placed = {name: c + 1 for c, name in taken.items()}
+    named: dict[str, tuple[str, str]] = {}
+    for (a, b), cols in reserved.items():
+        for i, c in enumerate(cols):
+            label = f"{a}_x_{b}" + (f"_{i + 1}" if i else "")
+            ordered[label] = table[:, c].copy()
+            named[label] = (a, b)
+            placed[label] = c + 1
+    errors: list[str] = []
+    for i, c in enumerate(free):
+        label = error_names[i] if i < len(error_names) else f"e{c + 1}"
+        if label in ordered:
+            problems.append(
+                f"error column name {label!r} is already the name of a factor or interaction column"
+            )
+        ordered[label] = table[:, c].copy()
+        errors.append(label)
+        placed[label] = c + 1
+    if problems:
+        raise DesignError(problems)
+    by_column = dict(sorted(placed.items(), key=lambda item: item[1]))
+    return Design(
+        info.name,
+        tuple(level_counts),
+        ordered,
+        tuple(errors),
+        columns=by_column,
+        interactions=named,
+    )
+
+
+Pair = tuple[str, ...]
+
+
+def _pair_problems(pairs: list[Pair], level_counts: dict[str, int]) -> list[str]:
+    problems = []
+    seen: set[frozenset[str]] = set()
+    for pair in pairs:
+        if len(pair) != 2:
+            problems.append(f"interaction {list(pair)} must name exactly two factors")
+            continue
+        unknown = [f for f in pair if f not in level_counts]
+        if unknown:
+            problems.append(
+                f"interaction {pair[0]} x {pair[1]}: {', '.join(unknown)} is not a "
+                f"factor (factors: {', '.join(level_counts)})"
+            )
+        if pair[0] == pair[1]:
+            problems.append(f"interaction {pair[0]} x {pair[1]} needs two different factors")
+        if frozenset(pair) in seen:
+            problems.append(f"interaction {pair[0]} x {pair[1]} is requested twice")
+        seen.add(frozenset(pair))
+    return problems
+
+
+def _has_interaction_table(name: str) -> bool:
+    try:
+        interaction_columns(name, 0, 1)
+    except ValueError:
+        return False
+    return True
+
+
+def _auto(
+    level_counts: dict[str, int], columns: dict[str, int | None], pairs: list[Pair]
+) -> OAInfo:
+    """The smallest catalogue array that fits the factors and leaves room for the interactions."""
+    if not pairs:
+        return smallest_array_for(list(level_counts.values()))
+    involved = sorted({f for p in pairs for f in p})
+    counts = sorted({level_counts[f] for f in involved})
+    if len(counts) > 1:
+        msg = (
+            f"interacting factors {', '.join(involved)} must have one level count for an "
+            f"interaction table, got {counts}"
+        )
+        raise ValueError(msg)
+    q = counts[0]
+    needed = len(level_counts) + len(pairs) * (q - 1)
+    candidates = [
+        info for info in list_orthogonal_arrays()
+        if set(info.levels) == {q} and info.columns >= needed
+        and max(level_counts.values()) <= q and _has_interaction_table(info.name)
+    ]  # fmt: skip
+    for info in candidates:
+        if not _assign(info, level_counts, columns, pairs)[2]:
+            return info
+    tried = ", ".join(i.name for i in candidates) or "none has enough columns"
+    msg = (
+        f"no catalogue array with an interaction table fits {len(level_counts)} factor(s) "
+        f"and {len(pairs)} interaction(s) of {q}-level factors ({needed} columns; tried: "
+        f"{tried}); use fewer interactions or factors"
+    )
+    raise ValueError(msg)
+
+
+def _assign(
+    info: OAInfo, level_counts: dict[str, int], columns: dict[str, int | None], pairs: list[Pair]
+) -> tuple[dict[int, str], dict[Pair, tuple[int, ...]], list[str]]:
+    """Column (0-based) → factor, interaction pair → its columns, and the problems found."""
+    ncols = info.columns
+    problems: list[str] = []
     taken: dict[int, str] = {}
     for name, col in columns.items():
         if col is None:
             continue
         if col > ncols:
-            problems.append(f"factor {name}: column {col} does not exist in {info.name} "
-                            f"(columns 1–{ncols})")
+            problems.append(
+                f"factor {name}: column {col} does not exist in {info.name} (columns 1-{ncols})"
+            )
         elif col - 1 in taken:
-            problems.append(f"factors {taken[col - 1]} and {name} are both assigned to column {col}")
+            problems.append(
+                f"factors {taken[col - 1]} and {name} are both assigned to column {col}"
+            )
         else:
             taken[col - 1] = name
+    reserved: dict[Pair, tuple[int, ...]] = {}
+    if pairs:
+        layout_problems = _interaction_problems(info, level_counts, pairs)
+        if layout_problems:
+            return taken, reserved, problems + layout_problems
+        failure = None
+        budget = [INTERACTION_SEARCH_LIMIT]
+        for placed, reserved in _layouts(info, level_counts, taken, pairs, budget):
+            rest, failure = _place_rest(info, level_counts, columns, taken | placed, reserved)
+            if not failure:
+                taken = rest
+                break
+        else:
+            stopped = (
+                f" (search stopped after {INTERACTION_SEARCH_LIMIT} placements)"
+                if budget[0] <= 0
+                else ""
+            )
+            listed = ", ".join(f"{a} x {b}" for a, b in pairs)
+            problems += failure or [
+                (
+                    f"no assignment of the factors to columns of {info.name} leaves the "
+                    f"interactions {listed} columns of their own{stopped}: use a larger array, "
+                    "other columns or fewer interactions"
+                )
+            ]
+            return taken, {}, problems
+    else:
+        taken, failure = _place_rest(info, level_counts, columns, taken, {})
+        problems += failure
+    for c, name in taken.items():
+        if level_counts[name] > info.levels[c]:
+            problems.append(
+                f"factor {name} has {level_counts[name]} levels but column {c + 1} of "
+                f"{info.name} has {info.levels[c]}: use {info.levels[c]} levels or "
+                "another array"
+            )
+    return taken, reserved, problems
+
+
+def _place_rest(
+    info: OAInfo,
+    level_counts: dict[str, int],
+    columns: dict[str, int | None],
+    taken: dict[int, str],
+    reserved: dict[Pair, tuple[int, ...]],
+) -> tuple[dict[int, str], list[str]]:
+    """Give each factor still without a column the next free one (own level count first)."""
+    taken = dict(taken)
+    placed = set(taken.values())
+    blocked = {c for cols in reserved.values() for c in cols}
+    problems = []
     for name, col in columns.items():
-        if col is not None:
+        if col is not None or name in placed:
             continue
-        free = [c for c in range(ncols) if c not in taken]
+        free = [c for c in range(info.columns) if c not in taken and c not in blocked]
         fit = [c for c in free if info.levels[c] == level_counts[name]]
         fit = fit or [c for c in free if info.levels[c] > level_counts[name]]
         if fit:
             taken[fit[0]] = name
         else:
-            problems.append(f"factor {name} ({level_counts[name]} levels) has no free column "
-                            f"left in {info.name}")
-    for c, name in taken.items():
-        if level_counts[name] > info.levels[c]:
-            problems.append(f"factor {name} has {level_counts[name]} levels but column {c + 1} of "
-                            f"{info.name} has {info.levels[c]}: use {info.levels[c]} levels or "
-                            "another array")
-    free = [c for c in range(ncols) if c not in taken]
-    if len(error_names) > len(free):
-        problems.append(f"{len(error_names)} error column names given but {info.name} leaves "
-                        f"{len(free)} column(s) free")
-    if problems:
-        raise DesignError(problems)
-    levels = {name: table[:, c] % level_counts[name] for c, name in sorted(taken.items())}
-    ordered = {name: levels[name] for name in level_counts}
-    errors: list[str] = []
-    for i, c in enumerate(free):
-        label = error_names[i] if i < len(error_names) else f"e{c + 1}"
-        ordered[label] = table[:, c].copy()
-        errors.append(label)
-    return Design(info.name, tuple(level_counts), ordered, tuple(errors))
+            problems.append(
+                f"factor {name} ({level_counts[name]} levels) has no free column "
+                f"left in {info.name}"
+            )
+    return taken, problems
+
+
+def _interaction_problems(
+    info: OAInfo, level_counts: dict[str, int], pairs: list[Pair]
+) -> list[str]:
+    if not _has_interaction_table(info.name):
+        msg = (
+            f"{info.name} has no interaction table: interactions need one of the arrays "
+            'L4, L8, L9, L16, L16(4^5), L25, L27, L32(2^31) (or design = "auto")'
+        )
+        return [msg]
+    q = info.levels[0]
+    involved = dict.fromkeys(f for p in pairs for f in p)
+    return [
+        f"factor {f} has {level_counts[f]} levels but its interactions in {info.name} need "
+        f"{q}-level factors (dummy levels cannot carry an interaction)"
+        for f in involved
+        if level_counts[f] != q
+    ]
+
+
+def _layouts(
+    info: OAInfo,
+    level_counts: dict[str, int],
+    taken: dict[int, str],
+    pairs: list[Pair],
+    budget: list[int],
+) -> Iterator[tuple[dict[int, str], dict[Pair, tuple[int, ...]]]]:
+    """Placements of the interacting factors where no column serves two purposes.
+
+    Depth-first over the free columns in order, so the first placement is the textbook one
+    (e.g. L8: A, B in columns 1, 2 → A x B in 3; C in 4 → A x C in 5). ``budget`` counts down
+    the placements tried.
+    """
+    fixed = {name: c for c, name in taken.items()}
+    todo = [f for f in dict.fromkeys(f for p in pairs for f in p) if f not in fixed]
+
+    def reserve(where: dict[str, int]) -> dict[Pair, tuple[int, ...]] | None:
+        used = set(where.values())
+        reserved = {}
+        for a, b in pairs:
+            if a in where and b in where:
+                cols = interaction_columns(info.name, where[a], where[b])
+                if used & set(cols):
+                    return None
+                used |= set(cols)
+                reserved[(a, b)] = cols
+        return reserved
+
+    def search(i: int, where: dict[str, int]) -> Iterator[tuple[dict[int, str], dict]]:
+        reserved = reserve(where)
+        if reserved is None or budget[0] <= 0:
+            return
+        budget[0] -= 1
+        if i == len(todo):
+            yield {c: name for name, c in where.items() if name in todo}, reserved
+            return
+        blocked = set(where.values()) | {c for cols in reserved.values() for c in cols}
+        for c in range(info.columns):
+            if c not in blocked and info.levels[c] == level_counts[todo[i]]:
+                yield from search(i + 1, where | {todo[i]: c})
+
+    yield from search(0, fixed)
 
 
 def is_orthogonal_array_name(name: str) -> bool:

@@ -11,9 +11,15 @@ from functools import cache
 
 from studies.scenes.base import Curve, CurveAxis, Parameter, Response, Scene, SceneOutput
 from studies.scenes.cam import CamScene
+from studies.scenes.crank import CrankScene
+from studies.scenes.luffing import LuffingScene
+from studies.scenes.reed import ReedScene
 
 SCENES: dict[str, type[Scene]] = {
     CamScene.name: CamScene,
+    CrankScene.name: CrankScene,
+    ReedScene.name: ReedScene,
+    LuffingScene.name: LuffingScene,
 }
 
 

@@ -62,7 +62,7 @@ MISTAKES = [
      ["base_radius = 'big' is not a finite number"]),
     ("bad choice", lambda t: t.replace("[parameters]", '[parameters]\nseg2_shape = "sine"'),
      ["seg2_shape = 'sine' is not allowed", "'sin_full'"]),
-    ("unknown top-level key", lambda t: t + '\nrepsonses = ["x"]\n',
+    ("unknown top-level key", lambda t: 'repsonses = ["x"]\n' + t,
      ["unknown top-level key 'repsonses'"]),
     ("missing scene", lambda t: t.replace('scene = "cam"\n', ""), ["missing required key 'scene'"]),
     ("column twice", lambda t: t.replace('units = "deg"', 'units = "deg"\ncolumn = 2').replace(

@@ -1,0 +1,299 @@
+"""Scene ``cam``: flat-faced tappet cam kinematics and contact criteria (SPEC §2).
+
+Three stages, each one compiled batch driver of :mod:`engine_kernels.cam_batch`:
+
+* ``kinematics`` — lift h and h', h'', h''' on the cam-angle grid (six-segment profile, a
+  standard rise law, or a smoothed measured table) and the kinematic responses;
+* ``geometry``   — radius of curvature, lubrication coefficient, entrainment, film ratio;
+* ``loads``      — contact force, Hertz stress, spring margin, EHL film thickness.
+
+A response runs only the stages it needs (``Response.needs``).
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from typing import Any
+
+import numpy as np
+
+from engine_kernels import cam_batch as cb
+from engine_kernels import cam_profile, lift_laws
+from studies.lift_tables import read_lift_table, table_kinematics
+from studies.scenes.base import Scene, SceneOutput
+from studies.scenes.cam_parameters import (
+    CAM_ANGLE,
+    CURVES,
+    PARAMETERS,
+    RESPONSES,
+    SETTINGS,
+    SHAPES,
+)
+
+LAW_CODES = {
+    "cycloidal": lift_laws.LAW_CYCLOIDAL,
+    "harmonic": lift_laws.LAW_HARMONIC,
+    "modified_sine": lift_laws.LAW_MODIFIED_SINE,
+    "modified_trapezoid": lift_laws.LAW_MODIFIED_TRAPEZOID,
+    "poly345": lift_laws.LAW_POLY345,
+    "poly4567": lift_laws.LAW_POLY4567,
+    "polydyne": lift_laws.LAW_POLYDYNE,
+    "six_segment": lift_laws.LAW_SIX_SEGMENT,
+    "table": -1,  # curves come from the spline of the table, not from a kernel law
+}
+SHAPE_CODES = {name: code for code, name in enumerate(SHAPES)}
+HALF_TURN_DEG = 180.0
+POLYDYNE_TOLERANCE = 1e-9
+
+# parameter name -> kernel column (all other kernel columns are named alike)
+_COLUMN = {
+    "law": cb.P_LAW, "cam_speed": cb.P_CAM_SPEED, "base_radius": cb.P_BASE_RADIUS,
+    "lift": cb.P_LIFT, "rise_angle": cb.P_RISE_ANGLE, "ramp_height": cb.P_RAMP_HEIGHT,
+    "ramp_width": cb.P_RAMP_WIDTH, "ramp_velocity": cb.P_RAMP_VELOCITY,
+    "cam_width": cb.P_CAM_WIDTH, "cam_modulus": cb.P_E1, "cam_poisson": cb.P_NU1,
+    "tappet_modulus": cb.P_E2, "tappet_poisson": cb.P_NU2,
+    "spring_preload": cb.P_SPRING_PRELOAD, "spring_rate": cb.P_SPRING_RATE,
+    "equivalent_mass": cb.P_EQUIVALENT_MASS, "oil_viscosity": cb.P_VISCOSITY,
+    "pressure_viscosity": cb.P_PRESSURE_VISCOSITY, "nose_window": cb.P_NOSE_WINDOW,
+    "min_radius_limit": cb.P_MIN_RADIUS_LIMIT, "stress_limit": cb.P_STRESS_LIMIT,
+    "spring_margin_limit": cb.P_SPRING_MARGIN_LIMIT,
+    **{f"seg{k + 1}_width": cb.P_SEG_WIDTH0 + k for k in range(6)},
+    **{f"seg{k + 1}_accel": cb.P_SEG_ACCEL0 + k for k in range(6)},
+    **{f"seg{k + 1}_amplitude": cb.P_SEG_AMP0 + k for k in range(6)},
+}
+
+MM, UM, MPA = 1e3, 1e6, 1e-6
+# response -> (stage output, column, factor from SI to the response's units)
+_SCALAR_SOURCE: dict[str, tuple[str, int, float]] = {
+    "max_lift": ("kin", cb.K_MAX_LIFT, MM),
+    "face_half_width": ("kin", cb.K_MAX_VELOCITY, MM),
+    "max_acceleration": ("kin", cb.K_MAX_ACCELERATION, MM),
+    "min_acceleration": ("kin", cb.K_MIN_ACCELERATION, MM),
+    "max_acceleration_time": ("kin", cb.K_MAX_ACCELERATION_TIME, 1.0),
+    "max_jerk": ("kin", cb.K_MAX_JERK, MM),
+    "fullness": ("kin", cb.K_WORKING_FULLNESS, 1.0),
+    "event_fullness": ("kin", cb.K_FULLNESS, 1.0),
+    "working_lift_unscaled": ("diag", cam_profile.D_UNSCALED_WORKING_LIFT, MM),
+    "fillet_monotone": ("diag", cam_profile.D_FILLET_MONOTONE, 1.0),
+    "ramp_feasible": ("diag", cam_profile.D_RAMP_FEASIBLE, 1.0),
+    "min_radius_of_curvature": ("geo", cb.G_MIN_RADIUS, MM),
+    "radius_margin": ("geo", cb.G_RADIUS_MARGIN, MM),
+    "radius_ok": ("geo", cb.G_RADIUS_OK, 1.0),
+    "max_lubrication_coefficient_nose": ("geo", cb.G_MAX_LUBRICATION, 1.0),
+    "min_lubrication_coefficient_nose": ("geo", cb.G_MIN_LUBRICATION, 1.0),
+    "min_relative_film_thickness_nose": ("geo", cb.G_MIN_FILM_RATIO, 1.0),
+    "max_entrainment_velocity": ("geo", cb.G_MAX_ENTRAINMENT, 1.0),
+    "max_contact_force": ("load", cb.L_MAX_FORCE, 1.0),
+    "min_contact_force": ("load", cb.L_MIN_FORCE, 1.0),
+    "max_contact_stress": ("load", cb.L_MAX_STRESS, MPA),
+    "stress_margin": ("load", cb.L_STRESS_MARGIN, MPA),
+    "stress_ok": ("load", cb.L_STRESS_OK, 1.0),
+    "spring_margin": ("load", cb.L_SPRING_MARGIN, 1.0),
+    "spring_margin_ok": ("load", cb.L_SPRING_OK, 1.0),
+    "min_film_thickness_nose": ("load", cb.L_MIN_FILM, UM),
+}
+_CURVE_SOURCE: dict[str, tuple[str, int, float]] = {
+    "lift": ("kin_curves", 0, MM),
+    "velocity": ("kin_curves", 1, MM),
+    "acceleration": ("kin_curves", 2, MM),
+    "jerk": ("kin_curves", 3, MM),
+    "radius_of_curvature": ("geo_curves", cb.GC_RADIUS, MM),
+    "lubrication_coefficient": ("geo_curves", cb.GC_LUBRICATION, 1.0),
+    "entrainment_velocity": ("geo_curves", cb.GC_ENTRAINMENT, 1.0),
+    "relative_film_thickness": ("geo_curves", cb.GC_FILM_RATIO, 1.0),
+    "contact_force": ("load_curves", cb.LC_FORCE, 1.0),
+    "contact_stress": ("load_curves", cb.LC_STRESS, MPA),
+    "film_thickness": ("load_curves", cb.LC_FILM, UM),
+}
+
+
+class CamScene(Scene):
+    name = "cam"
+    description = "flat-faced tappet cam: lift law, curvature, lubrication, contact stress"
+    parameters = PARAMETERS
+    settings = SETTINGS
+    responses = RESPONSES
+    curves = CURVES
+    curve_axis = CAM_ANGLE
+    stage_order = ("kinematics", "geometry", "loads")
+
+    def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray:
+        step = np.rad2deg(settings["angle_step"])
+        n = int(round(HALF_TURN_DEG / step))
+        return np.linspace(-HALF_TURN_DEG, HALF_TURN_DEG, 2 * n + 1)
+
+    # --- checks ---------------------------------------------------------------------------
+    def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+        found: dict[str, list[int]] = defaultdict(list)
+        tables: dict[str, str | None] = {}
+        for i in range(len(points["law"])):
+            for problem in self._point_problems(points, i, tables):
+                found[problem].append(i)
+        return [f"{_points_label(idx)}: {msg}" for msg, idx in found.items()]
+
+    def _point_problems(
+        self, p: dict[str, np.ndarray], i: int, tables: dict[str, str | None]
+    ) -> list[str]:
+        law = p["law"][i]
+        deg = np.rad2deg
+        out = []
+        if law == "six_segment":
+            widths = np.array([p[f"seg{k}_width"][i] for k in range(1, 7)])
+            shapes = np.array([SHAPE_CODES[p[f"seg{k}_shape"][i]] for k in range(1, 7)])
+            adjusted = np.empty(6)
+            if not cam_profile.segment_widths(widths, shapes, p["rise_angle"][i], adjusted):
+                out.append(
+                    f"segment widths {np.round(deg(widths), 3).tolist()} deg cannot be fitted to "
+                    f"the {deg(p['rise_angle'][i]):g} deg half-event: the fillet and segment 6 "
+                    f"would need widths {np.round(deg(adjusted), 3).tolist()} deg (must be ≥ 0)"
+                )
+            out += _ramp_problems(p["ramp_height"][i], p["ramp_width"][i],
+                                  p["ramp_velocity"][i])
+            half = p["rise_angle"][i] + (p["ramp_width"][i] if p["ramp_height"][i] > 0 else 0.0)
+        else:
+            half = p["rise_angle"][i]
+            if law != "table" and p["lift"][i] <= 0.0:
+                out.append(f"lift = 0 mm: law {law!r} needs a rise H > 0")
+        if deg(half) > HALF_TURN_DEG:
+            out.append(f"the event half-width {deg(half):g} deg (rise + ramp) exceeds 180 deg")
+        if law == "polydyne":
+            out += _polydyne_problems(p["polydyne_coefficients"][i])
+        if law == "table":
+            path = str(p["lift_table"][i])
+            if path not in tables:
+                try:
+                    read_lift_table(path)
+                    tables[path] = None
+                except ValueError as exc:
+                    tables[path] = str(exc)
+            if tables[path]:
+                out.append(str(tables[path]))
+        return out
+
+    # --- evaluation -----------------------------------------------------------------------
+    def evaluate(
+        self,
+        points: dict[str, np.ndarray],
+        settings: dict[str, Any],
+        responses: list[str],
+        curves: list[str],
+    ) -> SceneOutput:
+        ctx: dict[str, Any] = {
+            "params": _pack(points),
+            "shapes": np.array([[SHAPE_CODES[s] for s in points[f"seg{k}_shape"]]
+                                for k in range(1, 7)], dtype=np.int64).T.copy(),
+            "coeffs": _coefficients(points["polydyne_coefficients"]),
+            "theta": np.deg2rad(self.curve_coordinate(settings)),
+            "points": points,
+            "settings": settings,
+            "curves": set(curves),
+        }
+        for stage in self.stages_for(responses, curves):
+            self.stages[stage](ctx)
+        scalars = {}
+        for r in responses:
+            if r in ("jerk_margin", "jerk_ok", "fullness_ok"):
+                scalars[r] = _criterion(r, ctx, points)
+                continue
+            key, col, scale = _SCALAR_SOURCE[r]
+            scalars[r] = ctx[key][:, col] * scale
+        out_curves = {}
+        for c in curves:
+            key, idx, scale = _CURVE_SOURCE[c]
+            out_curves[c] = ctx[key][:, idx, :] * scale
+        return SceneOutput(scalars, out_curves)
+
+    def stage_kinematics(self, ctx: dict[str, Any]) -> None:
+        params, theta = ctx["params"], ctx["theta"]
+        n, m = params.shape[0], theta.size
+        curves = np.empty((n, 4, m))
+        diag = np.empty((n, cam_profile.N_DIAG))
+        cb.cam_kinematics_batch(params, ctx["shapes"], ctx["coeffs"], theta, curves, diag)
+        table_rows = np.flatnonzero(ctx["points"]["law"] == "table")
+        for i in table_rows:
+            angle, lift = read_lift_table(ctx["points"]["lift_table"][i])
+            smoothing = ctx["settings"]["table_smoothing"]
+            curves[i] = table_kinematics(np.deg2rad(angle), lift * 1e-3, smoothing, theta)
+            diag[i] = 1.0
+            diag[i, cam_profile.D_UNSCALED_WORKING_LIFT] = lift.max() * 1e-3
+        kin = np.empty((n, cb.N_KIN))
+        cb.cam_kinematic_responses_batch(params, theta, curves, kin)
+        ctx |= {"kin_curves": curves, "diag": diag, "kin": kin}
+
+    def stage_geometry(self, ctx: dict[str, Any]) -> None:
+        params, theta, curves = ctx["params"], ctx["theta"], ctx["kin_curves"]
+        want = any(_CURVE_SOURCE[c][0] == "geo_curves" for c in ctx["curves"])
+        geo = np.empty((params.shape[0], cb.N_GEO))
+        geo_curves = np.empty((params.shape[0], cb.N_GEO_CURVES, theta.size if want else 0))
+        cb.cam_geometry_batch(params, theta, curves, geo, geo_curves)
+        ctx |= {"geo": geo, "geo_curves": geo_curves}
+
+    def stage_loads(self, ctx: dict[str, Any]) -> None:
+        params, theta, curves = ctx["params"], ctx["theta"], ctx["kin_curves"]
+        want = any(_CURVE_SOURCE[c][0] == "load_curves" for c in ctx["curves"])
+        load = np.empty((params.shape[0], cb.N_LOAD))
+        load_curves = np.empty((params.shape[0], cb.N_LOAD_CURVES, theta.size if want else 0))
+        cb.cam_loads_batch(params, theta, curves, load, load_curves)
+        ctx |= {"load": load, "load_curves": load_curves}
+
+
+def _pack(points: dict[str, np.ndarray]) -> np.ndarray:
+    n = len(points["law"])
+    params = np.zeros((n, cb.N_PARAMS))
+    for name, col in _COLUMN.items():
+        if name == "law":
+            params[:, col] = [LAW_CODES[v] for v in points["law"]]
+        else:
+            params[:, col] = points[name]
+    table = points["law"] == "table"
+    params[table, cb.P_LIFT] = 0.0
+    return params
+
+
+def _coefficients(vectors: np.ndarray) -> np.ndarray:
+    coeffs = np.zeros((vectors.shape[0], lift_laws.NCOEF))
+    k = min(vectors.shape[1], lift_laws.NCOEF)
+    coeffs[:, :k] = vectors[:, :k]
+    return coeffs
+
+
+def _criterion(name: str, ctx: dict[str, Any], points: dict[str, np.ndarray]) -> np.ndarray:
+    kin = ctx["kin"]
+    if name == "fullness_ok":
+        return (kin[:, cb.K_WORKING_FULLNESS] >= points["fullness_limit"]).astype(float)
+    margin = (points["jerk_limit"] - kin[:, cb.K_MAX_JERK]) * MM
+    return margin if name == "jerk_margin" else (margin > 0).astype(float)
+
+
+def _ramp_problems(height: float, width: float, velocity: float) -> list[str]:
+    if height <= 0.0:
+        return []
+    deg = np.rad2deg
+    if velocity <= 0.0 or width <= 0.0:
+        return [f"a ramp of height {height * MM:g} mm needs ramp_width > 0 and ramp_velocity > 0"]
+    lo, hi = height / velocity, 2.0 * height / velocity
+    if not lo <= width <= hi:
+        return [
+            f"ramp_width = {deg(width):g} deg cannot carry a {height * MM:g} mm ramp ending at "
+            f"{velocity * MM:g} mm/rad: constant acceleration then constant velocity needs "
+            f"{deg(lo):.3g} ≤ ramp_width ≤ {deg(hi):.3g} deg"
+        ]
+    return []
+
+
+def _polydyne_problems(c: np.ndarray) -> list[str]:
+    if c.size > lift_laws.NCOEF:
+        return [f"polydyne_coefficients has {c.size} terms; at most {lift_laws.NCOEF} allowed"]
+    k = np.arange(c.size)
+    conditions = {"f(0) = 0": c[0], "f(1) = 1": c.sum() - 1.0,
+                  "f'(0) = 0": c[1] if c.size > 1 else 0.0, "f'(1) = 0": (k * c).sum()}
+    bad = [name for name, residual in conditions.items() if abs(residual) > POLYDYNE_TOLERANCE]
+    if bad:
+        return [f"polydyne_coefficients {c.tolist()} violate {', '.join(bad)} "
+                "(f(x) = Σ c_k x^k must rise from 0 to 1 with zero end velocity)"]
+    return []
+
+
+def _points_label(indices: list[int]) -> str:
+    shown = ", ".join(str(i) for i in indices[:8]) + (" …" if len(indices) > 8 else "")
+    return f"design point{'s' if len(indices) > 1 else ''} {shown}"

@@ -1,0 +1,338 @@
+"""The ``crank`` scene: slider-crank kinematics, forces and multi-cylinder torque (SPEC §5).
+
+Stages (each one compiled batch driver; a study runs only those its responses and curves need):
+
+* ``kinematics`` — :func:`engine_kernels.crank.crank_kinematics_batch`: piston and rod motion
+  and the error of the two-term approximation (always measured against the exact relations);
+* ``pressure`` — cylinder pressure on the cycle grid: the single-zone Wiebe cycle
+  (:func:`engine_kernels.combustion.cycle_pressure_batch`) or a measured table
+  (:mod:`studies.pressure_tables`);
+* ``forces`` — :func:`engine_kernels.crank.crank_forces_batch`: gas, inertia, rod, side,
+  tangential and radial forces and the torque of one cylinder;
+* ``multicylinder`` — :func:`engine_kernels.crank.crank_multicylinder_batch`: summed torque of
+  the layout, its harmonic orders and the free first- and second-order forces.
+
+The kinematics model (``exact`` or two-term ``approximate``) is a study setting; it sets the
+piston motion used for the inertia forces, the torque and the kinematic curves.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from engine_kernels import combustion as cb
+from engine_kernels import crank as ck
+from studies.pressure_tables import read_pressure_table, resample_pressure
+from studies.scenes.base import Scene, SceneOutput
+from studies.scenes.checks import PointProblems
+from studies.scenes.crank_parameters import (
+    CRANK_ANGLE,
+    CURVES,
+    MAX_ORDER_HALVES,
+    PARAMETERS,
+    RESPONSES,
+    SETTINGS,
+    order_name,
+)
+from studies.units import UNITS
+
+CYCLE_DEG = 720.0
+EXHAUST_OPENING_DEG = 180.0  # after firing TDC: the cycle opens the exhaust at BDC
+MODEL_CODES = {"exact": ck.MODEL_EXACT, "approximate": ck.MODEL_TWO_TERM}
+HEAT_CODES = {"max_pressure": cb.HEAT_MODE_PEAK_PRESSURE, "cycle_heat": cb.HEAT_MODE_ENERGY}
+FORCE_NAMES = {"mean_torque": "cylinder_mean_torque", "max_torque": "cylinder_max_torque",
+               "min_torque": "cylinder_min_torque", "torque": "cylinder_torque"}
+CYCLE_ONLY = ("compression_pressure", "heat_released", "cycle_work", "imep")
+
+
+def angle_count(angle_step: float) -> int:
+    """Grid points over the 720° cycle for a step [rad] (the step must divide 720°)."""
+    return round(ck.CYCLE_ANGLE / angle_step)
+
+
+def firing_order_problem(order: np.ndarray, cylinders: float) -> str | None:
+    """Why ``order`` is not a firing order of ``cylinders`` cylinders, or None."""
+    shown = "[" + ", ".join(f"{v:g}" for v in order) + "]"
+    if order.size == 0:
+        return "firing_order is empty: list every cylinder 1…z once"
+    if not np.all(order == np.round(order)):
+        return f"firing_order = {shown} must list whole cylinder numbers"
+    z = int(cylinders)
+    numbers = [int(v) for v in order]
+    issues = []
+    if len(numbers) != z:
+        issues.append(f"it has {len(numbers)} entries for cylinders = {z}")
+    missing = sorted(set(range(1, z + 1)) - set(numbers))
+    repeated = sorted({c for c in numbers if numbers.count(c) > 1})
+    foreign = sorted({c for c in numbers if not 1 <= c <= z})
+    if missing:
+        issues.append("missing " + ", ".join(map(str, missing)))
+    if repeated:
+        issues.append("repeated " + ", ".join(map(str, repeated)))
+    if foreign:
+        issues.append("no such cylinder " + ", ".join(map(str, foreign)))
+    if not issues:
+        return None
+    return (f"firing_order = {shown} must list every cylinder 1…{z} exactly once "
+            f"({'; '.join(issues)})")
+
+
+def crank_params(points: dict[str, np.ndarray], model: str) -> np.ndarray:
+    """The kernel parameter matrix params[n, N_PARAMS] (SI) of these design points."""
+    n = len(points["stroke"])
+    params = np.empty((n, ck.N_PARAMS))
+    params[:, ck.CRANK_RADIUS] = 0.5 * points["stroke"]
+    params[:, ck.ROD_RATIO] = points["rod_ratio"]
+    params[:, ck.ANGULAR_SPEED] = points["engine_speed"]
+    params[:, ck.BORE] = points["bore"]
+    params[:, ck.RECIPROCATING_MASS] = points["reciprocating_mass"]
+    params[:, ck.ROTATING_MASS] = points["rotating_mass"]
+    params[:, ck.CRANKCASE_PRESSURE] = points["crankcase_pressure"]
+    params[:, ck.KINEMATICS_MODEL] = MODEL_CODES[model]
+    params[:, ck.CYLINDERS] = points["cylinders"]
+    return params
+
+
+def cycle_params(points: dict[str, np.ndarray]) -> np.ndarray:
+    """The single-zone cycle parameter matrix (SI) of these design points."""
+    n = len(points["stroke"])
+    params = np.empty((n, cb.N_PARAMS))
+    params[:, cb.BORE] = points["bore"]
+    params[:, cb.CRANK_RADIUS] = 0.5 * points["stroke"]
+    params[:, cb.ROD_RATIO] = points["rod_ratio"]
+    params[:, cb.COMPRESSION_RATIO] = points["compression_ratio"]
+    params[:, cb.INTAKE_PRESSURE] = points["intake_pressure"]
+    params[:, cb.EXHAUST_PRESSURE] = points["exhaust_pressure"]
+    params[:, cb.POLYTROPIC_EXPONENT] = points["polytropic_exponent"]
+    params[:, cb.COMBUSTION_START] = points["combustion_start"]
+    params[:, cb.COMBUSTION_DURATION] = points["combustion_duration"]
+    params[:, cb.WIEBE_EFFICIENCY] = points["wiebe_efficiency"]
+    params[:, cb.WIEBE_FORM] = points["wiebe_form"]
+    params[:, cb.HEAT_INPUT_MODE] = [HEAT_CODES[h] for h in points["heat_input"]]
+    params[:, cb.HEAT_RELEASED] = points["cycle_heat"]
+    params[:, cb.PEAK_PRESSURE_TARGET] = points["max_pressure"]
+    return params
+
+
+def layout_angles(points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Firing and cylinder-axis angles [rad] per design point, (n, z_max) each."""
+    z = points["cylinders"].astype(int)
+    n, z_max = len(z), int(z.max())
+    firing = np.zeros((n, z_max))
+    axis = np.zeros((n, z_max))
+    orders = points["firing_order"].astype(np.int64)
+    for i in range(n):
+        order = np.ascontiguousarray(orders[i])
+        gamma = float(points["bank_angle"][i])
+        kind = points["firing"][i]
+        if kind == "given":
+            firing[i, : z[i]] = points["firing_angles"][i, : z[i]]
+        elif kind == "shared_crankpins":
+            ck.v_crank_firing_angles(order, gamma, firing[i])
+        else:
+            ck.even_firing_angles(order, firing[i])
+        if points["layout"][i] == "v":
+            ck.v_axis_angles(order, gamma, axis[i])
+    return firing, axis
+
+
+def _empty_curves(n: int, count: int, store: bool, m: int) -> np.ndarray:
+    return np.empty((n, count, m if store else 0))
+
+
+class CrankScene(Scene):
+    """Slider-crank and multi-cylinder engine (SPEC §5)."""
+
+    name = "crank"
+    description = ("slider-crank kinematics (exact and two-term), gas and inertia forces, torque, "
+                   "multi-cylinder torque harmonics and free forces (SPEC §5)")
+    parameters = PARAMETERS
+    settings = SETTINGS
+    responses = RESPONSES
+    curves = CURVES
+    curve_axis = CRANK_ANGLE
+    stage_order = ("kinematics", "pressure", "forces", "multicylinder")
+
+    def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray:
+        m = angle_count(settings["angle_step"])
+        return CYCLE_DEG * np.arange(m) / m
+
+    # --- checks --------------------------------------------------------------------------
+    def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+        problems: list[str] = []
+        step_deg = math.degrees(settings["angle_step"])
+        if not math.isclose(CYCLE_DEG / step_deg, round(CYCLE_DEG / step_deg), abs_tol=1e-9):
+            problems.append(f"setting angle_step = {step_deg:g} deg must divide 720 deg (a "
+                            "whole number of grid points per cycle)")
+        found = PointProblems()
+        for i, lam in enumerate(points["rod_ratio"]):
+            if lam >= 1.0:
+                found.add(i, f"rod_ratio λ = r/l = {lam:g} must be < 1 (the connecting rod "
+                          "must be longer than the crank radius)")
+        self._check_layout(points, found)
+        self._check_pressure(points, found)
+        return problems + found.messages()
+
+    def _check_layout(self, points: dict[str, np.ndarray], found: PointProblems) -> None:
+        for i, z in enumerate(points["cylinders"]):
+            if z != round(z):
+                found.add(i, f"cylinders = {z:g} must be a whole number")
+                continue
+            problem = firing_order_problem(points["firing_order"][i], z)
+            if problem:
+                found.add(i, problem)
+            kind, layout = points["firing"][i], points["layout"][i]
+            if kind == "shared_crankpins" and (layout != "v" or z % 2):
+                found.add(i, f"firing = 'shared_crankpins' needs layout = 'v' and an even "
+                          f"number of cylinders (layout = {layout!r}, cylinders = {z:g})")
+            given = points["firing_angles"][i]
+            if kind == "given" and given.size != z:
+                found.add(i, f"firing = 'given' needs one firing angle per cylinder: "
+                          f"firing_angles has {given.size} for cylinders = {z:g}")
+
+    def _check_pressure(self, points: dict[str, np.ndarray], found: PointProblems) -> None:
+        table = np.flatnonzero(points["pressure_model"] == "table")
+        if table.size:
+            try:
+                read_pressure_table(points["pressure_table"][table[0]])
+            except ValueError as exc:
+                found.add_all(table, str(exc))
+        for i in np.flatnonzero(points["pressure_model"] == "cycle"):
+            end = math.degrees(points["combustion_start"][i] + points["combustion_duration"][i])
+            if end > EXHAUST_OPENING_DEG:
+                found.add(i, f"combustion_start + combustion_duration = {end:g} deg after "
+                          "firing TDC must be ≤ 180 deg (the exhaust opens at BDC)")
+            if points["heat_input"][i] != "max_pressure":
+                continue
+            p_c = points["intake_pressure"][i] * points["compression_ratio"][i] ** points[
+                "polytropic_exponent"][i]
+            if p_c >= points["max_pressure"][i]:
+                found.add(i, f"max_pressure = {points['max_pressure'][i] / 1e6:g} MPa is not "
+                          f"above the compression pressure p_a ε^k = {p_c / 1e6:.4g} MPa: "
+                          "no heat release can reach it")
+
+    # --- stages --------------------------------------------------------------------------
+    def stage_kinematics(
+        self, params: np.ndarray, n_angles: int, store: bool
+    ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+        n = params.shape[0]
+        out = np.empty((n, ck.N_KINEMATICS_OUT))
+        curves = _empty_curves(n, ck.N_KINEMATICS_CURVES, store, n_angles)
+        ck.crank_kinematics_batch(params, n_angles, out, curves)
+        scalars = dict(zip(ck.KINEMATICS_OUTPUTS, out.T, strict=True))
+        r = params[:, ck.CRANK_RADIUS]
+        omega = params[:, ck.ANGULAR_SPEED]
+        scalars["approx_error_displacement_relative"] = scalars["approx_error_displacement"] / r
+        scalars["approx_error_velocity_relative"] = scalars["approx_error_velocity"] / (r * omega)
+        scalars["approx_error_acceleration_relative"] = (
+            scalars["approx_error_acceleration"] / (r * omega**2)
+        )
+        return scalars, dict(zip(ck.KINEMATICS_CURVES, curves.transpose(1, 0, 2), strict=True))
+
+    def stage_pressure(
+        self, points: dict[str, np.ndarray], n_angles: int
+    ) -> tuple[dict[str, np.ndarray], np.ndarray]:
+        n = len(points["stroke"])
+        pressure = np.empty((n, n_angles))
+        values = np.full((n, cb.N_OUT), np.nan)
+        cycle = points["pressure_model"] == "cycle"
+        if cycle.any():
+            out = np.empty((int(cycle.sum()), cb.N_OUT))
+            part = np.empty((out.shape[0], n_angles))
+            cb.cycle_pressure_batch(cycle_params(points)[cycle], out, part)
+            pressure[cycle], values[cycle] = part, out
+        if not cycle.all():
+            angle, table = read_pressure_table(points["pressure_table"][~cycle][0])
+            grid = resample_pressure(angle, table, n_angles)
+            peak = int(np.argmax(grid))
+            pressure[~cycle] = grid
+            values[~cycle, cb.OUT_PEAK_PRESSURE] = grid[peak]
+            values[~cycle, cb.OUT_PEAK_PRESSURE_ANGLE] = (
+                ck.CYCLE_ANGLE * peak / n_angles - 2.0 * math.pi
+            )
+        scalars = dict(zip(cb.OUTPUTS, values.T, strict=True))
+        for name in CYCLE_ONLY:
+            scalars[name] = np.where(cycle, scalars[name], np.nan)
+        return scalars, pressure
+
+    def stage_forces(
+        self, params: np.ndarray, pressure: np.ndarray, store: bool
+    ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+        n, m = pressure.shape
+        out = np.empty((n, ck.N_FORCE_OUT))
+        curves = _empty_curves(n, ck.N_FORCE_CURVES, store, m)
+        ck.crank_forces_batch(params, pressure, out, curves)
+        scalars = {FORCE_NAMES.get(k, k): v for k, v in zip(ck.FORCE_OUTPUTS, out.T, strict=True)}
+        named = {FORCE_NAMES.get(k, k): v
+                 for k, v in zip(ck.FORCE_CURVES, curves.transpose(1, 0, 2), strict=True)}
+        return scalars, named
+
+    def stage_multicylinder(
+        self,
+        params: np.ndarray,
+        pressure: np.ndarray,
+        firing: np.ndarray,
+        axis: np.ndarray,
+        store: bool,
+    ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+        n, m = pressure.shape
+        out = np.empty((n, ck.N_MULTI_OUT))
+        harmonics = np.empty((n, MAX_ORDER_HALVES))
+        curves = _empty_curves(n, 1, store, m)
+        ck.crank_multicylinder_batch(params, pressure, firing, axis, out, harmonics, curves)
+        scalars = dict(zip(ck.MULTI_OUTPUTS, out.T, strict=True))
+        for q in range(MAX_ORDER_HALVES):
+            scalars[order_name(q + 1)] = harmonics[:, q]
+        scalars["dominant_torque_order"] = (np.argmax(harmonics, axis=1) + 1) / 2.0
+        scalars["dominant_torque_amplitude"] = harmonics.max(axis=1)
+        return scalars, {"engine_torque": curves[:, 0]}
+
+    # --- evaluation ----------------------------------------------------------------------
+    def evaluate(
+        self,
+        points: dict[str, np.ndarray],
+        settings: dict[str, Any],
+        responses: list[str],
+        curves: list[str],
+    ) -> SceneOutput:
+        stages = self.stages_for(responses, curves)
+        m = angle_count(settings["angle_step"])
+        params = crank_params(points, settings["model"])
+        producers = {self.curve(c).needs[-1] for c in curves}  # type: ignore[union-attr]
+        scalars: dict[str, np.ndarray] = {}
+        curves_si: dict[str, np.ndarray] = {}
+
+        def store(stage: str) -> bool:  # a curve's last stage is the one that produces it
+            return stage in producers
+
+        if "kinematics" in stages:
+            s, c = self.stages["kinematics"](params, m, store("kinematics"))
+            scalars |= s
+            curves_si |= c
+        if "pressure" in stages:
+            s, pressure = self.stages["pressure"](points, m)
+            scalars |= s
+            curves_si["cylinder_pressure"] = pressure
+        if "forces" in stages:
+            s, c = self.stages["forces"](params, pressure, store("forces"))
+            scalars |= s
+            curves_si |= c
+        if "multicylinder" in stages:
+            firing, axis = layout_angles(points)
+            s, c = self.stages["multicylinder"](params, pressure, firing, axis,
+                                                store("multicylinder"))
+            scalars |= s
+            curves_si |= c
+        return SceneOutput(
+            scalars={r: scalars[r] / self._scale(r) for r in responses},
+            curves={c: curves_si[c] / self._scale(c) for c in curves},
+        )
+
+    def _scale(self, name: str) -> float:
+        """SI value of one unit of the response or curve ``name``."""
+        declared = self.response(name) or self.curve(name)
+        assert declared is not None
+        return UNITS[declared.units].to_si

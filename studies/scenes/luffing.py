@@ -1,0 +1,86 @@
+"""The ``luffing`` scene: trolley-drive sizing checks of the tower-crane test rig (SPEC §7).
+
+One stage, ``sizing`` (:func:`engine_kernels.luffing.luffing_batch`): the chain resistance →
+work power → motor power → next rated motor → belt, pulley, shaft load → coupling torque, key,
+bearing life, and the guide-tube deflection and slope. Every check is reported as value, limit
+and pass flag; ``all_checks_ok`` and ``checks_passed`` sum them up.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from engine_kernels import luffing as lf
+from studies.scenes.base import Scene, SceneOutput
+from studies.scenes.checks import PointProblems
+from studies.scenes.luffing_parameters import CHECKS, KERNEL_NAMES, NEEDS, PARAMETERS, RESPONSES
+from studies.units import UNITS
+
+BEARING_CODES = {"ball": lf.BALL_BEARING, "roller": lf.ROLLER_BEARING}
+COLUMNS = {name: getattr(lf, name.upper()) for name in lf.PARAM_NAMES}
+"""Kernel column of each parameter (the scene's parameter names are the kernel's)."""
+
+
+def luffing_params(points: dict[str, np.ndarray]) -> np.ndarray:
+    """The kernel parameter matrix params[n, N_PARAMS] (SI) of these design points."""
+    n = len(points["trolley_mass"])
+    params = np.empty((n, lf.N_PARAMS))
+    for name, column in COLUMNS.items():
+        if name == "bearing_type":
+            params[:, column] = [BEARING_CODES[b] for b in points[name]]
+        else:
+            params[:, column] = points[name]
+    return params
+
+
+class LuffingScene(Scene):
+    """Tower-crane test-rig trolley drive (SPEC §7)."""
+
+    name = "luffing"
+    description = ("tower-crane test-rig trolley drive: motor, belt, coupling, key, bearing and "
+                   "guide-tube checks as value, limit and pass (SPEC §7)")
+    parameters = PARAMETERS
+    responses = RESPONSES
+    stage_order = NEEDS
+
+    def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+        found = PointProblems()
+        mm = UNITS["mm"].to_si
+        for i in range(len(points["trolley_mass"])):
+            outer, inner = points["tube_outer_diameter"][i], points["tube_inner_diameter"][i]
+            if inner >= outer:
+                found.add(i, f"tube_inner_diameter = {inner / mm:g} mm must be smaller than "
+                          f"tube_outer_diameter = {outer / mm:g} mm")
+            ratings = points["motor_ratings"][i]
+            if np.any(ratings <= 0) or np.any(np.diff(ratings) <= 0):
+                shown = ", ".join(f"{r:g}" for r in ratings)
+                found.add(i, f"motor_ratings = [{shown}] W must be positive and strictly "
+                          "ascending")
+        return found.messages()
+
+    def stage_sizing(self, params: np.ndarray, ratings: np.ndarray) -> np.ndarray:
+        out = np.empty((params.shape[0], lf.N_OUT))
+        lf.luffing_batch(params, ratings, out)
+        return out
+
+    def evaluate(
+        self,
+        points: dict[str, np.ndarray],
+        settings: dict[str, Any],
+        responses: list[str],
+        curves: list[str],
+    ) -> SceneOutput:
+        ratings = np.ascontiguousarray(points["motor_ratings"][0])  # a vector: same in every run
+        # One stage: every response needs it, so it always runs.
+        out = self.stages["sizing"](luffing_params(points), ratings)
+        si = dict(zip(KERNEL_NAMES, out.T, strict=True))
+        si["selected_motor"] = si["selected_motor"] + 1.0
+        flags = np.stack([si[f"{c}_ok"] for c in CHECKS])
+        si["checks_passed"] = flags.sum(axis=0)
+        si["all_checks_ok"] = flags.min(axis=0)
+        return SceneOutput(
+            scalars={r: si[r] / UNITS[self.response(r).units].to_si  # type: ignore[union-attr]
+                     for r in responses},
+        )

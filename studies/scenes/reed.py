@@ -1,0 +1,197 @@
+"""The ``reed`` scene: reed-valve natural frequencies, mode shapes and resonance margins (SPEC §6).
+
+One stage, ``frequencies`` (:func:`engine_kernels.reed.reed_batch`): roots of the clamped–free
+frequency equation [B1], natural frequencies [B2] of the first ``N_MODES`` modes, the engine
+excitation band from the speed range, the signed margin of each mode to the band (positive
+outside, negative inside), the lowest engine-order harmonic that reaches f₁ and the speed at
+which it does, and (as curves) the mode shapes along the reed.
+
+Materials (the ``material`` factor has string levels; E and ρ from this table):
+
+============  =========  ===========  ==============================================
+material      E [GPa]    ρ [kg/m³]    source
+============  =========  ===========  ==============================================
+spring_steel  208        7800         SPEC §6 reference reed
+stainless     193        7900         AISI 301 spring-temper strip, typical handbook
+                                      values (assumption)
+glass_epoxy   18.6       1850         G-10/FR-4 laminate, lengthwise flexural
+                                      modulus, typical datasheet values (assumption)
+custom        youngs_modulus, density parameters
+============  =========  ===========  ==============================================
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from engine_kernels import reed as rd
+from studies.scenes.base import Curve, CurveAxis, Parameter, Response, Scene, SceneOutput
+from studies.scenes.checks import PointProblems
+from studies.units import UNITS
+
+SRC = "SPEC §6 reference reed"
+MATERIALS: dict[str, tuple[float, float]] = {
+    "spring_steel": (208e9, 7800.0),
+    "stainless": (193e9, 7900.0),
+    "glass_epoxy": (18.6e9, 1850.0),
+}
+"""Young's modulus [Pa] and density [kg/m³] of the tabulated materials (module docstring)."""
+OPENINGS = {"four_stroke": 0.5, "two_stroke": 1.0}
+"""Reed openings per crank revolution."""
+N_MODES = 4
+MODE_WORDS = ("first", "second", "third", "fourth")
+MIN_SLENDERNESS = 10.0
+"""Smallest length/thickness for which Euler–Bernoulli beam theory is used."""
+
+PARAMETERS: tuple[Parameter, ...] = (
+    Parameter("length", "mm", 35.0, "free length l of the reed", 0.0, 1000.0, True, source=SRC),
+    Parameter("width", "mm", 11.5, "width b of the reed", 0.0, 1000.0, True, source=SRC),
+    Parameter("thickness", "mm", 0.3, "thickness h of the reed", 0.0, 100.0, True, source=SRC),
+    Parameter("material", "-", "spring_steel", "reed material (E, ρ from the scene's table; "
+              "'custom' uses youngs_modulus and density)", choices=(*MATERIALS, "custom"),
+              source=SRC),
+    Parameter("youngs_modulus", "GPa", 208.0, "Young's modulus E (material = 'custom')",
+              0.0, 2000.0, True, source=SRC),
+    Parameter("density", "kg/m^3", 7800.0, "density ρ (material = 'custom')", 0.0, 1e5, True,
+              source=SRC),
+    Parameter("speed_min", "rpm", 1200.0, "lowest engine speed of the excitation band",
+              0.0, 1e5, True, source="SPEC §6"),
+    Parameter("speed_max", "rpm", 9000.0, "highest engine speed of the excitation band",
+              0.0, 1e5, True, source="SPEC §6"),
+    Parameter("cycle", "-", "four_stroke", "engine cycle: the reed opens once per cycle",
+              choices=tuple(OPENINGS), source="SPEC §6"),
+)
+
+SETTINGS: tuple[Parameter, ...] = (
+    Parameter("shape_points", "1", 51.0, "points along the reed for the mode-shape curves",
+              2.0, 10001.0),
+)
+
+NEEDS = ("frequencies",)
+
+
+def _mode_responses() -> tuple[Response, ...]:
+    out: list[Response] = []
+    for word in MODE_WORDS:
+        out += [
+            Response(f"{word}_frequency", "Hz", f"{word} natural frequency", NEEDS, "larger"),
+            Response(f"{word}_margin", "Hz", f"margin of the {word} mode to the excitation band "
+                     "(> 0 outside, < 0 inside)", NEEDS, "larger"),
+        ]
+    return tuple(out)
+
+
+RESPONSES: tuple[Response, ...] = (
+    *_mode_responses(),
+    Response("first_margin_ratio", "1", "first-mode margin over the first frequency", NEEDS,
+             "larger"),
+    Response("band_min", "Hz", "lowest excitation frequency", NEEDS),
+    Response("band_max", "Hz", "highest excitation frequency", NEEDS),
+    Response("first_mode_clear", "1", "first natural frequency outside the excitation band",
+             NEEDS, "larger", flag=True),
+    Response("all_modes_clear", "1", f"all {N_MODES} natural frequencies outside the band",
+             NEEDS, "larger", flag=True),
+    Response("harmonic_order", "1", "lowest engine-order harmonic of the band reaching f₁",
+             NEEDS, "larger"),
+    Response("resonance_speed", "rpm", "engine speed at which that harmonic meets f₁", NEEDS,
+             "larger"),
+    Response("tip_stiffness", "N/m", "static tip stiffness 3EI/l³", NEEDS, "larger"),
+    Response("mass", "g", "reed mass ρ b h l", NEEDS),
+)
+
+CURVES: tuple[Curve, ...] = tuple(
+    Curve(f"mode_shape_{k + 1}", "1", f"{MODE_WORDS[k]} mode shape (unit tip deflection)", NEEDS)
+    for k in range(N_MODES)
+)
+
+POSITION = CurveAxis("position", "1", "position along the reed x/l from the clamp")
+
+
+def material_properties(points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Young's modulus [Pa] and density [kg/m³] per design point."""
+    listed = np.array([MATERIALS.get(m, (np.nan, np.nan)) for m in points["material"]])
+    modulus, density = listed[:, 0], listed[:, 1]
+    custom = points["material"] == "custom"
+    modulus[custom] = points["youngs_modulus"][custom]
+    density[custom] = points["density"][custom]
+    return modulus, density
+
+
+class ReedScene(Scene):
+    """Clamped–free reed valve excited by the engine (SPEC §6)."""
+
+    name = "reed"
+    description = ("reed-valve natural frequencies, mode shapes and margins to the engine's "
+                   "excitation band (SPEC §6)")
+    parameters = PARAMETERS
+    settings = SETTINGS
+    responses = RESPONSES
+    curves = CURVES
+    curve_axis = POSITION
+    stage_order = NEEDS
+
+    def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray:
+        return np.linspace(0.0, 1.0, int(settings["shape_points"]))
+
+    def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+        problems = []
+        g = settings["shape_points"]
+        if g != round(g):
+            problems.append(f"setting shape_points = {g:g} must be a whole number")
+        found = PointProblems()
+        mm = UNITS["mm"].to_si
+        rpm = UNITS["rpm"].to_si
+        for i in range(len(points["length"])):
+            lo, hi = points["speed_min"][i], points["speed_max"][i]
+            if lo >= hi:
+                found.add(i, f"speed_min = {lo / rpm:g} rpm must be below speed_max = "
+                          f"{hi / rpm:g} rpm")
+            length, h = points["length"][i], points["thickness"][i]
+            if length < MIN_SLENDERNESS * h:
+                found.add(i, f"length/thickness = {length / mm:g} mm / {h / mm:g} mm = "
+                          f"{length / h:.3g} is below {MIN_SLENDERNESS:g}: the reed is not a "
+                          "slender beam and [B1]/[B2] do not apply")
+        return problems + found.messages()
+
+    def stage_frequencies(
+        self, params: np.ndarray, n_points: int
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        n = params.shape[0]
+        out = np.empty((n, rd.N_OUT))
+        modes = np.empty((n, rd.N_MODE_OUT, N_MODES))
+        shapes = np.empty((n, N_MODES, n_points))
+        rd.reed_batch(params, out, modes, shapes)
+        return out, modes, shapes
+
+    def evaluate(
+        self,
+        points: dict[str, np.ndarray],
+        settings: dict[str, Any],
+        responses: list[str],
+        curves: list[str],
+    ) -> SceneOutput:
+        n = len(points["length"])
+        params = np.empty((n, rd.N_PARAMS))
+        params[:, rd.LENGTH] = points["length"]
+        params[:, rd.WIDTH] = points["width"]
+        params[:, rd.THICKNESS] = points["thickness"]
+        params[:, rd.YOUNGS_MODULUS], params[:, rd.DENSITY] = material_properties(points)
+        params[:, rd.SPEED_MIN] = points["speed_min"]
+        params[:, rd.SPEED_MAX] = points["speed_max"]
+        params[:, rd.OPENINGS_PER_REVOLUTION] = [OPENINGS[c] for c in points["cycle"]]
+        n_points = int(settings["shape_points"]) if curves else 0
+        # One stage: every response and curve needs it, so it always runs.
+        out, modes, shapes = self.stages["frequencies"](params, n_points)
+        si = dict(zip(rd.OUTPUTS, out.T, strict=True))
+        for k, word in enumerate(MODE_WORDS):
+            si[f"{word}_frequency"] = modes[:, rd.MODE_FREQUENCY, k]
+            si[f"{word}_margin"] = modes[:, rd.MODE_MARGIN, k]
+        si["first_mode_clear"] = (modes[:, rd.MODE_MARGIN, 0] > 0).astype(float)
+        si["all_modes_clear"] = (modes[:, rd.MODE_MARGIN, :] > 0).all(axis=1).astype(float)
+        return SceneOutput(
+            scalars={r: si[r] / UNITS[self.response(r).units].to_si  # type: ignore[union-attr]
+                     for r in responses},
+            curves={c: shapes[:, int(c.rsplit("_", 1)[1]) - 1] for c in curves},
+        )
