@@ -1,11 +1,11 @@
 """Developer and user sessions: tests, lint, studies, benchmarks.
 
-    nox -s tests                      the test-suite (what CI runs)
-    nox -s lint                       ruff, mypy and the import contract
-    nox -s study -- isac_l9 [opts]    run one catalogue study (or a TOML path)
-    nox -s studies                    run every shipped study
-    nox -s baseline                   refresh the regression baseline under tests/
-    nox -s bench                      benchmarks (figures printed and written to outputs/bench)
+nox -s tests                      the test-suite (what CI runs)
+nox -s lint                       ruff, mypy and the import contract
+nox -s study -- isac_l9 [opts]    run one catalogue study (or a TOML path)
+nox -s studies                    run every shipped study
+nox -s baseline                   refresh the regression baseline under tests/
+nox -s bench                      benchmarks (figures printed and written to outputs/bench)
 """
 
 from __future__ import annotations

@@ -1,12 +1,12 @@
 """Command line: ``python -m studies COMMAND``.
 
-    run STUDY|--all        validate, run and record a study (catalogue name or TOML path)
-    check STUDY            validate only: list every problem, run nothing
-    list                   the shipped studies
-    scenes [NAME]          document scenes: parameters, settings, responses, curves (units)
-    analyze RESULTS.nc     range analysis + ANOVA tables and main-effect plots beside the file
-    runs [--study S]       the run registry, newest first
-    show RUN_ID            one run's record
+run STUDY|--all        validate, run and record a study (catalogue name or TOML path)
+check STUDY            validate only: list every problem, run nothing
+list                   the shipped studies
+scenes [NAME]          document scenes: parameters, settings, responses, curves (units)
+analyze RESULTS.nc     range analysis + ANOVA tables and main-effect plots beside the file
+runs [--study S]       the run registry, newest first
+show RUN_ID            one run's record
 """
 
 from __future__ import annotations
@@ -28,8 +28,10 @@ def main(argv: list[str] | None = None) -> int:
         return int(args.func(args) or 0)
     except StudyError as exc:
         print(f"error: {exc}", file=sys.stderr)
-        print("(nothing was run or written; `python -m studies scenes` documents every name)",
-              file=sys.stderr)
+        print(
+            "(nothing was run or written; `python -m studies scenes` documents every name)",
+            file=sys.stderr,
+        )
         return EXIT_STUDY_ERROR
     except (FileNotFoundError, ValueError, KeyError) as exc:
         print(f"error: {exc}", file=sys.stderr)
@@ -37,8 +39,11 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m studies", description=__doc__,
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = argparse.ArgumentParser(
+        prog="python -m studies",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     sub = p.add_subparsers(required=True, metavar="COMMAND")
 
     run = sub.add_parser("run", help="validate, run and record a study")
@@ -89,8 +94,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
     for plan in plans:
         result = run_plan(plan, args.outputs, args.chunk_size, progress=not args.no_progress)
         t = result.record.timings
-        print(f"{plan.definition.name}: {plan.runs} design points ({plan.design.name}), "
-              f"compile {t['compile_s']:.2f} s, run {t['run_s']:.3f} s")
+        print(
+            f"{plan.definition.name}: {plan.runs} design points ({plan.design.name}), "
+            f"compile {t['compile_s']:.2f} s, run {t['run_s']:.3f} s"
+        )
         for f in result.files:
             print(f"  {f}")
     return 0
@@ -101,8 +108,10 @@ def _cmd_check(args: argparse.Namespace) -> int:
 
     plan = plan_study(args.study)
     d = plan.definition
-    print(f"{d.name}: OK — scene {d.scene}, design {plan.design.name}, {plan.runs} runs, "
-          f"stages {', '.join(plan.stages)}")
+    print(
+        f"{d.name}: OK — scene {d.scene}, design {plan.design.name}, {plan.runs} runs, "
+        f"stages {', '.join(plan.stages)}"
+    )
     return 0
 
 
@@ -145,12 +154,16 @@ def _cmd_runs(args: argparse.Namespace) -> int:
     if not rows:
         print(f"no runs recorded under {args.outputs}")
         return 0
-    print(f"{'run id':<30} {'study':<20} {'status':<9} {'runs':>6} {'compile s':>10} "
-          f"{'run s':>8}  commit")
+    print(
+        f"{'run id':<30} {'study':<20} {'status':<9} {'runs':>6} {'compile s':>10} "
+        f"{'run s':>8}  commit"
+    )
     for r in rows:
         dirty = "+dirty" if r["git_dirty"] else ""
-        print(f"{r['run_id']:<30} {r['study']:<20} {r['status']:<9} {r['runs']:>6} "
-              f"{_num(r['compile_s']):>10} {_num(r['run_s']):>8}  {r['git_commit'][:10]}{dirty}")
+        print(
+            f"{r['run_id']:<30} {r['study']:<20} {r['status']:<9} {r['runs']:>6} "
+            f"{_num(r['compile_s']):>10} {_num(r['run_s']):>8}  {r['git_commit'][:10]}{dirty}"
+        )
     return 0
 
 

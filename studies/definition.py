@@ -45,8 +45,16 @@ from studies.units import UNITS
 
 CATALOG = Path(__file__).parent / "catalog"
 TOP_LEVEL_KEYS = {
-    "name", "scene", "description", "responses", "curves", "design", "settings", "parameters",
-    "factors", "sense",
+    "name",
+    "scene",
+    "description",
+    "responses",
+    "curves",
+    "design",
+    "settings",
+    "parameters",
+    "factors",
+    "sense",
 }
 DESIGN_KEYS = {"type", "error_columns"}
 FACTOR_KEYS = {"levels", "units", "column", "base"}
@@ -103,8 +111,9 @@ def find_study(name_or_path: str | Path) -> Path:
     if candidate.exists():
         return candidate
     known = ", ".join(catalog_names()) or "none"
-    problem = (f"no study named {str(name_or_path)!r} in the catalogue (known: {known}) "
-               "and no such file")
+    problem = (
+        f"no study named {str(name_or_path)!r} in the catalogue (known: {known}) and no such file"
+    )
     raise StudyError(str(name_or_path), [problem])
 
 
@@ -173,10 +182,18 @@ class _Parser:
         if not factors and not self.problems:
             self.problem("no [factors]: a study needs at least one varied parameter")
         definition = StudyDefinition(
-            name=name or "", scene=scene.name, description=self._string("description") or "",
-            design=design, responses=tuple(responses), curves=tuple(curves),
-            parameters=parameters, factors=tuple(factors), settings=settings,
-            error_columns=tuple(error_columns), sense=dict(sense), text=self.text,
+            name=name or "",
+            scene=scene.name,
+            description=self._string("description") or "",
+            design=design,
+            responses=tuple(responses),
+            curves=tuple(curves),
+            parameters=parameters,
+            factors=tuple(factors),
+            settings=settings,
+            error_columns=tuple(error_columns),
+            sense=dict(sense),
+            text=self.text,
             source=self.source,
         )
         return definition, self.problems
@@ -255,7 +272,8 @@ class _Parser:
 
     def _parameters(self, scene: Scene, raw: dict[str, Any]) -> dict[str, tuple[Any, str]]:
         out: dict[str, tuple[Any, str]] = {}
-        for name, value in raw.items():
+        for name, given in raw.items():
+            value = given
             param = scene.parameter(name)
             if param is None:
                 known = [p.name for p in scene.parameters]
@@ -264,13 +282,13 @@ class _Parser:
                 )
                 continue
             units = param.units
-            if isinstance(value, dict):
-                extra = set(value) - {"value", "units"}
-                if extra or "value" not in value:
+            if isinstance(given, dict):
+                extra = set(given) - {"value", "units"}
+                if extra or "value" not in given:
                     self.problem(f"parameter {name} must be a number or {{value = …, units = …}}")
                     continue
-                units = value.get("units", param.units)
-                value = value["value"]
+                units = given.get("units", param.units)
+                value = given["value"]
             if not self._units_ok(f"parameter {name}", param, units):
                 continue
             problem = param.check(value, None if param.kind != "number" else units)
@@ -349,8 +367,9 @@ class _Parser:
             setting = scene.setting(name)
             if setting is None:
                 known = [s.name for s in scene.settings]
-                self.problem(f"unknown setting {name!r} for scene {scene.name!r}"
-                             f"{_suggest(name, known)}")
+                self.problem(
+                    f"unknown setting {name!r} for scene {scene.name!r}{_suggest(name, known)}"
+                )
                 continue
             problem = setting.check(value)
             if problem:

@@ -31,8 +31,10 @@ def read_lift_table(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     data = np.atleast_2d(data)
     data = data[~np.isnan(data).all(axis=1)] if data.size else data
     if data.ndim != 2 or data.shape[1] != 2 or not np.isfinite(data).all():
-        raise ValueError(f"lift_table {path}: expected two numeric columns "
-                         "'cam angle [deg], lift [mm]' on every row")
+        raise ValueError(
+            f"lift_table {path}: expected two numeric columns "
+            "'cam angle [deg], lift [mm]' on every row"
+        )
     angle, lift = data[:, 0], data[:, 1]
     if len(angle) < MIN_POINTS:
         raise ValueError(f"lift_table {path}: {len(angle)} rows, need at least {MIN_POINTS}")

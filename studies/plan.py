@@ -50,7 +50,7 @@ def plan_text(text: str, source: str = "<string>") -> Plan:
 
 def _plan(definition: StudyDefinition | None, problems: list[str]) -> Plan:
     source = definition.source if definition else "<string>"
-    if definition is None or problems and not definition.factors:
+    if definition is None or (problems and not definition.factors):
         raise StudyError(source, problems)
     scene = get_scene(definition.scene)
     design = None
@@ -65,7 +65,8 @@ def _plan(definition: StudyDefinition | None, problems: list[str]) -> Plan:
     }
     points = _points(scene, definition, factor_values, design.runs)
     settings = {
-        s.name: s.to_si(definition.settings[s.name]) if s.kind == "number"
+        s.name: s.to_si(definition.settings[s.name])
+        if s.kind == "number"
         else definition.settings[s.name]
         for s in scene.settings
     }
@@ -90,8 +91,10 @@ def _design(d: StudyDefinition) -> designs.Design:
         columns = {f.name: f.column for f in d.factors}
         return designs.orthogonal(d.design, counts, columns, d.error_columns)
     known = ", ".join(i.name.split("(")[0] for i in designs.list_orthogonal_arrays())
-    problem = (f"unknown design {d.design!r}: use full_factorial, sweep, auto or an orthogonal "
-               f"array ({known})")
+    problem = (
+        f"unknown design {d.design!r}: use full_factorial, sweep, auto or an orthogonal "
+        f"array ({known})"
+    )
     raise designs.DesignError([problem])
 
 

@@ -8,8 +8,16 @@ from functools import cache
 from importlib import metadata
 from pathlib import Path
 
-PACKAGES = ("engine-studies", "numba", "numpy", "scipy", "xarray", "netCDF4", "pandas",
-            "matplotlib")
+PACKAGES = (
+    "engine-studies",
+    "numba",
+    "numpy",
+    "scipy",
+    "xarray",
+    "netCDF4",
+    "pandas",
+    "matplotlib",
+)
 SOURCE_ROOT = Path(__file__).resolve().parent.parent
 
 
@@ -18,13 +26,29 @@ def git_state() -> tuple[str, bool]:
     """(commit, dirty) of the source tree the code runs from; ("unknown", True) outside git."""
     try:
         commit = subprocess.run(
-            ["git", "rev-parse", "HEAD"], cwd=SOURCE_ROOT, capture_output=True, text=True,
-            check=True, timeout=10,
+            ["git", "rev-parse", "HEAD"],
+            cwd=SOURCE_ROOT,
+            capture_output=True,
+            text=True,
+            check=True,
+            timeout=10,
         ).stdout.strip()
         status = subprocess.run(
-            ["git", "status", "--porcelain", "--untracked-files=no", "--", "engine_kernels",
-             "studies", "pyproject.toml"],
-            cwd=SOURCE_ROOT, capture_output=True, text=True, check=True, timeout=10,
+            [
+                "git",
+                "status",
+                "--porcelain",
+                "--untracked-files=no",
+                "--",
+                "engine_kernels",
+                "studies",
+                "pyproject.toml",
+            ],
+            cwd=SOURCE_ROOT,
+            capture_output=True,
+            text=True,
+            check=True,
+            timeout=10,
         ).stdout.strip()
     except (OSError, subprocess.SubprocessError):
         return "unknown", True

@@ -32,13 +32,22 @@ def build_dataset(plan: Plan, ev: Evaluation, attrs: dict[str, Any]) -> xr.Datas
     for f in d.factors:
         param = scene.parameter(f.name)
         long_name = param.long_name if param else f.name
-        coords[f.name] = ("run", plan.factor_values[f.name],
-                          {"units": f.units, "long_name": long_name})
-        coords[f"{f.name}_level"] = ("run", design.levels[f.name].astype(np.int32),
-                                     {"units": "1", "long_name": f"level index of {f.name}"})
+        coords[f.name] = (
+            "run",
+            plan.factor_values[f.name],
+            {"units": f.units, "long_name": long_name},
+        )
+        coords[f"{f.name}_level"] = (
+            "run",
+            design.levels[f.name].astype(np.int32),
+            {"units": "1", "long_name": f"level index of {f.name}"},
+        )
     for e in design.error_columns:
-        coords[f"{e}_level"] = ("run", design.levels[e].astype(np.int32),
-                                {"units": "1", "long_name": f"empty array column {e} (error)"})
+        coords[f"{e}_level"] = (
+            "run",
+            design.levels[e].astype(np.int32),
+            {"units": "1", "long_name": f"empty array column {e} (error)"},
+        )
     for label, values in design.labels.items():
         coords[label] = ("run", values.astype(str), {"long_name": label.replace("_", " ")})
     data_vars: dict[str, Any] = {}
@@ -46,22 +55,34 @@ def build_dataset(plan: Plan, ev: Evaluation, attrs: dict[str, Any]) -> xr.Datas
         r = scene.response(name)
         assert r is not None
         values = ev.scalars[name]
-        attrs_r = {"units": r.units, "long_name": r.long_name, "better": d.sense.get(name, r.sense)}
+        attrs_r: dict[str, Any] = {
+            "units": r.units,
+            "long_name": r.long_name,
+            "better": d.sense.get(name, r.sense),
+        }
         if r.flag:
-            values = values.astype(np.int8)
-            attrs_r |= {"flag_values": np.array([0, 1], dtype=np.int8),
-                        "flag_meanings": "fails passes"}
+            values = np.where(np.isnan(values), -1, values).astype(np.int8)
+            attrs_r |= {
+                "flag_values": np.array([-1, 0, 1], dtype=np.int8),
+                "flag_meanings": "not_evaluated fails passes",
+            }
         data_vars[name] = ("run", values, attrs_r)
     if d.curves:
         axis = scene.curve_axis
         assert axis is not None
-        coords[axis.name] = (axis.name, scene.curve_coordinate(plan.settings),
-                             {"units": axis.units, "long_name": axis.long_name})
+        coords[axis.name] = (
+            axis.name,
+            scene.curve_coordinate(plan.settings),
+            {"units": axis.units, "long_name": axis.long_name},
+        )
         for name in d.curves:
             c = scene.curve(name)
             assert c is not None
-            data_vars[name] = (("run", axis.name), ev.curves[name],
-                               {"units": c.units, "long_name": c.long_name})
+            data_vars[name] = (
+                ("run", axis.name),
+                ev.curves[name],
+                {"units": c.units, "long_name": c.long_name},
+            )
     ds = xr.Dataset(data_vars, coords=coords)
     ds.attrs = {
         "title": f"{d.name}: {d.description}".strip(": "),
@@ -74,8 +95,16 @@ def build_dataset(plan: Plan, ev: Evaluation, attrs: dict[str, Any]) -> xr.Datas
         "settings": json.dumps(d.settings),
         "study_toml": d.text,
         "Conventions": "CF-1.10",
-        **{k: (json.dumps(v) if isinstance(v, (dict, list)) else
-               int(v) if isinstance(v, bool) else v) for k, v in attrs.items()},
+        **{
+            k: (
+                json.dumps(v)
+                if isinstance(v, (dict, list))
+                else int(v)
+                if isinstance(v, bool)
+                else v
+            )
+            for k, v in attrs.items()
+        },
     }
     return ds
 

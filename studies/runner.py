@@ -55,8 +55,9 @@ def evaluate(
     compile_s = time.perf_counter() - t0
     parts: list[SceneOutput] = []
     t1 = time.perf_counter()
-    bar = tqdm(total=plan.runs, unit="pt", desc=plan.definition.name, disable=not progress,
-               leave=False)
+    bar = tqdm(
+        total=plan.runs, unit="pt", desc=plan.definition.name, disable=not progress, leave=False
+    )
     with bar:
         for part in chunks(plan.runs, chunk_size):
             out = evaluate_chunk(plan, part)
@@ -67,6 +68,9 @@ def evaluate(
     run_s = time.perf_counter() - t1
     scalars = {k: np.concatenate([p.scalars[k] for p in parts]) for k in parts[0].scalars}
     curves = {k: np.concatenate([p.curves[k] for p in parts]) for k in parts[0].curves}
-    timings = {"compile_s": compile_s, "run_s": run_s,
-               "points_per_s": plan.runs / run_s if run_s > 0 else float("inf")}
+    timings = {
+        "compile_s": compile_s,
+        "run_s": run_s,
+        "points_per_s": plan.runs / run_s if run_s > 0 else float("inf"),
+    }
     return Evaluation(scalars, curves, timings)

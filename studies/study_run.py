@@ -52,17 +52,33 @@ def run_plan(
     folder = tracking.run_folder(outputs, d.name, run_id)
     (folder / "study.toml").write_text(d.text, encoding="utf-8")
     record = tracking.RunRecord(
-        run_id=run_id, study=d.name, scene=d.scene, design=plan.design.name, runs=plan.runs,
-        status="running", started=tracking.now(), git_commit=commit, git_dirty=dirty,
-        definition_sha256=tracking.definition_hash(d.text), folder=str(folder),
-        versions=provenance.versions(), host=provenance.host(), settings=dict(d.settings),
+        run_id=run_id,
+        study=d.name,
+        scene=d.scene,
+        design=plan.design.name,
+        runs=plan.runs,
+        status="running",
+        started=tracking.now(),
+        git_commit=commit,
+        git_dirty=dirty,
+        definition_sha256=tracking.definition_hash(d.text),
+        folder=str(folder),
+        versions=provenance.versions(),
+        host=provenance.host(),
+        settings=dict(d.settings),
     )
     record.write()
     tracking.register(outputs, record)
     try:
         ev = evaluate(plan, chunk_size=chunk_size, progress=progress)
-        attrs = {"run_id": run_id, "git_commit": commit, "git_dirty": dirty,
-                 "versions": record.versions, "timings": ev.timings, "created": record.started}
+        attrs = {
+            "run_id": run_id,
+            "git_commit": commit,
+            "git_dirty": dirty,
+            "versions": record.versions,
+            "timings": ev.timings,
+            "created": record.started,
+        }
         ds = build_dataset(plan, ev, attrs)
         files = [write_netcdf(ds, folder / "results.nc")]
         files += write_analysis(ds, folder)
@@ -75,4 +91,3 @@ def run_plan(
     record.write()
     tracking.register(outputs, record)
     return RunResult(record, ds, folder, (folder / "study.toml", folder / "run.json", *files))
-

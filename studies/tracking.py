@@ -26,8 +26,22 @@ from pathlib import Path
 from typing import Any
 
 REGISTRY = "registry.sqlite"
-COLUMNS = ("run_id", "study", "scene", "design", "runs", "status", "started", "finished",
-           "git_commit", "git_dirty", "compile_s", "run_s", "folder", "definition_sha256")
+COLUMNS = (
+    "run_id",
+    "study",
+    "scene",
+    "design",
+    "runs",
+    "status",
+    "started",
+    "finished",
+    "git_commit",
+    "git_dirty",
+    "compile_s",
+    "run_s",
+    "folder",
+    "definition_sha256",
+)
 
 
 @dataclass
@@ -58,7 +72,7 @@ class RunRecord:
 
 
 def now() -> str:
-    return dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds")
+    return dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
 
 
 def definition_hash(text: str) -> str:
@@ -66,7 +80,7 @@ def definition_hash(text: str) -> str:
 
 
 def new_run_id(text: str) -> str:
-    stamp = dt.datetime.now(dt.timezone.utc).strftime("%Y%m%dT%H%M%S%f")[:-3]
+    stamp = dt.datetime.now(dt.UTC).strftime("%Y%m%dT%H%M%S%f")[:-3]
     return f"{stamp}-{definition_hash(text)[:6]}"
 
 
@@ -86,8 +100,10 @@ def register(outputs: Path, record: RunRecord) -> None:
     }
     with closing(_connect(outputs)) as con, con:
         placeholders = ", ".join("?" for _ in COLUMNS)
-        con.execute(f"INSERT OR REPLACE INTO runs ({', '.join(COLUMNS)}) VALUES ({placeholders})",
-                    [row.get(c) for c in COLUMNS])
+        con.execute(
+            f"INSERT OR REPLACE INTO runs ({', '.join(COLUMNS)}) VALUES ({placeholders})",
+            [row.get(c) for c in COLUMNS],
+        )
 
 
 def list_runs(outputs: Path, study: str | None = None) -> list[dict[str, Any]]:

@@ -47,15 +47,27 @@ POLYDYNE_TOLERANCE = 1e-9
 
 # parameter name -> kernel column (all other kernel columns are named alike)
 _COLUMN = {
-    "law": cb.P_LAW, "cam_speed": cb.P_CAM_SPEED, "base_radius": cb.P_BASE_RADIUS,
-    "lift": cb.P_LIFT, "rise_angle": cb.P_RISE_ANGLE, "ramp_height": cb.P_RAMP_HEIGHT,
-    "ramp_width": cb.P_RAMP_WIDTH, "ramp_velocity": cb.P_RAMP_VELOCITY,
-    "cam_width": cb.P_CAM_WIDTH, "cam_modulus": cb.P_E1, "cam_poisson": cb.P_NU1,
-    "tappet_modulus": cb.P_E2, "tappet_poisson": cb.P_NU2,
-    "spring_preload": cb.P_SPRING_PRELOAD, "spring_rate": cb.P_SPRING_RATE,
-    "equivalent_mass": cb.P_EQUIVALENT_MASS, "oil_viscosity": cb.P_VISCOSITY,
-    "pressure_viscosity": cb.P_PRESSURE_VISCOSITY, "nose_window": cb.P_NOSE_WINDOW,
-    "min_radius_limit": cb.P_MIN_RADIUS_LIMIT, "stress_limit": cb.P_STRESS_LIMIT,
+    "law": cb.P_LAW,
+    "cam_speed": cb.P_CAM_SPEED,
+    "base_radius": cb.P_BASE_RADIUS,
+    "lift": cb.P_LIFT,
+    "rise_angle": cb.P_RISE_ANGLE,
+    "ramp_height": cb.P_RAMP_HEIGHT,
+    "ramp_width": cb.P_RAMP_WIDTH,
+    "ramp_velocity": cb.P_RAMP_VELOCITY,
+    "cam_width": cb.P_CAM_WIDTH,
+    "cam_modulus": cb.P_E1,
+    "cam_poisson": cb.P_NU1,
+    "tappet_modulus": cb.P_E2,
+    "tappet_poisson": cb.P_NU2,
+    "spring_preload": cb.P_SPRING_PRELOAD,
+    "spring_rate": cb.P_SPRING_RATE,
+    "equivalent_mass": cb.P_EQUIVALENT_MASS,
+    "oil_viscosity": cb.P_VISCOSITY,
+    "pressure_viscosity": cb.P_PRESSURE_VISCOSITY,
+    "nose_window": cb.P_NOSE_WINDOW,
+    "min_radius_limit": cb.P_MIN_RADIUS_LIMIT,
+    "stress_limit": cb.P_STRESS_LIMIT,
     "spring_margin_limit": cb.P_SPRING_MARGIN_LIMIT,
     **{f"seg{k + 1}_width": cb.P_SEG_WIDTH0 + k for k in range(6)},
     **{f"seg{k + 1}_accel": cb.P_SEG_ACCEL0 + k for k in range(6)},
@@ -119,7 +131,7 @@ class CamScene(Scene):
 
     def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray:
         step = np.rad2deg(settings["angle_step"])
-        n = int(round(HALF_TURN_DEG / step))
+        n = round(HALF_TURN_DEG / step)
         return np.linspace(-HALF_TURN_DEG, HALF_TURN_DEG, 2 * n + 1)
 
     # --- checks ---------------------------------------------------------------------------
@@ -147,8 +159,7 @@ class CamScene(Scene):
                     f"the {deg(p['rise_angle'][i]):g} deg half-event: the fillet and segment 6 "
                     f"would need widths {np.round(deg(adjusted), 3).tolist()} deg (must be ≥ 0)"
                 )
-            out += _ramp_problems(p["ramp_height"][i], p["ramp_width"][i],
-                                  p["ramp_velocity"][i])
+            out += _ramp_problems(p["ramp_height"][i], p["ramp_width"][i], p["ramp_velocity"][i])
             half = p["rise_angle"][i] + (p["ramp_width"][i] if p["ramp_height"][i] > 0 else 0.0)
         else:
             half = p["rise_angle"][i]
@@ -180,8 +191,10 @@ class CamScene(Scene):
     ) -> SceneOutput:
         ctx: dict[str, Any] = {
             "params": _pack(points),
-            "shapes": np.array([[SHAPE_CODES[s] for s in points[f"seg{k}_shape"]]
-                                for k in range(1, 7)], dtype=np.int64).T.copy(),
+            "shapes": np.array(
+                [[SHAPE_CODES[s] for s in points[f"seg{k}_shape"]] for k in range(1, 7)],
+                dtype=np.int64,
+            ).T.copy(),
             "coeffs": _coefficients(points["polydyne_coefficients"]),
             "theta": np.deg2rad(self.curve_coordinate(settings)),
             "points": points,
@@ -274,9 +287,11 @@ def _ramp_problems(height: float, width: float, velocity: float) -> list[str]:
     lo, hi = height / velocity, 2.0 * height / velocity
     if not lo <= width <= hi:
         return [
-            f"ramp_width = {deg(width):g} deg cannot carry a {height * MM:g} mm ramp ending at "
-            f"{velocity * MM:g} mm/rad: constant acceleration then constant velocity needs "
-            f"{deg(lo):.3g} ≤ ramp_width ≤ {deg(hi):.3g} deg"
+            (
+                f"ramp_width = {deg(width):g} deg cannot carry a {height * MM:g} mm ramp ending at "
+                f"{velocity * MM:g} mm/rad: constant acceleration then constant velocity needs "
+                f"{deg(lo):.3g} ≤ ramp_width ≤ {deg(hi):.3g} deg"
+            )
         ]
     return []
 
@@ -285,12 +300,20 @@ def _polydyne_problems(c: np.ndarray) -> list[str]:
     if c.size > lift_laws.NCOEF:
         return [f"polydyne_coefficients has {c.size} terms; at most {lift_laws.NCOEF} allowed"]
     k = np.arange(c.size)
-    conditions = {"f(0) = 0": c[0], "f(1) = 1": c.sum() - 1.0,
-                  "f'(0) = 0": c[1] if c.size > 1 else 0.0, "f'(1) = 0": (k * c).sum()}
+    conditions = {
+        "f(0) = 0": c[0],
+        "f(1) = 1": c.sum() - 1.0,
+        "f'(0) = 0": c[1] if c.size > 1 else 0.0,
+        "f'(1) = 0": (k * c).sum(),
+    }
     bad = [name for name, residual in conditions.items() if abs(residual) > POLYDYNE_TOLERANCE]
     if bad:
-        return [f"polydyne_coefficients {c.tolist()} violate {', '.join(bad)} "
-                "(f(x) = Σ c_k x^k must rise from 0 to 1 with zero end velocity)"]
+        return [
+            (
+                f"polydyne_coefficients {c.tolist()} violate {', '.join(bad)} "
+                "(f(x) = Σ c_k x^k must rise from 0 to 1 with zero end velocity)"
+            )
+        ]
     return []
 
 

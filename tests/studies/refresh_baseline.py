@@ -16,8 +16,16 @@ import xarray as xr
 from studies.study_run import run_study
 
 BASELINE = Path(__file__).parent / "data" / "isac_l9_baseline.nc"
-KEEP_ATTRS = ("study_name", "scene", "design", "factors", "error_columns", "responses",
-              "git_commit", "git_dirty")
+KEEP_ATTRS = (
+    "study_name",
+    "scene",
+    "design",
+    "factors",
+    "error_columns",
+    "responses",
+    "git_commit",
+    "git_dirty",
+)
 
 
 def baseline_from(ds: xr.Dataset) -> xr.Dataset:

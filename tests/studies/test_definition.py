@@ -33,45 +33,92 @@ levels = [12.0, 14.0, 16.0]
 MISTAKES = [
     ("TOML syntax", lambda t: t.replace('type = "L9"', "type = L9"), ["not valid TOML"]),
     ("unknown scene", lambda t: t.replace('"cam"', '"camm"'), ["unknown scene 'camm'", "cam"]),
-    ("unknown response", lambda t: t.replace('"max_jerk"', '"max_jerks"'),
-     ["unknown response 'max_jerks'", "did you mean 'max_jerk'"]),
-    ("unknown factor", lambda t: t.replace("factors.seg2_width", "factors.seg2_widht"),
-     ["unknown factor 'seg2_widht'", "seg2_width"]),
-    ("unknown parameter", lambda t: t.replace("base_radius", "base_radus"),
-     ["unknown parameter 'base_radus'"]),
-    ("wrong units", lambda t: t.replace('units = "deg"', 'units = "mm"'),
-     ["units 'mm' are a length", "seg2_width is a angle"]),
-    ("unknown units", lambda t: t.replace('units = "deg"', 'units = "degree"'),
-     ["unknown units 'degree'"]),
-    ("empty levels", lambda t: t.replace("[3.5, 4.5, 5.5]", "[]"),
-     ["factor seg6_amplitude has no levels"]),
-    ("duplicate levels", lambda t: t.replace("[12.0, 14.0, 16.0]", "[12.0, 12.0, 16.0]"),
-     ["duplicate levels: 12.0"]),
-    ("levels do not fit the array", lambda t: t.replace("[12.0, 14.0, 16.0]",
-                                                        "[12.0, 14.0, 16.0, 18.0]"),
-     ["seg2_amplitude", "4 levels"]),
-    ("negative base radius", lambda t: t.replace("base_radius = 20.5", "base_radius = -5.0"),
-     ["base_radius = -5 mm is physically impossible", "(0, 500] mm"]),
-    ("unknown design", lambda t: t.replace('type = "L9"', 'type = "L7"'),
-     ["unknown design 'L7'"]),
-    ("fixed and varied",
-     lambda t: t.replace("base_radius = 20.5", "base_radius = 20.5\nseg2_width = 9.0"),
-     ["seg2_width is both fixed in [parameters] and varied in [factors]"]),
-    ("string where a number belongs", lambda t: t.replace("base_radius = 20.5",
-                                                          'base_radius = "big"'),
-     ["base_radius = 'big' is not a finite number"]),
-    ("bad choice", lambda t: t.replace("[parameters]", '[parameters]\nseg2_shape = "sine"'),
-     ["seg2_shape = 'sine' is not allowed", "'sin_full'"]),
-    ("unknown top-level key", lambda t: 'repsonses = ["x"]\n' + t,
-     ["unknown top-level key 'repsonses'"]),
+    (
+        "unknown response",
+        lambda t: t.replace('"max_jerk"', '"max_jerks"'),
+        ["unknown response 'max_jerks'", "did you mean 'max_jerk'"],
+    ),
+    (
+        "unknown factor",
+        lambda t: t.replace("factors.seg2_width", "factors.seg2_widht"),
+        ["unknown factor 'seg2_widht'", "seg2_width"],
+    ),
+    (
+        "unknown parameter",
+        lambda t: t.replace("base_radius", "base_radus"),
+        ["unknown parameter 'base_radus'"],
+    ),
+    (
+        "wrong units",
+        lambda t: t.replace('units = "deg"', 'units = "mm"'),
+        ["units 'mm' are a length", "seg2_width is a angle"],
+    ),
+    (
+        "unknown units",
+        lambda t: t.replace('units = "deg"', 'units = "degree"'),
+        ["unknown units 'degree'"],
+    ),
+    (
+        "empty levels",
+        lambda t: t.replace("[3.5, 4.5, 5.5]", "[]"),
+        ["factor seg6_amplitude has no levels"],
+    ),
+    (
+        "duplicate levels",
+        lambda t: t.replace("[12.0, 14.0, 16.0]", "[12.0, 12.0, 16.0]"),
+        ["duplicate levels: 12.0"],
+    ),
+    (
+        "levels do not fit the array",
+        lambda t: t.replace("[12.0, 14.0, 16.0]", "[12.0, 14.0, 16.0, 18.0]"),
+        ["seg2_amplitude", "4 levels"],
+    ),
+    (
+        "negative base radius",
+        lambda t: t.replace("base_radius = 20.5", "base_radius = -5.0"),
+        ["base_radius = -5 mm is physically impossible", "(0, 500] mm"],
+    ),
+    ("unknown design", lambda t: t.replace('type = "L9"', 'type = "L7"'), ["unknown design 'L7'"]),
+    (
+        "fixed and varied",
+        lambda t: t.replace("base_radius = 20.5", "base_radius = 20.5\nseg2_width = 9.0"),
+        ["seg2_width is both fixed in [parameters] and varied in [factors]"],
+    ),
+    (
+        "string where a number belongs",
+        lambda t: t.replace("base_radius = 20.5", 'base_radius = "big"'),
+        ["base_radius = 'big' is not a finite number"],
+    ),
+    (
+        "bad choice",
+        lambda t: t.replace("[parameters]", '[parameters]\nseg2_shape = "sine"'),
+        ["seg2_shape = 'sine' is not allowed", "'sin_full'"],
+    ),
+    (
+        "unknown top-level key",
+        lambda t: 'repsonses = ["x"]\n' + t,
+        ["unknown top-level key 'repsonses'"],
+    ),
     ("missing scene", lambda t: t.replace('scene = "cam"\n', ""), ["missing required key 'scene'"]),
-    ("column twice", lambda t: t.replace('units = "deg"', 'units = "deg"\ncolumn = 2').replace(
-        "[3.5, 4.5, 5.5]", "[3.5, 4.5, 5.5]\ncolumn = 2"), ["both assigned to column 2"]),
-    ("bad study name", lambda t: t.replace('name = "ok"', 'name = "my study/1"'),
-     ["may only contain letters"]),
-    ("setting out of range", lambda t: t + "\n[settings]\nangle_step = 0.0\n",
-     ["angle_step = 0 deg is physically impossible"]),
+    (
+        "column twice",
+        lambda t: t.replace('units = "deg"', 'units = "deg"\ncolumn = 2').replace(
+            "[3.5, 4.5, 5.5]", "[3.5, 4.5, 5.5]\ncolumn = 2"
+        ),
+        ["both assigned to column 2"],
+    ),
+    (
+        "bad study name",
+        lambda t: t.replace('name = "ok"', 'name = "my study/1"'),
+        ["may only contain letters"],
+    ),
+    (
+        "setting out of range",
+        lambda t: t + "\n[settings]\nangle_step = 0.0\n",
+        ["angle_step = 0 deg is physically impossible"],
+    ),
 ]
+
 
 def test_good_study_plans() -> None:
     plan = plan_text(GOOD)
@@ -89,10 +136,12 @@ def test_mistake_is_reported(what: str, edit, words: list[str]) -> None:
 
 
 def test_every_problem_listed_at_once() -> None:
-    text = (GOOD.replace('"max_jerk"', '"max_jerks"')
-            .replace("base_radius = 20.5", "base_radius = -1.0")
-            .replace("[12.0, 14.0, 16.0]", "[12.0, 12.0, 16.0]")
-            .replace('units = "deg"', 'units = "N"'))
+    text = (
+        GOOD.replace('"max_jerk"', '"max_jerks"')
+        .replace("base_radius = 20.5", "base_radius = -1.0")
+        .replace("[12.0, 14.0, 16.0]", "[12.0, 12.0, 16.0]")
+        .replace('units = "deg"', 'units = "N"')
+    )
     with pytest.raises(StudyError) as info:
         plan_text(text)
     assert len(info.value.problems) == 4, info.value.problems
@@ -114,7 +163,10 @@ def test_cli_prints_message_without_traceback_and_writes_nothing(
     outputs = tmp_path / "outputs"
     proc = subprocess.run(
         [sys.executable, "-m", "studies", "run", str(study), "--outputs", str(outputs)],
-        capture_output=True, text=True, check=False, timeout=300,
+        capture_output=True,
+        text=True,
+        check=False,
+        timeout=300,
     )
     assert proc.returncode == 2
     assert "Traceback" not in proc.stderr
@@ -123,7 +175,7 @@ def test_cli_prints_message_without_traceback_and_writes_nothing(
 
 
 def test_missing_file_is_a_clear_error(tmp_path: Path) -> None:
-    with pytest.raises(StudyError, match="no such file"):
-        from studies.plan import plan_study
+    from studies.plan import plan_study
 
+    with pytest.raises(StudyError, match="no such file"):
         plan_study(tmp_path / "nope.toml")

@@ -21,7 +21,8 @@ def test_sweep_moves_one_factor_at_a_time() -> None:
     d = designs.sweep({"a": 3, "b": 5}, base={"a": 1, "b": 2})
     assert d.runs == 1 + 2 + 4
     moved = (np.c_[d.levels["a"] != 1, d.levels["b"] != 2]).sum(axis=1)
-    assert moved[0] == 0 and np.all(moved[1:] == 1)
+    assert moved[0] == 0
+    assert np.all(moved[1:] == 1)
     assert list(d.labels["swept_factor"]) == ["base", "a", "a", "b", "b", "b", "b"]
 
 

@@ -30,8 +30,9 @@ levels = [1000.0, 1300.0, 1600.0]
 
 
 def small(responses=("max_jerk",), curves=(), design="full_factorial") -> str:
-    return SMALL.format(responses=json.dumps(list(responses)), curves=json.dumps(list(curves)),
-                        design=design)
+    return SMALL.format(
+        responses=json.dumps(list(responses)), curves=json.dumps(list(curves)), design=design
+    )
 
 
 @pytest.fixture(scope="module")
@@ -44,13 +45,20 @@ def test_isac_results_layout(isac) -> None:
     _, result = isac
     with xr.open_dataset(result.folder / "results.nc") as ds:
         assert ds.sizes["run"] == 9
-        for f, units in [("seg2_width", "deg"), ("seg6_amplitude", "mm/rad^2"),
-                         ("seg2_amplitude", "mm/rad^2")]:
+        for f, units in [
+            ("seg2_width", "deg"),
+            ("seg6_amplitude", "mm/rad^2"),
+            ("seg2_amplitude", "mm/rad^2"),
+        ]:
             assert ds[f].attrs["units"] == units
             assert sorted(set(ds[f"{f}_level"].values)) == [0, 1, 2]
-        assert "D_level" in ds.coords and "D" not in ds.coords
-        expected_units = {"max_contact_stress": "MPa", "max_lubrication_coefficient_nose": "1",
-                          "max_jerk": "mm/rad^3"}
+        assert "D_level" in ds.coords
+        assert "D" not in ds.coords
+        expected_units = {
+            "max_contact_stress": "MPa",
+            "max_lubrication_coefficient_nose": "1",
+            "max_jerk": "mm/rad^3",
+        }
         assert set(ds.data_vars) == set(expected_units)
         for name, units in expected_units.items():
             assert ds[name].attrs["units"] == units
@@ -69,8 +77,9 @@ def test_isac_run_record(isac) -> None:
     assert {f"main_effects_{r}.png" for r in ["max_contact_stress", "max_jerk"]} <= names
     record = json.loads((result.folder / "run.json").read_text())
     assert record["status"] == "finished"
-    assert {"git_commit", "git_dirty", "versions", "host", "started", "finished",
-            "timings"} <= set(record)
+    assert {"git_commit", "git_dirty", "versions", "host", "started", "finished", "timings"} <= set(
+        record
+    )
     assert set(record["timings"]) >= {"compile_s", "run_s"}
     text = (result.folder / "analysis.txt").read_text()
     assert "ANOVA" in text or "anova" in text.lower()
@@ -101,7 +110,8 @@ def test_kinematic_response_runs_only_the_kinematics_stage() -> None:
         evaluate(plan, progress=False)
     finally:
         scene.stages.update(original)
-    assert calls and set(calls) == {"kinematics"}
+    assert calls
+    assert set(calls) == {"kinematics"}
 
 
 def test_stress_response_needs_all_three_stages() -> None:
@@ -112,8 +122,9 @@ def test_stress_response_needs_all_three_stages() -> None:
 def test_curves_only_when_asked(tmp_path: Path) -> None:
     without = run_plan(plan_text(small()), tmp_path, progress=False).dataset
     assert "cam_angle" not in without.dims
-    with_curves = run_plan(plan_text(small(curves=["lift", "radius_of_curvature"])), tmp_path,
-                           progress=False).dataset
+    with_curves = run_plan(
+        plan_text(small(curves=["lift", "radius_of_curvature"])), tmp_path, progress=False
+    ).dataset
     assert with_curves["lift"].dims == ("run", "cam_angle")
     assert with_curves["lift"].attrs["units"] == "mm"
     assert with_curves["cam_angle"].attrs["units"] == "deg"

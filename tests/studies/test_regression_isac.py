@@ -20,9 +20,9 @@ from studies.study_run import run_study
 
 BASELINE = Path(__file__).parent / "data" / "isac_l9_baseline.nc"
 RTOL = {
-    "max_contact_stress": 1e-7,            # MPa
+    "max_contact_stress": 1e-7,  # MPa
     "max_lubrication_coefficient_nose": 1e-7,  # dimensionless
-    "max_jerk": 1e-7,                      # mm/rad^3
+    "max_jerk": 1e-7,  # mm/rad^3
 }
 
 
@@ -47,5 +47,6 @@ def test_same_design(fresh: xr.Dataset, baseline: xr.Dataset) -> None:
 @pytest.mark.parametrize("response", sorted(RTOL))
 def test_response_matches_baseline(fresh: xr.Dataset, baseline: xr.Dataset, response: str) -> None:
     assert fresh[response].attrs["units"] == baseline[response].attrs["units"]
-    np.testing.assert_allclose(fresh[response].values, baseline[response].values,
-                               rtol=RTOL[response], atol=0)
+    np.testing.assert_allclose(
+        fresh[response].values, baseline[response].values, rtol=RTOL[response], atol=0
+    )
