@@ -28,8 +28,12 @@ def jit(func):
 
 
 def batch(func):
-    """Compile a batch driver whose outer loop is ``prange`` over cases."""
-    return numba.njit(cache=True, fastmath=FASTMATH, nogil=True, parallel=PARALLEL)(func)
+    """Compile a batch driver whose outer loop is ``prange`` over cases.
+
+    Numba's disk cache does not key on the ``parallel`` flag, so the serial variant is never
+    cached: otherwise a cached parallel build would silently serve ``ENGINE_KERNELS_PARALLEL=0``.
+    """
+    return numba.njit(cache=PARALLEL, fastmath=FASTMATH, nogil=True, parallel=PARALLEL)(func)
 
 
 prange = numba.prange

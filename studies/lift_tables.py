@@ -29,7 +29,8 @@ def read_lift_table(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     except ValueError as exc:
         raise ValueError(f"lift_table {path}: not a two-column numeric CSV ({exc})") from None
     data = np.atleast_2d(data)
-    data = data[~np.isnan(data).all(axis=1)] if data.size else data
+    if data.shape[0] > 0 and np.isnan(data[0]).all():
+        data = data[1:]  # a header line
     if data.ndim != 2 or data.shape[1] != 2 or not np.isfinite(data).all():
         raise ValueError(
             f"lift_table {path}: expected two numeric columns "
