@@ -1,0 +1,36 @@
+"""The command line documents scenes, lists and checks studies."""
+
+from __future__ import annotations
+
+import pytest
+
+from studies.cli import main
+from studies.scenes import SCENES, get_scene
+
+
+def test_scenes_documents_every_name_with_units(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["scenes"]) == 0
+    out = capsys.readouterr().out
+    for name in SCENES:
+        scene = get_scene(name)
+        assert f"scene {name}:" in out
+        for item in (*scene.parameters, *scene.settings, *scene.responses, *scene.curves):
+            assert item.name in out
+    assert "base_radius                  mm" in out
+
+
+def test_list_shows_the_catalogue(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["list"]) == 0
+    out = capsys.readouterr().out
+    assert "isac_l9" in out
+    assert "isac_sweep" in out
+
+
+def test_check_reports_design_and_stages(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["check", "isac_l9"]) == 0
+    assert "9 runs, stages kinematics, geometry, loads" in capsys.readouterr().out
+
+
+def test_unknown_study_is_exit_code_2(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["check", "no_such_study"]) == 2
+    assert "no study named 'no_such_study'" in capsys.readouterr().err
