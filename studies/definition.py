@@ -16,6 +16,7 @@ File layout (see ``studies/catalog/*.toml`` and the README)::
     [design]
     type = "L9"                      # full_factorial | sweep | auto | an orthogonal array name
     error_columns = ["D"]            # names of the array's unassigned columns (optional)
+    interactions = [["A", "B"]]      # factor pairs whose interaction columns are kept (optional)
 
     [settings]
     angle_step = 0.1                 # accuracy settings of the scene, in its units
@@ -56,7 +57,7 @@ TOP_LEVEL_KEYS = {
     "factors",
     "sense",
 }
-DESIGN_KEYS = {"type", "error_columns"}
+DESIGN_KEYS = {"type", "error_columns", "interactions"}
 FACTOR_KEYS = {"levels", "units", "column", "base"}
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9_-]+$")
 
@@ -100,6 +101,7 @@ class StudyDefinition:
     sense: dict[str, str] = field(default_factory=dict)
     text: str = ""
     source: str = "<string>"
+    interactions: tuple[tuple[str, str], ...] = ()
 
 
 def find_study(name_or_path: str | Path) -> Path:
@@ -179,6 +181,7 @@ class _Parser:
             if f.name in parameters:
                 self.problem(f"{f.name} is both fixed in [parameters] and varied in [factors]")
         settings = self._settings(scene, settings_raw)
+        interactions = self._interactions([f.name for f in factors], design)
         if not factors and not self.problems:
             self.problem("no [factors]: a study needs at least one varied parameter")
         definition = StudyDefinition(
@@ -195,6 +198,7 @@ class _Parser:
             sense=dict(sense),
             text=self.text,
             source=self.source,
+            interactions=tuple(interactions),
         )
         return definition, self.problems
 
@@ -251,6 +255,30 @@ class _Parser:
             self.problem(f"[design] error_columns = {errors!r} must be a list of simple names")
             errors = []
         return kind, errors
+
+    def _interactions(self, factors: list[str], design: str) -> list[tuple[str, str]]:
+        table = self.data.get("design")
+        pairs = table.get("interactions", []) if isinstance(table, dict) else []
+        if not isinstance(pairs, list) or not all(
+            isinstance(p, list) and len(p) == 2 and all(isinstance(n, str) for n in p)
+            for p in pairs
+        ):
+            self.problem(
+                f"[design] interactions = {pairs!r} must be a list of factor pairs, "
+                'e.g. [["seg2_width", "seg2_amplitude"]]'
+            )
+            return []
+        if pairs and design in ("full_factorial", "sweep"):
+            self.problem(
+                f"[design] interactions only apply to orthogonal-array designs, not {design}"
+            )
+        for name in dict.fromkeys(n for p in pairs for n in p):
+            if name not in factors:
+                self.problem(
+                    f"[design] interactions name {name!r}, which is not a factor"
+                    f"{_suggest(name, factors)}"
+                )
+        return [(a, b) for a, b in pairs if a in factors and b in factors]
 
     def _check_responses(
         self, scene: Scene, responses: list[str], curves: list[str], sense: dict[str, Any]

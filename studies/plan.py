@@ -89,7 +89,7 @@ def _design(d: StudyDefinition) -> designs.Design:
         return designs.sweep(counts, base)
     if d.design == "auto" or designs.is_orthogonal_array_name(d.design):
         columns = {f.name: f.column for f in d.factors}
-        return designs.orthogonal(d.design, counts, columns, d.error_columns)
+        return designs.orthogonal(d.design, counts, columns, d.error_columns, d.interactions)
     known = ", ".join(i.name.split("(")[0] for i in designs.list_orthogonal_arrays())
     problem = (
         f"unknown design {d.design!r}: use full_factorial, sweep, auto or an orthogonal "

@@ -1,4 +1,5 @@
-"""Main-effect plots: mean response at each level of each factor.
+"""Main-effect plots (mean response at each level of each factor), sweep plots, interaction
+plots and S/N main-effect plots.
 
 Figures are built with :class:`matplotlib.figure.Figure` directly (no pyplot, no global backend
 switch), so the module is safe to import in any program; PNGs are rendered by Agg on save.
@@ -14,6 +15,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
+from studies import taguchi
 from studies.analysis import range_analysis, sweep_runs
 
 PANEL_SIZE = (3.0, 3.0)  # inches per factor panel
@@ -93,4 +95,80 @@ def save_sweep_plots(ds: xr.Dataset, responses: Sequence[str], folder: Path) -> 
         path = folder / f"sweep_{name}.png"
         sweep_figure(ds, name).savefig(path, dpi=DPI)
         paths.append(path)
+    return paths
+
+
+def sn_png(response: str) -> str:
+    return f"sn_{response}.png"
+
+
+def interaction_png(response: str, a: str, b: str) -> str:
+    return f"interaction_{response}_{a}_x_{b}.png"
+
+
+def sn_figure(ds: xr.Dataset, response: str, kind: str | None = None) -> Figure:
+    """Main effects on the S/N ratio [dB] of ``response`` (see :mod:`studies.taguchi`).
+
+    ``kind`` ("smaller", "larger", "nominal") defaults to the response's ``better`` attribute.
+    A response with a ``replicate`` dimension gives one S/N value per run over its replicates.
+    """
+    view = taguchi.with_sn(ds, response, {response: kind} if kind else None)
+    name = taguchi.sn_name(response)
+    fig = main_effects_figure(view, name)
+    fig.axes[0].set_ylabel("S/N ratio [dB]")
+    fig.suptitle(f"S/N ratio of {response} ({view[name].attrs['sn_kind']} is better)")
+    return fig
+
+
+def interaction_figure(ds: xr.Dataset, response: str, a: str, b: str) -> Figure:
+    """Mean ``response`` against the levels of ``a``, one line per level of ``b``.
+
+    Parallel lines mean no interaction. Factors without numeric values are plotted against
+    their 1-based level number.
+    """
+    means = taguchi.interaction_means(ds, response, a, b)
+    x = means[a].values
+    numeric = np.issubdtype(x.dtype, np.number)
+    if not numeric:
+        x = means[f"{a}_level"].values + 1
+    units_a = ds[a].attrs.get("units", "") if a in ds.coords else ""
+    units_b = ds[b].attrs.get("units", "") if b in ds.coords else ""
+    fig = Figure(figsize=(1.5 * PANEL_SIZE[0], 1.3 * PANEL_SIZE[1]), layout="constrained")
+    ax = fig.subplots()
+    for j, value in enumerate(means[b].values):
+        shown = f"{value:g}" if isinstance(value, int | float | np.number) else str(value)
+        label = f"{b} = {shown} {units_b}".rstrip()
+        ax.plot(x, means.values[:, j], marker="o", label=label)
+    ax.set_xlabel(_label(a, units_a) if numeric else f"{a} (level)")
+    if not numeric:
+        ax.set_xticks(x)
+    y = ds[response]
+    ax.set_ylabel(_label(y.attrs.get("long_name", response), y.attrs.get("units", "")))
+    ax.legend(loc="best", fontsize="small")
+    fig.suptitle(f"Interaction {a} x {b} on {response}")
+    return fig
+
+
+def save_sn_plots(ds: xr.Dataset, responses: Sequence[str], folder: Path) -> list[Path]:
+    """Write ``sn_<response>.png`` for each response into ``folder``."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for name in responses:
+        path = folder / sn_png(name)
+        sn_figure(ds, name).savefig(path, dpi=DPI)
+        paths.append(path)
+    return paths
+
+
+def save_interaction_plots(ds: xr.Dataset, responses: Sequence[str], folder: Path) -> list[Path]:
+    """Write ``interaction_<response>_<a>_x_<b>.png`` per response and assigned interaction."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for name in responses:
+        for a, b in taguchi.interaction_pairs(ds):
+            path = folder / interaction_png(name, a, b)
+            interaction_figure(ds, name, a, b).savefig(path, dpi=DPI)
+            paths.append(path)
     return paths

@@ -36,8 +36,9 @@ def read_pressure_table(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     if data.size:
         data = data[~np.isnan(data).all(axis=1)]
     if data.ndim != 2 or data.shape[1] != 2 or not np.isfinite(data).all():
-        raise ValueError(f"{name}: expected two numeric columns 'crank angle [deg], pressure "
-                         "[MPa]' on every row")
+        raise ValueError(
+            f"{name}: expected two numeric columns 'crank angle [deg], pressure [MPa]' on every row"
+        )
     angle, pressure = data[:, 0], data[:, 1]
     if len(angle) < MIN_ROWS:
         raise ValueError(f"{name}: {len(angle)} rows, need at least {MIN_ROWS}")
@@ -48,9 +49,11 @@ def read_pressure_table(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError(f"{name}: covers {span:g}° of crank angle, more than one cycle (720°)")
     gap = CYCLE_DEG - span
     if gap > np.diff(angle).max() * (1.0 + 1e-9):
-        raise ValueError(f"{name}: covers only {span:g}° of crank angle; give the whole "
-                         "720° cycle (the gap between the last and first row is wider than "
-                         "the table's own spacing)")
+        raise ValueError(
+            f"{name}: covers only {span:g}° of crank angle; give the whole "
+            "720° cycle (the gap between the last and first row is wider than "
+            "the table's own spacing)"
+        )
     if np.any(pressure < 0):
         raise ValueError(f"{name}: pressures must be ≥ 0 MPa (absolute pressure)")
     return angle, pressure

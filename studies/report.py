@@ -1,7 +1,9 @@
-"""What a run writes beside its results: ``analysis.txt`` and the figures.
+"""What a run writes beside its results: ``analysis.txt``, ``report.md`` and the figures.
 
-Orthogonal-array and full-factorial runs get range analysis and ANOVA per response and
-main-effect plots; sweeps get a table and a response-vs-factor plot per swept factor.
+Orthogonal-array and full-factorial runs get range analysis and ANOVA per response (interaction
+columns as terms), main-effect, S/N and interaction plots; sweeps get a table and a
+response-vs-factor plot per swept factor. ``report.md`` (:mod:`studies.markdown_report`) adds
+S/N ratios, the predicted optimum and the confirmation run.
 """
 
 from __future__ import annotations
@@ -11,7 +13,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from studies import analysis, plots, scene_plots, scene_summaries
+from studies import analysis, markdown_report, plots, scene_plots, scene_summaries, taguchi
 
 
 def write_analysis(ds: xr.Dataset, folder: Path, responses: list[str] | None = None) -> list[Path]:
@@ -27,13 +29,17 @@ def write_analysis(ds: xr.Dataset, folder: Path, responses: list[str] | None = N
         body = [analysis.format_sweep(ds, scalar)]
         figures = plots.save_sweep_plots(ds, scalar, folder)
     else:
-        body = [analysis.format_tables(ds, r) for r in scalar]
+        terms = taguchi.model_terms(ds) or None
+        body = [analysis.format_tables(ds, r, terms) for r in scalar]
         figures = plots.save_main_effects(ds, scalar, folder)
+        figures += plots.save_sn_plots(ds, taguchi.sn_responses(ds, scalar), folder)
+        figures += plots.save_interaction_plots(ds, scalar, folder)
     body += scene_summaries.scene_summaries(ds)
     figures += scene_plots.save_scene_figures(ds, folder)
     text_path = folder / "analysis.txt"
     text_path.write_text("\n\n".join([header, *body]) + "\n", encoding="utf-8")
-    return [text_path, *figures]
+    reports = markdown_report.write_report(ds, folder, scalar, figures)
+    return [text_path, *reports, *figures]
 
 
 def _header(ds: xr.Dataset) -> str:

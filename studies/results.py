@@ -4,7 +4,9 @@ Layout (dimension ``run`` = design point):
 
 * coordinates ``<factor>`` (physical value, ``units`` as written in the study) and
   ``<factor>_level`` (0-based level index) for every factor; ``<name>_level`` alone for the
-  empty orthogonal-array columns (error columns); design labels such as ``swept_factor``;
+  empty orthogonal-array columns (error columns) and for the interaction columns (named in the
+  attribute ``interaction_columns``: column name → the two factors); design labels such as
+  ``swept_factor``; the attribute ``array_columns`` maps every name to its 1-based column;
 * scalar responses on ``run``; curves on ``run × <angle>`` only when the study asks;
 * ``units`` and ``long_name`` on every variable; the study text, design, provenance and
   timings as global attributes (str/number only: dicts as JSON strings, booleans as ints).
@@ -47,6 +49,12 @@ def build_dataset(plan: Plan, ev: Evaluation, attrs: dict[str, Any]) -> xr.Datas
             "run",
             design.levels[e].astype(np.int32),
             {"units": "1", "long_name": f"empty array column {e} (error)"},
+        )
+    for name, (a, b) in design.interactions.items():
+        coords[f"{name}_level"] = (
+            "run",
+            design.levels[name].astype(np.int32),
+            {"units": "1", "long_name": f"interaction column {a} x {b}"},
         )
     for label, values in design.labels.items():
         coords[label] = ("run", values.astype(str), {"long_name": label.replace("_", " ")})
@@ -91,6 +99,8 @@ def build_dataset(plan: Plan, ev: Evaluation, attrs: dict[str, Any]) -> xr.Datas
         "design": design.name,
         "factors": json.dumps([f.name for f in d.factors]),
         "error_columns": json.dumps(list(design.error_columns)),
+        "interaction_columns": json.dumps({k: list(v) for k, v in design.interactions.items()}),
+        "array_columns": json.dumps(design.columns),
         "responses": json.dumps(list(d.responses)),
         "settings": json.dumps(d.settings),
         "study_toml": d.text,

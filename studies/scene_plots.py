@@ -65,18 +65,18 @@ class _Layout:
 
     def __init__(self, ds: xr.Dataset, used: Sequence[str]) -> None:
         others = [f for f in _factors(ds) if f not in used]
-        self.row = others[0] if others else None
-        self.col = others[1] if len(others) > 1 else None
+        self.row = others[0] if len(others) > 1 else None
+        self.col = others[1] if len(others) > 1 else others[0] if others else None
         self.held = {f: _levels(ds, f)[(len(_levels(ds, f)) - 1) // 2] for f in others[2:]}
         self.rows = _levels(ds, self.row) if self.row else [0]
         self.cols = _levels(ds, self.col) if self.col else [0]
         self.ds = ds
 
     def figure(self, size: tuple[float, float] = PANEL) -> tuple[Figure, np.ndarray]:
-        fig = Figure(figsize=(size[0] * len(self.cols), size[1] * len(self.rows) + 0.6),
-                     layout="constrained")
-        axes = fig.subplots(len(self.rows), len(self.cols), squeeze=False, sharex=True,
-                            sharey=True)
+        fig = Figure(
+            figsize=(size[0] * len(self.cols), size[1] * len(self.rows) + 0.6), layout="constrained"
+        )
+        axes = fig.subplots(len(self.rows), len(self.cols), squeeze=False, sharex=True, sharey=True)
         return fig, axes
 
     def panels(self):
@@ -90,15 +90,21 @@ class _Layout:
                 yield i, j, where
 
     def title(self, where: dict[str, int]) -> str:
-        shown = [f"{f} = {_value(self.ds, f, lv)}" for f, lv in where.items()
-                 if f in (self.row, self.col)]
+        shown = [
+            f"{f} = {_value(self.ds, f, lv)}"
+            for f, lv in where.items()
+            if f in (self.row, self.col)
+        ]
         return ", ".join(shown)
 
     def held_note(self) -> str:
         if not self.held:
             return ""
-        return " (held: " + ", ".join(f"{f} = {_value(self.ds, f, lv)}"
-                                      for f, lv in self.held.items()) + ")"
+        return (
+            " (held: "
+            + ", ".join(f"{f} = {_value(self.ds, f, lv)}" for f, lv in self.held.items())
+            + ")"
+        )
 
 
 def _lines(ds: xr.Dataset, factor: str | None) -> list[tuple[str, dict[str, int]]]:
@@ -139,8 +145,9 @@ def torque_curve_figure(ds: xr.Dataset) -> Figure | None:
         ax.set_ylabel(_label(ds[name], name))
     if speed:
         axes[0, 0].legend(title="engine speed", fontsize="x-small", title_fontsize="x-small")
-    fig.suptitle(f"{ds[name].attrs.get('long_name', name)} over the cycle (dashed: mean)"
-                 f"{layout.held_note()}")
+    fig.suptitle(
+        f"{ds[name].attrs.get('long_name', name)} over the cycle (dashed: mean){layout.held_note()}"
+    )
     return fig
 
 
@@ -161,8 +168,13 @@ def torque_harmonics_figure(ds: xr.Dataset, max_order: float = 12.0) -> Figure |
         ax = axes[i, j]
         for k, (label, cond) in enumerate(lines):
             for run in _runs(ds, where | cond):
-                ax.bar(halves / 2 + (k - (len(lines) - 1) / 2) * width, amplitude[run], width,
-                       color=f"C{k}", label=label or None)
+                ax.bar(
+                    halves / 2 + (k - (len(lines) - 1) / 2) * width,
+                    amplitude[run],
+                    width,
+                    color=f"C{k}",
+                    label=label or None,
+                )
         ax.set_title(layout.title(where), fontsize="small")
         ax.set_xticks(np.arange(0.0, max_order + 0.5, 1.5))
         ax.grid(alpha=0.3, axis="y")
@@ -193,13 +205,26 @@ def approximation_error_figure(ds: xr.Dataset) -> Figure | None:
             runs = _runs(ds, held | cond)
             order = np.argsort(ds["rod_ratio"].values[runs])
             runs = runs[order]
-            ax.plot(ds["rod_ratio"].values[runs], ds[name].values[runs], marker="o",
-                    color=f"C{k}", label=label or None)
+            ax.plot(
+                ds["rod_ratio"].values[runs],
+                ds[name].values[runs],
+                marker="o",
+                color=f"C{k}",
+                label=label or None,
+            )
         ax.set_yscale("log")
         ax.set_xlabel("λ = r/l")
-        ax.set_ylabel(_label(ds[name], str(name)), fontsize="small")
+        what = str(name).removeprefix("approx_error_").replace("_", " ")
+        ax.set_title(f"{what} error", fontsize="small")
+        relative = str(name).endswith("_relative")
+        ax.set_ylabel(
+            ds[name].attrs.get("long_name", "")
+            if relative
+            else f"max |exact − two-term| [{ds[name].attrs.get('units', '')}]",
+            fontsize="x-small" if relative else "small",
+        )
         ax.grid(alpha=0.3, which="both")
-    for ax in axes[len(names):]:
+    for ax in axes[len(names) :]:
         ax.set_visible(False)
     if speed:
         axes[0].legend(title="engine speed", fontsize="x-small", title_fontsize="x-small")
@@ -214,7 +239,8 @@ def _grid(ds: xr.Dataset, name: str, x: str, y: str, where: dict[str, int]) -> n
     grid = np.full((len(_levels(ds, y)), len(_levels(ds, x))), np.nan)
     for run in _runs(ds, where):
         grid[int(ds[f"{y}_level"].values[run]), int(ds[f"{x}_level"].values[run])] = float(
-            ds[name].values[run])
+            ds[name].values[run]
+        )
     return grid
 
 
@@ -236,19 +262,34 @@ def frequency_map_figure(ds: xr.Dataset) -> Figure | None:
     for i, j, where in layout.panels():
         ax = axes[i, j]
         f1 = _grid(ds, "first_frequency", "length", "thickness", where)
-        mesh = ax.pcolormesh(x, y, f1, shading="nearest", cmap="viridis",
-                             vmin=norm_range[0], vmax=norm_range[1])
+        mesh = ax.pcolormesh(
+            x, y, f1, shading="nearest", cmap="viridis", vmin=norm_range[0], vmax=norm_range[1]
+        )
         if "first_margin" in ds:
             inside = _grid(ds, "first_margin", "length", "thickness", where) <= 0
-            ax.pcolormesh(x, y, np.where(inside, 1.0, np.nan), shading="nearest",
-                          cmap="Reds", vmin=0.0, vmax=1.5, alpha=0.6)
+            ax.pcolormesh(
+                x,
+                y,
+                np.where(inside, 1.0, np.nan),
+                shading="nearest",
+                cmap="Reds",
+                vmin=0.0,
+                vmax=1.5,
+                alpha=0.6,
+            )
         for (r, c), value in np.ndenumerate(f1):
             if np.isfinite(value):
-                ax.text(x[c], y[r], f"{value:.4g}", ha="center", va="center",
-                        fontsize="xx-small", color="white")
+                ax.text(
+                    x[c],
+                    y[r],
+                    f"{value:.4g}",
+                    ha="center",
+                    va="center",
+                    fontsize="xx-small",
+                    color="white",
+                )
         if band and f1.shape[0] > 1 and f1.shape[1] > 1 and np.isfinite(f1).all():
-            contours = ax.contour(x, y, f1, levels=sorted(set(band)), colors="red",
-                                  linewidths=1.2)
+            contours = ax.contour(x, y, f1, levels=sorted(set(band)), colors="red", linewidths=1.2)
             ax.clabel(contours, fmt="%g Hz", fontsize="xx-small")
         ax.set_title(layout.title(where), fontsize="small")
     for ax in axes[-1]:
@@ -257,9 +298,12 @@ def frequency_map_figure(ds: xr.Dataset) -> Figure | None:
         ax.set_ylabel("thickness [mm]")
     if mesh is not None:
         fig.colorbar(mesh, ax=axes, label="first natural frequency [Hz]", shrink=0.8)
-    band_text = f"band {band[0]:g}–{band[-1]:g} Hz (red lines)" if len(band) == 2 else "band"
-    fig.suptitle(f"First natural frequency; {band_text}, red cells inside the band"
-                 f"{layout.held_note()}")
+    band_text = f" {band[0]:g}–{band[-1]:g} Hz (red lines)" if len(band) == 2 else ""
+    fig.suptitle(
+        f"First natural frequency [Hz]\nexcitation band{band_text}; red cells lie "
+        f"inside it{layout.held_note()}",
+        fontsize="medium",
+    )
     return fig
 
 
@@ -282,7 +326,7 @@ def mode_shapes_figure(ds: xr.Dataset) -> Figure | None:
 
 # --- luffing --------------------------------------------------------------------------------
 def pass_fail_map_figure(ds: xr.Dataset) -> Figure | None:
-    """Every design point on the first two factors: green passes, red lists the failing checks."""
+    """Every design point on the first two factors: the checks that fail (none = green)."""
     flags = [c for c in LUFFING_CHECKS if f"{c}_ok" in ds]
     factors = _factors(ds)
     if not flags or len(factors) < 2:
@@ -292,17 +336,25 @@ def pass_fail_map_figure(ds: xr.Dataset) -> Figure | None:
     fig, axes = layout.figure((3.8, 3.2))
     xs = [str(_raw_value(ds, x, lv)) for lv in _levels(ds, x)]
     ys = [str(_raw_value(ds, y, lv)) for lv in _levels(ds, y)]
+    mesh = None
     for i, j, where in layout.panels():
         ax = axes[i, j]
-        ok = np.full((len(ys), len(xs)), np.nan)
-        notes = np.full(ok.shape, "", dtype=object)
+        failing = np.full((len(ys), len(xs)), np.nan)
+        notes = np.full(failing.shape, "", dtype=object)
         for run in _runs(ds, where):
             r, c = int(ds[f"{y}_level"].values[run]), int(ds[f"{x}_level"].values[run])
             failed = [f for f in flags if ds[f"{f}_ok"].values[run] == 0]
-            ok[r, c] = 0.0 if failed else 1.0
-            notes[r, c] = "pass" if not failed else "\n".join(failed)
-        ax.pcolormesh(np.arange(len(xs)), np.arange(len(ys)), ok, shading="nearest",
-                      cmap="RdYlGn", vmin=-0.3, vmax=1.3)
+            failing[r, c] = len(failed)
+            notes[r, c] = "\n".join(failed) or "all pass"
+        mesh = ax.pcolormesh(
+            np.arange(len(xs)),
+            np.arange(len(ys)),
+            failing,
+            shading="nearest",
+            cmap="RdYlGn_r",
+            vmin=0,
+            vmax=len(flags),
+        )
         for (r, c), text in np.ndenumerate(notes):
             ax.text(c, r, text, ha="center", va="center", fontsize="xx-small")
         ax.set_xticks(np.arange(len(xs)), xs)
@@ -312,8 +364,13 @@ def pass_fail_map_figure(ds: xr.Dataset) -> Figure | None:
         ax.set_xlabel(_label(ds[x], x))
     for ax in axes[:, 0]:
         ax.set_ylabel(_label(ds[y], y))
-    fig.suptitle(f"Design checks: green = all of {', '.join(flags)} pass; red cells list the "
-                 f"failing checks{layout.held_note()}", fontsize="medium")
+    if mesh is not None:
+        fig.colorbar(mesh, ax=axes, label="number of failing checks", shrink=0.8)
+    fig.suptitle(
+        f"Design checks that fail at each design point\n(checked: {', '.join(flags)})"
+        f"{layout.held_note()}",
+        fontsize="medium",
+    )
     return fig
 
 
@@ -331,11 +388,22 @@ def motor_power_figure(ds: xr.Dataset) -> Figure | None:
         for k, (label, cond) in enumerate(_lines(ds, line)):
             runs = _runs(ds, where | cond)
             runs = runs[np.argsort(ds[x].values[runs])]
-            ax.plot(ds[x].values[runs], ds["motor_power"].values[runs], marker="o",
-                    color=f"C{k}", label=label or None)
+            ax.plot(
+                ds[x].values[runs],
+                ds["motor_power"].values[runs],
+                marker="o",
+                color=f"C{k}",
+                label=label or None,
+            )
             if "motor_rated_power" in ds:
-                ax.step(ds[x].values[runs], ds["motor_rated_power"].values[runs], where="mid",
-                        color=f"C{k}", ls=":", lw=0.8)
+                ax.step(
+                    ds[x].values[runs],
+                    ds["motor_rated_power"].values[runs],
+                    where="mid",
+                    color=f"C{k}",
+                    ls=":",
+                    lw=0.8,
+                )
         ax.set_title(layout.title(where), fontsize="small")
         ax.grid(alpha=0.3)
     for ax in axes[-1]:

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -34,8 +35,8 @@ def _sig4(value: float) -> str:
     return "—" if not np.isfinite(value) else f"{value:.4g}"
 
 
-def _factor_columns(ds: xr.Dataset) -> dict[str, np.ndarray]:
-    columns = {}
+def _factor_columns(ds: xr.Dataset) -> dict[str, Any]:
+    columns: dict[str, Any] = {}
     for f in json.loads(ds.attrs.get("factors", "[]")):
         units = ds[f].attrs.get("units", "")
         key = f"{f} [{units}]" if units not in ("", "-", "1") else f
@@ -55,15 +56,20 @@ def reed_summary(ds: xr.Dataset) -> list[str]:
     columns = _factor_columns(ds)
     columns[_header(ds, "first_frequency")] = [_sig4(v) for v in ds["first_frequency"].values]
     if {"band_min", "band_max"} <= set(ds.data_vars):
-        columns["band [Hz]"] = [f"{_sig4(a)}–{_sig4(b)}" for a, b in
-                                zip(ds["band_min"].values, ds["band_max"].values, strict=True)]
+        columns["band [Hz]"] = [
+            f"{_sig4(a)}–{_sig4(b)}"
+            for a, b in zip(ds["band_min"].values, ds["band_max"].values, strict=True)
+        ]
     if "first_margin" in ds:
         margin = ds["first_margin"].values
         columns[_header(ds, "first_margin")] = [_sig4(v) for v in margin]
         columns["first mode"] = np.where(margin > 0, "outside the band", "INSIDE the band")
     table = pd.DataFrame(columns).to_string(index=False)
-    return [f"First natural frequency and its margin to the excitation band (4 significant "
-            f"figures; margin > 0 outside the band)\n{table}"]
+    title = (
+        "First natural frequency and its margin to the excitation band (4 significant "
+        "figures; margin > 0 outside the band)"
+    )
+    return [f"{title}\n{table}"]
 
 
 def luffing_summary(ds: xr.Dataset) -> list[str]:
@@ -79,23 +85,34 @@ def luffing_summary(ds: xr.Dataset) -> list[str]:
         for label, name in (("value", value), ("limit", limit)):
             if name in ds:
                 v = ds[name].values.astype(float)
-                span = _sig4(np.nanmin(v)) if np.nanmin(v) == np.nanmax(v) else (
-                    f"{_sig4(np.nanmin(v))} … {_sig4(np.nanmax(v))}")
-                shown[label] = f"{span} {ds[name].attrs.get('units', '')}".strip()
+                span = (
+                    _sig4(np.nanmin(v))
+                    if np.nanmin(v) == np.nanmax(v)
+                    else (f"{_sig4(np.nanmin(v))} … {_sig4(np.nanmax(v))}")
+                )
+                units = ds[name].attrs.get("units", "")
+                shown[label] = f"{span} {units}" if units not in ("", "-", "1") else span
             else:
                 shown[label] = "(not stored)"
         passes = int(ds[f"{c}_ok"].values.sum())
-        rows.append({"check": c, "value": shown["value"], "limit": shown["limit"],
-                     "passes": f"{passes} of {n}"})
+        rows.append(
+            {
+                "check": c,
+                "value": shown["value"],
+                "limit": shown["limit"],
+                "passes": f"{passes} of {n}",
+            }
+        )
     checks_table = pd.DataFrame(rows).to_string(index=False)
     columns = _factor_columns(ds)
     columns["failing checks"] = [
-        ", ".join(c for c in checks if ds[f"{c}_ok"].values[run] == 0) or "none"
-        for run in range(n)
+        ", ".join(c for c in checks if ds[f"{c}_ok"].values[run] == 0) or "none" for run in range(n)
     ]
     points_table = pd.DataFrame(columns).to_string(index=False)
-    return [f"Design checks (value and limit over the design points)\n{checks_table}",
-            f"Failing checks per design point\n{points_table}"]
+    return [
+        f"Design checks (value and limit over the design points)\n{checks_table}",
+        f"Failing checks per design point\n{points_table}",
+    ]
 
 
 SUMMARIES: dict[str, Callable[[xr.Dataset], list[str]]] = {

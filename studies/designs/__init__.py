@@ -12,6 +12,7 @@ triangular tables of the GF(q) arrays, e.g. L8, L16, L27).
 
 from __future__ import annotations
 
+import functools
 import itertools
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
@@ -183,12 +184,24 @@ def _pair_problems(pairs: list[Pair], level_counts: dict[str, int]) -> list[str]
     return problems
 
 
-def _has_interaction_table(name: str) -> bool:
+@functools.cache
+def _interaction_table(name: str) -> dict[tuple[int, int], tuple[int, ...]]:
+    """Every column pair of ``name`` → its interaction columns; empty without a table."""
+    ncols = orthogonal_array(name).shape[1]
     try:
         interaction_columns(name, 0, 1)
     except ValueError:
-        return False
-    return True
+        return {}
+    return {
+        (a, b): interaction_columns(name, a, b)
+        for a in range(ncols)
+        for b in range(ncols)
+        if a != b
+    }
+
+
+def _has_interaction_table(name: str) -> bool:
+    return bool(_interaction_table(name))
 
 
 def _auto(
@@ -247,6 +260,7 @@ def _assign(
     reserved: dict[Pair, tuple[int, ...]] = {}
     if pairs:
         layout_problems = _interaction_problems(info, level_counts, pairs)
+        layout_problems = layout_problems or _fixed_reservations(info.name, taken, pairs)[2]
         if layout_problems:
             return taken, reserved, problems + layout_problems
         failure = None
@@ -342,37 +356,67 @@ def _layouts(
 
     Depth-first over the free columns in order, so the first placement is the textbook one
     (e.g. L8: A, B in columns 1, 2 → A x B in 3; C in 4 → A x C in 5). ``budget`` counts down
-    the placements tried.
+    the placements tried. Nothing is yielded when the given columns already collide.
     """
+    table = _interaction_table(info.name)
     fixed = {name: c for c, name in taken.items()}
     todo = [f for f in dict.fromkeys(f for p in pairs for f in p) if f not in fixed]
+    used, reserved, clashes = _fixed_reservations(info.name, taken, pairs)
+    if clashes:
+        return
 
-    def reserve(where: dict[str, int]) -> dict[Pair, tuple[int, ...]] | None:
-        used = set(where.values())
-        reserved = {}
-        for a, b in pairs:
-            if a in where and b in where:
-                cols = interaction_columns(info.name, where[a], where[b])
-                if used & set(cols):
-                    return None
-                used |= set(cols)
-                reserved[(a, b)] = cols
-        return reserved
-
-    def search(i: int, where: dict[str, int]) -> Iterator[tuple[dict[int, str], dict]]:
-        reserved = reserve(where)
-        if reserved is None or budget[0] <= 0:
+    def search(
+        i: int, where: dict[str, int], used: set[int], reserved: dict[Pair, tuple[int, ...]]
+    ) -> Iterator[tuple[dict[int, str], dict[Pair, tuple[int, ...]]]]:
+        if budget[0] <= 0:
             return
         budget[0] -= 1
         if i == len(todo):
-            yield {c: name for name, c in where.items() if name in todo}, reserved
+            yield {where[f]: f for f in todo}, reserved
             return
-        blocked = set(where.values()) | {c for cols in reserved.values() for c in cols}
+        f = todo[i]
         for c in range(info.columns):
-            if c not in blocked and info.levels[c] == level_counts[todo[i]]:
-                yield from search(i + 1, where | {todo[i]: c})
+            if c in used or info.levels[c] != level_counts[f]:
+                continue
+            now_used, now_reserved = used | {c}, dict(reserved)
+            for pair in pairs:
+                other = pair[1] if pair[0] == f else pair[0] if pair[1] == f else None
+                if other not in where:
+                    continue
+                cols = table[c, where[other]] if pair[0] == f else table[where[other], c]
+                if now_used & set(cols):
+                    break
+                now_used |= set(cols)
+                now_reserved[pair] = cols
+            else:
+                yield from search(i + 1, where | {f: c}, now_used, now_reserved)
 
-    yield from search(0, fixed)
+    yield from search(0, fixed, used, reserved)
+
+
+def _fixed_reservations(
+    name: str, taken: dict[int, str], pairs: list[Pair]
+) -> tuple[set[int], dict[Pair, tuple[int, ...]], list[str]]:
+    """Columns used by the placed factors and by the interactions of placed pairs; clashes."""
+    table = _interaction_table(name)
+    where = {factor: c for c, factor in taken.items()}
+    used = set(taken)
+    owner = {c: f"factor {factor}" for c, factor in taken.items()}
+    reserved: dict[Pair, tuple[int, ...]] = {}
+    clashes = []
+    for a, b in pairs:
+        if a in where and b in where:
+            cols = table[where[a], where[b]]
+            for c in cols:
+                if c in owner:
+                    clashes.append(
+                        f"interaction {a} x {b} falls in column {c + 1} of {name}, "
+                        f"which {owner[c]} takes"
+                    )
+                owner[c] = f"interaction {a} x {b}"
+            used |= set(cols)
+            reserved[(a, b)] = cols
+    return used, reserved, clashes
 
 
 def is_orthogonal_array_name(name: str) -> bool:
@@ -399,4 +443,4 @@ __all__ = [
     "Design", "DesignError", "OAInfo", "full_factorial", "interaction_columns",
     "is_orthogonal_array_name", "list_orthogonal_arrays", "orthogonal", "orthogonal_array",
     "smallest_array_for", "sweep",
-]
+]  # fmt: skip

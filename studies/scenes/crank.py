@@ -43,8 +43,12 @@ CYCLE_DEG = 720.0
 EXHAUST_OPENING_DEG = 180.0  # after firing TDC: the cycle opens the exhaust at BDC
 MODEL_CODES = {"exact": ck.MODEL_EXACT, "approximate": ck.MODEL_TWO_TERM}
 HEAT_CODES = {"max_pressure": cb.HEAT_MODE_PEAK_PRESSURE, "cycle_heat": cb.HEAT_MODE_ENERGY}
-FORCE_NAMES = {"mean_torque": "cylinder_mean_torque", "max_torque": "cylinder_max_torque",
-               "min_torque": "cylinder_min_torque", "torque": "cylinder_torque"}
+FORCE_NAMES = {
+    "mean_torque": "cylinder_mean_torque",
+    "max_torque": "cylinder_max_torque",
+    "min_torque": "cylinder_min_torque",
+    "torque": "cylinder_torque",
+}
 CYCLE_ONLY = ("compression_pressure", "heat_released", "cycle_work", "imep")
 
 
@@ -76,8 +80,9 @@ def firing_order_problem(order: np.ndarray, cylinders: float) -> str | None:
         issues.append("no such cylinder " + ", ".join(map(str, foreign)))
     if not issues:
         return None
-    return (f"firing_order = {shown} must list every cylinder 1…{z} exactly once "
-            f"({'; '.join(issues)})")
+    return (
+        f"firing_order = {shown} must list every cylinder 1…{z} exactly once ({'; '.join(issues)})"
+    )
 
 
 def crank_params(points: dict[str, np.ndarray], model: str) -> np.ndarray:
@@ -147,8 +152,10 @@ class CrankScene(Scene):
     """Slider-crank and multi-cylinder engine (SPEC §5)."""
 
     name = "crank"
-    description = ("slider-crank kinematics (exact and two-term), gas and inertia forces, torque, "
-                   "multi-cylinder torque harmonics and free forces (SPEC §5)")
+    description = (
+        "slider-crank kinematics (exact and two-term), gas and inertia forces, torque, "
+        "multi-cylinder torque harmonics and free forces (SPEC §5)"
+    )
     parameters = PARAMETERS
     settings = SETTINGS
     responses = RESPONSES
@@ -165,13 +172,18 @@ class CrankScene(Scene):
         problems: list[str] = []
         step_deg = math.degrees(settings["angle_step"])
         if not math.isclose(CYCLE_DEG / step_deg, round(CYCLE_DEG / step_deg), abs_tol=1e-9):
-            problems.append(f"setting angle_step = {step_deg:g} deg must divide 720 deg (a "
-                            "whole number of grid points per cycle)")
+            problems.append(
+                f"setting angle_step = {step_deg:g} deg must divide 720 deg (a "
+                "whole number of grid points per cycle)"
+            )
         found = PointProblems()
         for i, lam in enumerate(points["rod_ratio"]):
             if lam >= 1.0:
-                found.add(i, f"rod_ratio λ = r/l = {lam:g} must be < 1 (the connecting rod "
-                          "must be longer than the crank radius)")
+                found.add(
+                    i,
+                    f"rod_ratio λ = r/l = {lam:g} must be < 1 (the connecting rod "
+                    "must be longer than the crank radius)",
+                )
         self._check_layout(points, found)
         self._check_pressure(points, found)
         return problems + found.messages()
@@ -186,12 +198,18 @@ class CrankScene(Scene):
                 found.add(i, problem)
             kind, layout = points["firing"][i], points["layout"][i]
             if kind == "shared_crankpins" and (layout != "v" or z % 2):
-                found.add(i, f"firing = 'shared_crankpins' needs layout = 'v' and an even "
-                          f"number of cylinders (layout = {layout!r}, cylinders = {z:g})")
+                found.add(
+                    i,
+                    f"firing = 'shared_crankpins' needs layout = 'v' and an even "
+                    f"number of cylinders (layout = {layout!r}, cylinders = {z:g})",
+                )
             given = points["firing_angles"][i]
             if kind == "given" and given.size != z:
-                found.add(i, f"firing = 'given' needs one firing angle per cylinder: "
-                          f"firing_angles has {given.size} for cylinders = {z:g}")
+                found.add(
+                    i,
+                    f"firing = 'given' needs one firing angle per cylinder: "
+                    f"firing_angles has {given.size} for cylinders = {z:g}",
+                )
 
     def _check_pressure(self, points: dict[str, np.ndarray], found: PointProblems) -> None:
         table = np.flatnonzero(points["pressure_model"] == "table")
@@ -200,19 +218,27 @@ class CrankScene(Scene):
                 read_pressure_table(points["pressure_table"][table[0]])
             except ValueError as exc:
                 found.add_all(table, str(exc))
-        for i in np.flatnonzero(points["pressure_model"] == "cycle"):
+        for i in map(int, np.flatnonzero(points["pressure_model"] == "cycle")):
             end = math.degrees(points["combustion_start"][i] + points["combustion_duration"][i])
             if end > EXHAUST_OPENING_DEG:
-                found.add(i, f"combustion_start + combustion_duration = {end:g} deg after "
-                          "firing TDC must be ≤ 180 deg (the exhaust opens at BDC)")
+                found.add(
+                    i,
+                    f"combustion_start + combustion_duration = {end:g} deg after "
+                    "firing TDC must be ≤ 180 deg (the exhaust opens at BDC)",
+                )
             if points["heat_input"][i] != "max_pressure":
                 continue
-            p_c = points["intake_pressure"][i] * points["compression_ratio"][i] ** points[
-                "polytropic_exponent"][i]
+            p_c = (
+                points["intake_pressure"][i]
+                * points["compression_ratio"][i] ** points["polytropic_exponent"][i]
+            )
             if p_c >= points["max_pressure"][i]:
-                found.add(i, f"max_pressure = {points['max_pressure'][i] / 1e6:g} MPa is not "
-                          f"above the compression pressure p_a ε^k = {p_c / 1e6:.4g} MPa: "
-                          "no heat release can reach it")
+                found.add(
+                    i,
+                    f"max_pressure = {points['max_pressure'][i] / 1e6:g} MPa is not "
+                    f"above the compression pressure p_a ε^k = {p_c / 1e6:.4g} MPa: "
+                    "no heat release can reach it",
+                )
 
     # --- stages --------------------------------------------------------------------------
     def stage_kinematics(
@@ -227,8 +253,8 @@ class CrankScene(Scene):
         omega = params[:, ck.ANGULAR_SPEED]
         scalars["approx_error_displacement_relative"] = scalars["approx_error_displacement"] / r
         scalars["approx_error_velocity_relative"] = scalars["approx_error_velocity"] / (r * omega)
-        scalars["approx_error_acceleration_relative"] = (
-            scalars["approx_error_acceleration"] / (r * omega**2)
+        scalars["approx_error_acceleration_relative"] = scalars["approx_error_acceleration"] / (
+            r * omega**2
         )
         return scalars, dict(zip(ck.KINEMATICS_CURVES, curves.transpose(1, 0, 2), strict=True))
 
@@ -266,8 +292,10 @@ class CrankScene(Scene):
         curves = _empty_curves(n, ck.N_FORCE_CURVES, store, m)
         ck.crank_forces_batch(params, pressure, out, curves)
         scalars = {FORCE_NAMES.get(k, k): v for k, v in zip(ck.FORCE_OUTPUTS, out.T, strict=True)}
-        named = {FORCE_NAMES.get(k, k): v
-                 for k, v in zip(ck.FORCE_CURVES, curves.transpose(1, 0, 2), strict=True)}
+        named = {
+            FORCE_NAMES.get(k, k): v
+            for k, v in zip(ck.FORCE_CURVES, curves.transpose(1, 0, 2), strict=True)
+        }
         return scalars, named
 
     def stage_multicylinder(
@@ -322,8 +350,9 @@ class CrankScene(Scene):
             curves_si |= c
         if "multicylinder" in stages:
             firing, axis = layout_angles(points)
-            s, c = self.stages["multicylinder"](params, pressure, firing, axis,
-                                                store("multicylinder"))
+            s, c = self.stages["multicylinder"](
+                params, pressure, firing, axis, store("multicylinder")
+            )
             scalars |= s
             curves_si |= c
         return SceneOutput(

@@ -23,73 +23,217 @@ MAX_ORDER_HALVES = 24
 """Torque harmonics reported: engine orders 0.5, 1, …, 12 (harmonic q of the 720° cycle)."""
 
 PARAMETERS: tuple[Parameter, ...] = (
-    Parameter("engine_speed", "rpm", 2600.0, "crankshaft speed n", 0.0, 30000.0, True,
-              source=SRC),
-    Parameter("stroke", "mm", 180.0, "stroke S = 2r (12V150: not in the source, 180 mm is an "
-              "assumption)", 0.0, 5000.0, True, source=STROKE_SOURCE),
-    Parameter("rod_ratio", "1", 0.28, "crank radius over rod length λ = r/l (must be < 1)",
-              0.0, None, True, source=ASSUMED),
+    Parameter("engine_speed", "rpm", 2600.0, "crankshaft speed n", 0.0, 30000.0, True, source=SRC),
+    Parameter(
+        "stroke",
+        "mm",
+        180.0,
+        "stroke S = 2r (12V150: not in the source, 180 mm is an assumption)",
+        0.0,
+        5000.0,
+        True,
+        source=STROKE_SOURCE,
+    ),
+    Parameter(
+        "rod_ratio",
+        "1",
+        0.28,
+        "crank radius over rod length λ = r/l (must be < 1)",
+        0.0,
+        None,
+        True,
+        source=ASSUMED,
+    ),
     Parameter("bore", "mm", 150.0, "cylinder bore D", 0.0, 5000.0, True, source=SRC),
-    Parameter("reciprocating_mass", "kg", 3.5,
-              "reciprocating mass mj per cylinder (piston group + rod small-end share)",
-              0.0, 1e5, source=ASSUMED),
-    Parameter("rotating_mass", "kg", 3.0,
-              "rotating mass mr per crank throw (crank + rod big-end share)", 0.0, 1e5,
-              source=ASSUMED),
-    Parameter("crankcase_pressure", "kPa", 101.325, "crankcase pressure p0 under the piston",
-              0.0, 1e5, source="SPEC §5 (≈ 1 atm)"),
+    Parameter(
+        "reciprocating_mass",
+        "kg",
+        3.5,
+        "reciprocating mass mj per cylinder (piston group + rod small-end share)",
+        0.0,
+        1e5,
+        source=ASSUMED,
+    ),
+    Parameter(
+        "rotating_mass",
+        "kg",
+        3.0,
+        "rotating mass mr per crank throw (crank + rod big-end share)",
+        0.0,
+        1e5,
+        source=ASSUMED,
+    ),
+    Parameter(
+        "crankcase_pressure",
+        "kPa",
+        101.325,
+        "crankcase pressure p0 under the piston",
+        0.0,
+        1e5,
+        source="SPEC §5 (≈ 1 atm)",
+    ),
     Parameter("layout", "-", "v", "cylinder layout", choices=LAYOUTS, source=SRC),
-    Parameter("cylinders", "1", 12.0, "number of cylinders z (a whole number)", 1.0, 64.0,
-              source=SRC),
-    Parameter("bank_angle", "deg", 90.0, "angle γ between the banks of a V engine", 0.0, 180.0,
-              True, source=SRC),
-    Parameter("firing_order", "-", FIRING_ORDER_12V150,
-              "cylinder numbers in firing order (every cylinder 1…z exactly once)", vector=True,
-              source=SRC),
-    Parameter("firing", "-", "even",
-              "firing angles: 'even' = 720°/z in firing order; 'shared_crankpins' = V engine with "
-              "two rods per throw (even only when γ = 720°/z); 'given' = firing_angles",
-              choices=FIRINGS, source="SPEC §5 (even firing by default)"),
-    Parameter("firing_angles", "deg", [],
-              "firing angle of cylinder 1, 2, …, z after cylinder 1 (firing = 'given')",
-              vector=True),
-    Parameter("pressure_model", "-", "cycle",
-              "cylinder pressure: parametric single-zone 'cycle' or a measured 'table'",
-              choices=PRESSURE_MODELS),
-    Parameter("pressure_table", "-", "",
-              "CSV of crank angle [deg] (firing TDC at 0) and pressure [MPa] for "
-              "pressure_model = 'table' (path relative to the working directory)", text=True),
-    Parameter("compression_ratio", "1", 14.0, "compression ratio ε", 1.0, 100.0, True,
-              source=ASSUMED),
-    Parameter("intake_pressure", "kPa", 300.0, "cylinder pressure at inlet closing (BDC)",
-              0.0, 1e5, True, source=ASSUMED),
-    Parameter("exhaust_pressure", "kPa", 250.0, "cylinder pressure during the exhaust stroke",
-              0.0, 1e5, True, source=ASSUMED),
-    Parameter("polytropic_exponent", "1", 1.35, "polytropic exponent k of compression and "
-              "expansion", 1.0, 2.0, True, source=ASSUMED),
-    Parameter("combustion_start", "deg", -15.0,
-              "start of heat release after firing TDC (negative = before TDC)", -180.0, 180.0,
-              source=ASSUMED),
-    Parameter("combustion_duration", "deg", 50.0, "heat-release duration", 0.0, 360.0, True,
-              source=ASSUMED),
-    Parameter("wiebe_efficiency", "1", 6.908, "Wiebe efficiency parameter a", 0.0, 100.0, True,
-              source="Heywood (2018) §9.2"),
+    Parameter(
+        "cylinders", "1", 12.0, "number of cylinders z (a whole number)", 1.0, 64.0, source=SRC
+    ),
+    Parameter(
+        "bank_angle",
+        "deg",
+        90.0,
+        "angle γ between the banks of a V engine",
+        0.0,
+        180.0,
+        True,
+        source=SRC,
+    ),
+    Parameter(
+        "firing_order",
+        "-",
+        FIRING_ORDER_12V150,
+        "cylinder numbers in firing order (every cylinder 1…z exactly once)",
+        vector=True,
+        source=SRC,
+    ),
+    Parameter(
+        "firing",
+        "-",
+        "even",
+        "firing angles: 'even' = 720°/z in firing order; 'shared_crankpins' = V engine with "
+        "two rods per throw (even only when γ = 720°/z); 'given' = firing_angles",
+        choices=FIRINGS,
+        source="SPEC §5 (even firing by default)",
+    ),
+    Parameter(
+        "firing_angles",
+        "deg",
+        [],
+        "firing angle of cylinder 1, 2, …, z after cylinder 1 (firing = 'given')",
+        vector=True,
+    ),
+    Parameter(
+        "pressure_model",
+        "-",
+        "cycle",
+        "cylinder pressure: parametric single-zone 'cycle' or a measured 'table'",
+        choices=PRESSURE_MODELS,
+    ),
+    Parameter(
+        "pressure_table",
+        "-",
+        "",
+        "CSV of crank angle [deg] (firing TDC at 0) and pressure [MPa] for "
+        "pressure_model = 'table' (path relative to the working directory)",
+        text=True,
+    ),
+    Parameter(
+        "compression_ratio", "1", 14.0, "compression ratio ε", 1.0, 100.0, True, source=ASSUMED
+    ),
+    Parameter(
+        "intake_pressure",
+        "kPa",
+        300.0,
+        "cylinder pressure at inlet closing (BDC)",
+        0.0,
+        1e5,
+        True,
+        source=ASSUMED,
+    ),
+    Parameter(
+        "exhaust_pressure",
+        "kPa",
+        250.0,
+        "cylinder pressure during the exhaust stroke",
+        0.0,
+        1e5,
+        True,
+        source=ASSUMED,
+    ),
+    Parameter(
+        "polytropic_exponent",
+        "1",
+        1.35,
+        "polytropic exponent k of compression and expansion",
+        1.0,
+        2.0,
+        True,
+        source=ASSUMED,
+    ),
+    Parameter(
+        "combustion_start",
+        "deg",
+        -15.0,
+        "start of heat release after firing TDC (negative = before TDC)",
+        -180.0,
+        180.0,
+        source=ASSUMED,
+    ),
+    Parameter(
+        "combustion_duration",
+        "deg",
+        50.0,
+        "heat-release duration",
+        0.0,
+        360.0,
+        True,
+        source=ASSUMED,
+    ),
+    Parameter(
+        "wiebe_efficiency",
+        "1",
+        6.908,
+        "Wiebe efficiency parameter a",
+        0.0,
+        100.0,
+        True,
+        source="Heywood (2018) §9.2",
+    ),
     Parameter("wiebe_form", "1", 1.0, "Wiebe form factor m", 0.0, 10.0, source=ASSUMED),
-    Parameter("heat_input", "-", "max_pressure",
-              "heat input of the cycle: from the target 'max_pressure' or from 'cycle_heat'",
-              choices=HEAT_INPUTS),
-    Parameter("max_pressure", "MPa", 23.0, "maximum combustion pressure (target of the cycle)",
-              0.0, 1000.0, True, source=SRC),
-    Parameter("cycle_heat", "kJ", 12.0, "heat released per cycle and cylinder (heat_input = "
-              "'cycle_heat')", 0.0, 1e4, source=ASSUMED),
+    Parameter(
+        "heat_input",
+        "-",
+        "max_pressure",
+        "heat input of the cycle: from the target 'max_pressure' or from 'cycle_heat'",
+        choices=HEAT_INPUTS,
+    ),
+    Parameter(
+        "max_pressure",
+        "MPa",
+        23.0,
+        "maximum combustion pressure (target of the cycle)",
+        0.0,
+        1000.0,
+        True,
+        source=SRC,
+    ),
+    Parameter(
+        "cycle_heat",
+        "kJ",
+        12.0,
+        "heat released per cycle and cylinder (heat_input = 'cycle_heat')",
+        0.0,
+        1e4,
+        source=ASSUMED,
+    ),
 )
 
 SETTINGS: tuple[Parameter, ...] = (
-    Parameter("model", "-", "exact", "piston kinematics: 'exact' [K1] or two-term "
-              "'approximate' [K2]–[K4] (inertia forces, torque, kinematic curves)",
-              choices=MODELS),
-    Parameter("angle_step", "deg", 1.0, "crank-angle grid step over the 720° cycle (must "
-              "divide 720°)", 0.0, 10.0, True),
+    Parameter(
+        "model",
+        "-",
+        "exact",
+        "piston kinematics: 'exact' [K1] or two-term "
+        "'approximate' [K2]–[K4] (inertia forces, torque, kinematic curves)",
+        choices=MODELS,
+    ),
+    Parameter(
+        "angle_step",
+        "deg",
+        1.0,
+        "crank-angle grid step over the 720° cycle (must divide 720°)",
+        0.0,
+        10.0,
+        True,
+    ),
 )
 
 KIN = ("kinematics",)
@@ -106,8 +250,9 @@ def order_name(halves: int) -> str:
 
 def _order_responses() -> tuple[Response, ...]:
     return tuple(
-        Response(order_name(q), "N*m", f"amplitude of engine order {q / 2:g} of the engine "
-                 "torque", MULTI)
+        Response(
+            order_name(q), "N*m", f"amplitude of engine order {q / 2:g} of the engine torque", MULTI
+        )
         for q in range(1, MAX_ORDER_HALVES + 1)
     )
 
@@ -115,36 +260,53 @@ def _order_responses() -> tuple[Response, ...]:
 RESPONSES: tuple[Response, ...] = (
     Response("mean_piston_speed", "m/s", "mean piston speed cm = S n/30", KIN),
     Response("max_piston_velocity", "m/s", "maximum piston velocity", KIN),
-    Response("crank_angle_max_velocity", "deg", "crank angle of the maximum piston velocity",
-             KIN),
+    Response("crank_angle_max_velocity", "deg", "crank angle of the maximum piston velocity", KIN),
     Response("piston_acceleration_tdc", "m/s^2", "piston acceleration at TDC", KIN),
-    Response("min_piston_acceleration", "m/s^2", "most negative piston acceleration", KIN,
-             "larger"),
+    Response(
+        "min_piston_acceleration", "m/s^2", "most negative piston acceleration", KIN, "larger"
+    ),
     Response("max_rod_angle", "deg", "largest rod angle β = asin λ", KIN),
     Response("max_rod_angular_velocity", "rad/s", "largest rod angular velocity λω", KIN),
-    Response("max_rod_angular_acceleration", "rad/s^2", "largest |rod angular acceleration|",
-             KIN),
-    Response("approx_error_displacement", "mm",
-             "max |exact − two-term| piston displacement over the cycle", KIN),
-    Response("approx_error_velocity", "m/s",
-             "max |exact − two-term| piston velocity over the cycle", KIN),
-    Response("approx_error_acceleration", "m/s^2",
-             "max |exact − two-term| piston acceleration over the cycle", KIN),
-    Response("approx_error_displacement_relative", "1",
-             "two-term displacement error over the crank radius r", KIN),
+    Response("max_rod_angular_acceleration", "rad/s^2", "largest |rod angular acceleration|", KIN),
+    Response(
+        "approx_error_displacement",
+        "mm",
+        "max |exact − two-term| piston displacement over the cycle",
+        KIN,
+    ),
+    Response(
+        "approx_error_velocity", "m/s", "max |exact − two-term| piston velocity over the cycle", KIN
+    ),
+    Response(
+        "approx_error_acceleration",
+        "m/s^2",
+        "max |exact − two-term| piston acceleration over the cycle",
+        KIN,
+    ),
+    Response(
+        "approx_error_displacement_relative",
+        "1",
+        "two-term displacement error over the crank radius r",
+        KIN,
+    ),
     Response("approx_error_velocity_relative", "1", "two-term velocity error over r ω", KIN),
-    Response("approx_error_acceleration_relative", "1",
-             "two-term acceleration error over r ω²", KIN),
+    Response(
+        "approx_error_acceleration_relative", "1", "two-term acceleration error over r ω²", KIN
+    ),
     Response("peak_pressure", "MPa", "peak cylinder pressure (on the grid)", PRESSURE),
-    Response("peak_pressure_angle", "deg", "crank angle of the peak pressure after firing TDC",
-             PRESSURE),
-    Response("compression_pressure", "MPa", "compression pressure p_a ε^k (cycle only)",
-             PRESSURE),
+    Response(
+        "peak_pressure_angle", "deg", "crank angle of the peak pressure after firing TDC", PRESSURE
+    ),
+    Response("compression_pressure", "MPa", "compression pressure p_a ε^k (cycle only)", PRESSURE),
     Response("heat_released", "kJ", "heat released in the closed cycle (cycle only)", PRESSURE),
-    Response("cycle_work", "kJ", "indicated work per cycle and cylinder ∮p dV (cycle only)",
-             PRESSURE, "larger"),
-    Response("imep", "MPa", "indicated mean effective pressure (cycle only)", PRESSURE,
-             "larger"),
+    Response(
+        "cycle_work",
+        "kJ",
+        "indicated work per cycle and cylinder ∮p dV (cycle only)",
+        PRESSURE,
+        "larger",
+    ),
+    Response("imep", "MPa", "indicated mean effective pressure (cycle only)", PRESSURE, "larger"),
     Response("max_gas_force", "kN", "maximum gas force on the piston", FORCES),
     Response("max_piston_force", "kN", "maximum total piston force P = Pg + Pj", FORCES),
     Response("min_piston_force", "kN", "minimum total piston force", FORCES, "larger"),
@@ -152,17 +314,24 @@ RESPONSES: tuple[Response, ...] = (
     Response("min_rod_force", "kN", "minimum rod force", FORCES, "larger"),
     Response("max_side_force", "kN", "maximum |piston side force| N = P tan β", FORCES),
     Response("max_tangential_force", "kN", "maximum tangential crankpin force T", FORCES),
-    Response("min_tangential_force", "kN", "minimum tangential crankpin force", FORCES,
-             "larger"),
+    Response("min_tangential_force", "kN", "minimum tangential crankpin force", FORCES, "larger"),
     Response("max_radial_force", "kN", "maximum radial crankpin force Z", FORCES),
     Response("min_radial_force", "kN", "minimum radial crankpin force", FORCES, "larger"),
     Response("cylinder_mean_torque", "N*m", "mean torque of one cylinder", FORCES, "larger"),
     Response("cylinder_max_torque", "N*m", "maximum torque of one cylinder", FORCES),
     Response("cylinder_min_torque", "N*m", "minimum torque of one cylinder", FORCES, "larger"),
-    Response("first_order_inertia_amplitude", "kN",
-             "first-order reciprocating inertia amplitude mj r ω²", FORCES),
-    Response("second_order_inertia_amplitude", "kN",
-             "second-order reciprocating inertia amplitude mj r ω² λ", FORCES),
+    Response(
+        "first_order_inertia_amplitude",
+        "kN",
+        "first-order reciprocating inertia amplitude mj r ω²",
+        FORCES,
+    ),
+    Response(
+        "second_order_inertia_amplitude",
+        "kN",
+        "second-order reciprocating inertia amplitude mj r ω² λ",
+        FORCES,
+    ),
     Response("rotating_inertia_force", "kN", "rotating inertia force mr r ω²", FORCES),
     Response("mean_torque", "N*m", "mean engine torque", MULTI, "larger"),
     Response("max_torque", "N*m", "maximum engine torque", MULTI),
@@ -170,13 +339,17 @@ RESPONSES: tuple[Response, ...] = (
     Response("torque_peak_to_peak", "N*m", "engine torque max − min", MULTI),
     Response("torque_nonuniformity", "1", "(max − min)/mean engine torque", MULTI),
     Response("mean_power", "kW", "mean indicated power (mean torque × ω)", MULTI, "larger"),
-    Response("free_first_order_force", "kN", "free first-order reciprocating force of the "
-             "layout", MULTI),
-    Response("free_second_order_force", "kN", "free second-order reciprocating force of the "
-             "layout", MULTI),
+    Response(
+        "free_first_order_force", "kN", "free first-order reciprocating force of the layout", MULTI
+    ),
+    Response(
+        "free_second_order_force",
+        "kN",
+        "free second-order reciprocating force of the layout",
+        MULTI,
+    ),
     *_order_responses(),
-    Response("dominant_torque_order", "1", "engine order with the largest torque amplitude",
-             MULTI),
+    Response("dominant_torque_order", "1", "engine order with the largest torque amplitude", MULTI),
     Response("dominant_torque_amplitude", "N*m", "largest torque-harmonic amplitude", MULTI),
 )
 
@@ -199,5 +372,6 @@ CURVES: tuple[Curve, ...] = (
     Curve("engine_torque", "N*m", "summed engine torque", MULTI),
 )
 
-CRANK_ANGLE = CurveAxis("crank_angle", "deg", "crank angle of cylinder 1 from gas-exchange TDC "
-                        "(firing TDC at 360°)")
+CRANK_ANGLE = CurveAxis(
+    "crank_angle", "deg", "crank angle of cylinder 1 from gas-exchange TDC (firing TDC at 360°)"
+)

@@ -39,8 +39,10 @@ class LuffingScene(Scene):
     """Tower-crane test-rig trolley drive (SPEC §7)."""
 
     name = "luffing"
-    description = ("tower-crane test-rig trolley drive: motor, belt, coupling, key, bearing and "
-                   "guide-tube checks as value, limit and pass (SPEC §7)")
+    description = (
+        "tower-crane test-rig trolley drive: motor, belt, coupling, key, bearing and "
+        "guide-tube checks as value, limit and pass (SPEC §7)"
+    )
     parameters = PARAMETERS
     responses = RESPONSES
     stage_order = NEEDS
@@ -51,13 +53,15 @@ class LuffingScene(Scene):
         for i in range(len(points["trolley_mass"])):
             outer, inner = points["tube_outer_diameter"][i], points["tube_inner_diameter"][i]
             if inner >= outer:
-                found.add(i, f"tube_inner_diameter = {inner / mm:g} mm must be smaller than "
-                          f"tube_outer_diameter = {outer / mm:g} mm")
+                found.add(
+                    i,
+                    f"tube_inner_diameter = {inner / mm:g} mm must be smaller than "
+                    f"tube_outer_diameter = {outer / mm:g} mm",
+                )
             ratings = points["motor_ratings"][i]
             if np.any(ratings <= 0) or np.any(np.diff(ratings) <= 0):
                 shown = ", ".join(f"{r:g}" for r in ratings)
-                found.add(i, f"motor_ratings = [{shown}] W must be positive and strictly "
-                          "ascending")
+                found.add(i, f"motor_ratings = [{shown}] W must be positive and strictly ascending")
         return found.messages()
 
     def stage_sizing(self, params: np.ndarray, ratings: np.ndarray) -> np.ndarray:
@@ -81,6 +85,8 @@ class LuffingScene(Scene):
         si["checks_passed"] = flags.sum(axis=0)
         si["all_checks_ok"] = flags.min(axis=0)
         return SceneOutput(
-            scalars={r: si[r] / UNITS[self.response(r).units].to_si  # type: ignore[union-attr]
-                     for r in responses},
+            scalars={
+                r: si[r] / UNITS[self.response(r).units].to_si  # type: ignore[union-attr]
+                for r in responses
+            },
         )

@@ -49,24 +49,61 @@ PARAMETERS: tuple[Parameter, ...] = (
     Parameter("length", "mm", 35.0, "free length l of the reed", 0.0, 1000.0, True, source=SRC),
     Parameter("width", "mm", 11.5, "width b of the reed", 0.0, 1000.0, True, source=SRC),
     Parameter("thickness", "mm", 0.3, "thickness h of the reed", 0.0, 100.0, True, source=SRC),
-    Parameter("material", "-", "spring_steel", "reed material (E, ρ from the scene's table; "
-              "'custom' uses youngs_modulus and density)", choices=(*MATERIALS, "custom"),
-              source=SRC),
-    Parameter("youngs_modulus", "GPa", 208.0, "Young's modulus E (material = 'custom')",
-              0.0, 2000.0, True, source=SRC),
-    Parameter("density", "kg/m^3", 7800.0, "density ρ (material = 'custom')", 0.0, 1e5, True,
-              source=SRC),
-    Parameter("speed_min", "rpm", 1200.0, "lowest engine speed of the excitation band",
-              0.0, 1e5, True, source="SPEC §6"),
-    Parameter("speed_max", "rpm", 9000.0, "highest engine speed of the excitation band",
-              0.0, 1e5, True, source="SPEC §6"),
-    Parameter("cycle", "-", "four_stroke", "engine cycle: the reed opens once per cycle",
-              choices=tuple(OPENINGS), source="SPEC §6"),
+    Parameter(
+        "material",
+        "-",
+        "spring_steel",
+        "reed material (E, ρ from the scene's table; 'custom' uses youngs_modulus and density)",
+        choices=(*MATERIALS, "custom"),
+        source=SRC,
+    ),
+    Parameter(
+        "youngs_modulus",
+        "GPa",
+        208.0,
+        "Young's modulus E (material = 'custom')",
+        0.0,
+        2000.0,
+        True,
+        source=SRC,
+    ),
+    Parameter(
+        "density", "kg/m^3", 7800.0, "density ρ (material = 'custom')", 0.0, 1e5, True, source=SRC
+    ),
+    Parameter(
+        "speed_min",
+        "rpm",
+        1200.0,
+        "lowest engine speed of the excitation band",
+        0.0,
+        1e5,
+        True,
+        source="SPEC §6",
+    ),
+    Parameter(
+        "speed_max",
+        "rpm",
+        9000.0,
+        "highest engine speed of the excitation band",
+        0.0,
+        1e5,
+        True,
+        source="SPEC §6",
+    ),
+    Parameter(
+        "cycle",
+        "-",
+        "four_stroke",
+        "engine cycle: the reed opens once per cycle",
+        choices=tuple(OPENINGS),
+        source="SPEC §6",
+    ),
 )
 
 SETTINGS: tuple[Parameter, ...] = (
-    Parameter("shape_points", "1", 51.0, "points along the reed for the mode-shape curves",
-              2.0, 10001.0),
+    Parameter(
+        "shape_points", "1", 51.0, "points along the reed for the mode-shape curves", 2.0, 10001.0
+    ),
 )
 
 NEEDS = ("frequencies",)
@@ -77,26 +114,50 @@ def _mode_responses() -> tuple[Response, ...]:
     for word in MODE_WORDS:
         out += [
             Response(f"{word}_frequency", "Hz", f"{word} natural frequency", NEEDS, "larger"),
-            Response(f"{word}_margin", "Hz", f"margin of the {word} mode to the excitation band "
-                     "(> 0 outside, < 0 inside)", NEEDS, "larger"),
+            Response(
+                f"{word}_margin",
+                "Hz",
+                f"margin of the {word} mode to the excitation band (> 0 outside, < 0 inside)",
+                NEEDS,
+                "larger",
+            ),
         ]
     return tuple(out)
 
 
 RESPONSES: tuple[Response, ...] = (
     *_mode_responses(),
-    Response("first_margin_ratio", "1", "first-mode margin over the first frequency", NEEDS,
-             "larger"),
+    Response(
+        "first_margin_ratio", "1", "first-mode margin over the first frequency", NEEDS, "larger"
+    ),
     Response("band_min", "Hz", "lowest excitation frequency", NEEDS),
     Response("band_max", "Hz", "highest excitation frequency", NEEDS),
-    Response("first_mode_clear", "1", "first natural frequency outside the excitation band",
-             NEEDS, "larger", flag=True),
-    Response("all_modes_clear", "1", f"all {N_MODES} natural frequencies outside the band",
-             NEEDS, "larger", flag=True),
-    Response("harmonic_order", "1", "lowest engine-order harmonic of the band reaching f₁",
-             NEEDS, "larger"),
-    Response("resonance_speed", "rpm", "engine speed at which that harmonic meets f₁", NEEDS,
-             "larger"),
+    Response(
+        "first_mode_clear",
+        "1",
+        "first natural frequency outside the excitation band",
+        NEEDS,
+        "larger",
+        flag=True,
+    ),
+    Response(
+        "all_modes_clear",
+        "1",
+        f"all {N_MODES} natural frequencies outside the band",
+        NEEDS,
+        "larger",
+        flag=True,
+    ),
+    Response(
+        "harmonic_order",
+        "1",
+        "lowest engine-order harmonic of the band reaching f₁",
+        NEEDS,
+        "larger",
+    ),
+    Response(
+        "resonance_speed", "rpm", "engine speed at which that harmonic meets f₁", NEEDS, "larger"
+    ),
     Response("tip_stiffness", "N/m", "static tip stiffness 3EI/l³", NEEDS, "larger"),
     Response("mass", "g", "reed mass ρ b h l", NEEDS),
 )
@@ -123,8 +184,10 @@ class ReedScene(Scene):
     """Clamped–free reed valve excited by the engine (SPEC §6)."""
 
     name = "reed"
-    description = ("reed-valve natural frequencies, mode shapes and margins to the engine's "
-                   "excitation band (SPEC §6)")
+    description = (
+        "reed-valve natural frequencies, mode shapes and margins to the engine's "
+        "excitation band (SPEC §6)"
+    )
     parameters = PARAMETERS
     settings = SETTINGS
     responses = RESPONSES
@@ -146,13 +209,17 @@ class ReedScene(Scene):
         for i in range(len(points["length"])):
             lo, hi = points["speed_min"][i], points["speed_max"][i]
             if lo >= hi:
-                found.add(i, f"speed_min = {lo / rpm:g} rpm must be below speed_max = "
-                          f"{hi / rpm:g} rpm")
+                found.add(
+                    i, f"speed_min = {lo / rpm:g} rpm must be below speed_max = {hi / rpm:g} rpm"
+                )
             length, h = points["length"][i], points["thickness"][i]
             if length < MIN_SLENDERNESS * h:
-                found.add(i, f"length/thickness = {length / mm:g} mm / {h / mm:g} mm = "
-                          f"{length / h:.3g} is below {MIN_SLENDERNESS:g}: the reed is not a "
-                          "slender beam and [B1]/[B2] do not apply")
+                found.add(
+                    i,
+                    f"length/thickness = {length / mm:g} mm / {h / mm:g} mm = "
+                    f"{length / h:.3g} is below {MIN_SLENDERNESS:g}: the reed is not a "
+                    "slender beam and [B1]/[B2] do not apply",
+                )
         return problems + found.messages()
 
     def stage_frequencies(
@@ -191,7 +258,9 @@ class ReedScene(Scene):
         si["first_mode_clear"] = (modes[:, rd.MODE_MARGIN, 0] > 0).astype(float)
         si["all_modes_clear"] = (modes[:, rd.MODE_MARGIN, :] > 0).all(axis=1).astype(float)
         return SceneOutput(
-            scalars={r: si[r] / UNITS[self.response(r).units].to_si  # type: ignore[union-attr]
-                     for r in responses},
+            scalars={
+                r: si[r] / UNITS[self.response(r).units].to_si  # type: ignore[union-attr]
+                for r in responses
+            },
             curves={c: shapes[:, int(c.rsplit("_", 1)[1]) - 1] for c in curves},
         )
