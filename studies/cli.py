@@ -82,7 +82,31 @@ def _parser() -> argparse.ArgumentParser:
     show.add_argument("run_id")
     show.add_argument("--outputs", type=Path, default=Path("outputs"))
     show.set_defaults(func=_cmd_show)
+    bench = sub.add_parser("bench", help="run benchmarks (cases/s, ratios)")
+    bench.add_argument("name", help="benchmark name or 'all'")
+    bench.add_argument("--cases", type=int, default=20000, help="design points per timing")
+    bench.add_argument("--step", type=float, default=0.5, help="angle step [deg]")
+    bench.add_argument("--repeat", type=int, default=3, help="timed repetitions (best kept)")
+    bench.add_argument("--outputs", type=Path, default=Path("outputs"))
+    bench.set_defaults(func=_cmd_bench)
     return p
+
+
+def _cmd_bench(args: argparse.Namespace) -> int:
+    from studies.bench import BENCHMARKS, run_benchmark
+
+    names = list(BENCHMARKS) if args.name == "all" else [args.name]
+    for name in names:
+        path = run_benchmark(name, args.cases, args.step, args.repeat, args.outputs)
+        figures = json.loads(path.read_text(encoding="utf-8"))["figures"]
+        print(f"benchmark {name} ({args.cases} cases, step {args.step} deg):")
+        print(_indent(json.dumps(figures, indent=2)))
+        print(f"  written to {path}")
+    return 0
+
+
+def _indent(text: str) -> str:
+    return "\n".join("  " + line for line in text.splitlines())
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
