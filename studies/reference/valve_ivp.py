@@ -36,8 +36,7 @@ class ReferenceSolution:
     switches: list[tuple[float, str]] = field(default_factory=list)
 
 
-def table_excitation(excitation: np.ndarray, table_step: float, table_start: float
-                     ) -> Excitation:
+def table_excitation(excitation: np.ndarray, table_step: float, table_start: float) -> Excitation:
     """The cubic Hermite interpolant the kernels use, as a callable θ → (Y, Y', Y'').
 
     Y is interpolated with slopes Y', Y' with slopes Y'', Y'' linearly (SI units, per rad).
@@ -71,9 +70,14 @@ def _modes(signs):
     return drive > 0, gap > 0 and seat > 0
 
 
-def valve_reference(excitation: Excitation, params: np.ndarray, theta_eval: np.ndarray,
-                    method: str = "DOP853", rtol: float = 1e-10, atol: float = 1e-14
-                    ) -> ReferenceSolution:
+def valve_reference(
+    excitation: Excitation,
+    params: np.ndarray,
+    theta_eval: np.ndarray,
+    method: str = "DOP853",
+    rtol: float = 1e-10,
+    atol: float = 1e-14,
+) -> ReferenceSolution:
     """Solve [V2] from ``theta_eval[0]`` to ``theta_eval[-1]`` with event restarts.
 
     excitation : callable θ [rad] → (Y [m], Y' [m/rad], Y'' [m/rad²]).
@@ -122,8 +126,16 @@ def valve_reference(excitation: Excitation, params: np.ndarray, theta_eval: np.n
             event.terminal = True
             event.direction = -signs[index]
             events.append(event)
-        sol = solve_ivp(rhs, (theta, end), state, method=method, rtol=rtol, atol=atol,
-                        events=events, dense_output=True)
+        sol = solve_ivp(
+            rhs,
+            (theta, end),
+            state,
+            method=method,
+            rtol=rtol,
+            atol=atol,
+            events=events,
+            dense_output=True,
+        )
         if not sol.success:
             raise RuntimeError(f"valve reference failed at {theta:.6f} rad: {sol.message}")
         stop = float(sol.t[-1])
