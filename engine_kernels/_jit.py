@@ -10,21 +10,59 @@ floating-point contraction and the parallel switch are set once:
 
 ``fastmath={'contract'}`` only allows fused multiply-add; it never reorders sums or assumes
 away NaN/Inf, so kernels keep IEEE semantics for the physics checks that rely on them.
+
+Numba's disk cache checks only the timestamp of the file that defines a function, not of the
+modules it calls (whose code it inlines). :func:`_drop_stale_cache` therefore clears the
+package's cache whenever any kernel source changes, so an edit can never be served stale.
 """
 
 from __future__ import annotations
 
+import hashlib
 import os
+from pathlib import Path
 
 import numba
 
 FASTMATH = {"contract"}
 PARALLEL = os.environ.get("ENGINE_KERNELS_PARALLEL", "1") not in ("0", "false", "False", "")
+_PACKAGE = Path(__file__).resolve().parent
+_STAMP = "engine_kernels.sources.sha256"
+
+
+def _drop_stale_cache() -> None:
+    """Delete cached machine code of this package if any kernel source changed since."""
+    digest = hashlib.sha256()
+    for source in sorted(_PACKAGE.glob("*.py")):
+        digest.update(source.name.encode() + source.read_bytes())
+    cache = _PACKAGE / "__pycache__"
+    stamp = cache / _STAMP
+    try:
+        if stamp.exists() and stamp.read_text() == digest.hexdigest():
+            return
+        for stale in (*cache.glob("*.nbi"), *cache.glob("*.nbc")):
+            stale.unlink(missing_ok=True)
+        cache.mkdir(exist_ok=True)
+        stamp.write_text(digest.hexdigest())
+    except OSError:
+        return  # read-only install: Numba then falls back to its own cache location
+
+
+_drop_stale_cache()
 
 
 def jit(func):
     """Compile a scalar kernel (no parallel loops), cached on disk."""
     return numba.njit(cache=True, fastmath=FASTMATH, nogil=True)(func)
+
+
+def jit_inline(func):
+    """Like :func:`jit`, but inlined into its callers at the Numba IR level.
+
+    For small helpers inside lane (SIMD) loops: a call boundary there stops LLVM from
+    vectorising the loop.
+    """
+    return numba.njit(cache=True, fastmath=FASTMATH, nogil=True, inline="always")(func)
 
 
 def batch(func):
