@@ -259,6 +259,7 @@ def frequency_map_figure(ds: xr.Dataset) -> Figure | None:
     f1_all = ds["first_frequency"].values
     norm_range = (np.nanmin(f1_all), np.nanmax(f1_all))
     mesh = None
+    edges_drawn = False
     for i, j, where in layout.panels():
         ax = axes[i, j]
         f1 = _grid(ds, "first_frequency", "length", "thickness", where)
@@ -288,8 +289,11 @@ def frequency_map_figure(ds: xr.Dataset) -> Figure | None:
                     fontsize="xx-small",
                     color="white",
                 )
-        if band and f1.shape[0] > 1 and f1.shape[1] > 1 and np.isfinite(f1).all():
-            contours = ax.contour(x, y, f1, levels=sorted(set(band)), colors="red", linewidths=1.2)
+        complete = min(f1.shape) > 1 and np.isfinite(f1).all()
+        crossed = sorted({b for b in band if complete and f1.min() < b < f1.max()})
+        if crossed:
+            edges_drawn = True
+            contours = ax.contour(x, y, f1, levels=crossed, colors="red", linewidths=1.2)
             ax.clabel(contours, fmt="%g Hz", fontsize="xx-small")
         ax.set_title(layout.title(where), fontsize="small")
     for ax in axes[-1]:
@@ -298,7 +302,8 @@ def frequency_map_figure(ds: xr.Dataset) -> Figure | None:
         ax.set_ylabel("thickness [mm]")
     if mesh is not None:
         fig.colorbar(mesh, ax=axes, label="first natural frequency [Hz]", shrink=0.8)
-    band_text = f" {band[0]:g}–{band[-1]:g} Hz (red lines)" if len(band) == 2 else ""
+    band_text = f" {band[0]:g}–{band[-1]:g} Hz" if len(band) == 2 else ""
+    band_text += " (red lines: its edges)" if edges_drawn else ""
     fig.suptitle(
         f"First natural frequency [Hz]\nexcitation band{band_text}; red cells lie "
         f"inside it{layout.held_note()}",

@@ -107,7 +107,7 @@ PARAMETERS: tuple[Parameter, ...] = (
         "firing_angles",
         "deg",
         [],
-        "firing angle of cylinder 1, 2, …, z after cylinder 1 (firing = 'given')",
+        "crank angle (0–720°) at which cylinder 1, 2, …, z fires (firing = 'given')",
         vector=True,
     ),
     Parameter(
