@@ -77,7 +77,9 @@ class Parameter:
         if self.text:
             return None if isinstance(value, str) else f"{self.name} = {value!r} must be a string"
         if self.vector:
-            ok = isinstance(value, list) and all(_is_number(v) for v in value) and len(value) > 0
+            if isinstance(value, list) and not value:
+                return f"{self.name} = [] is empty: give {self.allowed()}"
+            ok = isinstance(value, list) and all(_is_number(v) for v in value)
             return None if ok else f"{self.name} = {value!r} is not allowed: use {self.allowed()}"
         if not _is_number(value) or not math.isfinite(value):
             return f"{self.name} = {value!r} is not a finite number (expected {self.allowed()})"
