@@ -143,7 +143,7 @@ def test_v12_torque_runs_with_curves_figures_and_energy_balance(tmp_path: Path) 
         (
             "firing_order = []",
             "[factors.engine_speed]\nlevels = [1000.0, 2000.0]",
-            "firing_order = [] is not allowed",
+            "firing_order = [] is empty",
         ),
         (
             'cylinders = 4\nlayout = "inline"\nfiring_order = [1, 2, 2, 4]',
