@@ -143,7 +143,9 @@ def _sequential_ss(y: np.ndarray, terms: list[np.ndarray]) -> tuple[list[float],
     rss_before, rank_before = float(((y - y.mean()) ** 2).sum()), 1
     ss, dof = [], []
     for codes in terms:
-        dummies = (codes[:, None] == np.unique(codes)[None, :]).astype(float)
+        # treatment coding: one dummy per level but the first keeps the design full-rank, so
+        # lstsq's rank detection stays reliable for saturated arrays (e.g. L27 with 12 factors)
+        dummies = (codes[:, None] == np.unique(codes)[None, 1:]).astype(float)
         x = np.hstack([x, dummies])
         beta, _, rank, _ = np.linalg.lstsq(x, y, rcond=None)
         rss = float(((y - x @ beta) ** 2).sum())

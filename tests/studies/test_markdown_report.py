@@ -1,0 +1,318 @@
+"""report.md, the S/N and interaction figures, and what a run writes for orthogonal-array studies.
+
+Datasets are built as :mod:`studies.results` lays them out, with synthetic responses, so the
+report is checked without running kernels. Expected best levels come from numpy level means
+(direct computation); figure data from numpy cell means and the S/N definition; the study
+structure from the shipped TOML files read with tomllib.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from studies import designs
+from studies.markdown_report import report_text, write_report
+from studies.plots import interaction_figure, sn_figure
+from studies.report import write_analysis
+
+CATALOG = Path(__file__).parents[2] / "studies" / "catalog"
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+def oa_studies() -> list[Path]:
+    """Shipped studies whose design is an orthogonal array (or auto)."""
+    out = []
+    for path in sorted(CATALOG.glob("*.toml")):
+        kind = tomllib.loads(path.read_text(encoding="utf-8")).get("design", {}).get("type", "")
+        if kind not in ("full_factorial", "sweep", ""):
+            out.append(path)
+    return out
+
+
+def study_dataset(path: Path, seed: int = 0) -> xr.Dataset:
+    """A results Dataset of a shipped study with synthetic additive responses plus noise."""
+    text = path.read_text(encoding="utf-8")
+    study = tomllib.loads(text)
+    factors = study["factors"]
+    spec = study.get("design", {})
+    design = designs.orthogonal(
+        spec["type"],
+        {f: len(v["levels"]) for f, v in factors.items()},
+        {f: v.get("column") for f, v in factors.items()},
+        tuple(spec.get("error_columns", ())),
+        spec.get("interactions", ()),
+    )
+    coords: dict = {"run": np.arange(design.runs)}
+    for f, v in factors.items():
+        coords[f] = (
+            "run",
+            np.asarray(v["levels"])[design.levels[f]],
+            {"units": v.get("units", "")},
+        )
+        coords[f"{f}_level"] = ("run", design.levels[f].astype(np.int32))
+    for name in [*design.interactions, *design.error_columns]:
+        coords[f"{name}_level"] = ("run", design.levels[name].astype(np.int32))
+    rng = np.random.default_rng(seed)
+    levels = np.array([design.levels[f] for f in factors], dtype=float).T
+    data = {
+        r: ("run", 100.0 + levels @ rng.normal(0, 10, len(factors)) + rng.normal(0, 1, design.runs),
+            {"units": "MPa", "long_name": r.replace("_", " "), "better": "smaller"})
+        for r in study["responses"]
+    }  # fmt: skip
+    ds = xr.Dataset(data, coords=coords)
+    ds.attrs = {
+        "title": f"{study['name']}: {study.get('description', '')}",
+        "study_name": study["name"],
+        "scene": study["scene"],
+        "design": design.name,
+        "factors": json.dumps(list(factors)),
+        "error_columns": json.dumps(list(design.error_columns)),
+        "interaction_columns": json.dumps({k: list(v) for k, v in design.interactions.items()}),
+        "array_columns": json.dumps(design.columns),
+        "responses": json.dumps(study["responses"]),
+        "study_toml": text,
+        "run_id": "20250101T000000Z-abc123",
+        "git_commit": "0123456789abcdef",
+        "git_dirty": 0,
+    }
+    return ds
+
+
+def links(text: str) -> list[str]:
+    return re.findall(r"!\[[^\]]*\]\(([^)]+)\)", text)
+
+
+def tables_are_well_formed(text: str) -> None:
+    """Every Markdown table row has as many cells as its header."""
+    block: list[str] = []
+    for line in [*text.splitlines(), ""]:
+        if line.startswith("|"):
+            block.append(line)
+            continue
+        if block:
+            widths = {len(re.split(r"(?<!\\)\|", row)) for row in block}
+            assert len(widths) == 1, block
+            assert set(block[1]) <= set("|-"), block[1]
+        block = []
+
+
+def section(text: str, title: str) -> str:
+    start = text.index(title)
+    end = text.find("\n## ", start + len(title))
+    return text[start : end if end > 0 else None]
+
+
+def test_there_is_a_shipped_orthogonal_array_study() -> None:
+    assert "isac_l9" in [p.stem for p in oa_studies()]
+
+
+@pytest.mark.parametrize("path", oa_studies(), ids=lambda p: p.stem)
+def test_write_analysis_writes_report_and_every_figure(path: Path, tmp_path: Path) -> None:
+    ds = study_dataset(path)
+    responses = json.loads(ds.attrs["responses"])
+    files = write_analysis(ds, tmp_path)
+    names = {f.name for f in files}
+    assert files[0].name == "analysis.txt"
+    assert {"report.md", "confirmation.toml"} <= names
+    for r in responses:
+        assert {f"main_effects_{r}.png", f"sn_{r}.png"} <= names
+    for f in files:
+        if f.suffix == ".png":
+            assert f.read_bytes().startswith(PNG)
+    text = (tmp_path / "report.md").read_text(encoding="utf-8")
+    shown = links(text)
+    assert sorted(shown) == sorted(n for n in names if n.endswith(".png"))
+    assert all((tmp_path / n).exists() for n in shown)
+    tables_are_well_formed(text)
+    for title in ["## Design", "## Runs", "### ANOVA", "### Predicted optimum",
+                  "## Confirmation run"]:  # fmt: skip
+        assert title in text, title
+    # Best levels of each response, from numpy level means (smaller is better).
+    factors = json.loads(ds.attrs["factors"])
+    for r in responses:
+        block = section(text, f"## {r}:")
+        optimum = block[block.index("### Predicted optimum") :]
+        y = ds[r].values
+        for f in factors:
+            lv = ds[f"{f}_level"].values
+            best = int(np.argmin([y[lv == v].mean() for v in np.unique(lv)]))
+            value = ds[f].values[lv == best][0]
+            assert f"| {f} | {best + 1} | {value:g}" in optimum, (r, f)
+    study = tomllib.loads((tmp_path / "confirmation.toml").read_text(encoding="utf-8"))
+    assert study["design"] == {"type": "full_factorial"}
+    assert set(study["factors"]) == set(factors)
+    assert all(len(v["levels"]) == 1 for v in study["factors"].values())
+
+
+def l27_dataset(replicates: int = 0) -> xr.Dataset:
+    counts = dict.fromkeys("ABCD", 3) | {"E": 2}
+    design = designs.orthogonal("auto", counts, dict.fromkeys(counts), (), [("A", "B")])
+    coords: dict = {}
+    units = {"A": "mm", "B": "deg", "D": "N", "E": "mm"}
+    for f in counts:
+        values = np.arange(1.0, 4.0) * 10 if f != "C" else np.array(["lin", "sin", "cyc"])
+        coords[f] = ("run", values[design.levels[f]], {"units": units.get(f, "")})
+        coords[f"{f}_level"] = ("run", design.levels[f].astype(np.int32))
+    for name in [*design.interactions, *design.error_columns]:
+        coords[f"{name}_level"] = ("run", design.levels[name].astype(np.int32))
+    lv = design.levels
+    rng = np.random.default_rng(1)
+    mu = 10 + 2 * lv["A"] - lv["B"] + 1.5 * (lv["A"] == lv["B"]) + 0.5 * lv["C"]
+    attrs = {"units": "N", "long_name": "force", "better": "smaller"}
+    if replicates:
+        y = mu[:, None] + rng.normal(0, 0.3, (design.runs, replicates))
+        var = (("run", "replicate"), y, attrs)
+    else:
+        var = ("run", mu + rng.normal(0, 0.3, design.runs), attrs)
+    ds = xr.Dataset({"force": var}, coords=coords)
+    ds.attrs = {
+        "design": design.name,
+        "factors": json.dumps(list(counts)),
+        "error_columns": json.dumps(list(design.error_columns)),
+        "interaction_columns": json.dumps({k: list(v) for k, v in design.interactions.items()}),
+        "array_columns": json.dumps(design.columns),
+    }
+    return ds
+
+
+def test_report_shows_interactions_dummy_levels_and_their_figures(tmp_path: Path) -> None:
+    ds = l27_dataset()
+    files = write_analysis(ds, tmp_path, ["force"])
+    names = {f.name for f in files}
+    assert "interaction_force_A_x_B.png" in names
+    assert "confirmation.toml" not in names  # no study text to build a runnable study from
+    text = (tmp_path / "report.md").read_text(encoding="utf-8")
+    tables_are_well_formed(text)
+    design = section(text, "## Design")
+    assert "| 3 | 3 | A_x_B | interaction A x B |" in design
+    assert "| 4 | 3 | A_x_B_2 | interaction A x B |" in design
+    assert "E | factor, dummy level (column level → factor level: 3 → 1)" in design
+    assert "### Interactions" in text
+    assert "![A x B](interaction_force_A_x_B.png)" in text
+    # The two-way table holds the cell means (numpy).
+    y, a, b = ds["force"].values, ds["A_level"].values, ds["B_level"].values
+    assert f"| 30 mm | {y[(a == 2) & (b == 0)].mean():.4g} |" in text
+    analysis_txt = (tmp_path / "analysis.txt").read_text(encoding="utf-8")
+    assert "A_x_B_2" in analysis_txt  # interaction columns are ANOVA terms there too
+
+
+def test_report_of_a_replicated_response_uses_run_means() -> None:
+    ds = l27_dataset(replicates=3)
+    text = report_text(ds, ["force"])
+    tables_are_well_formed(text)
+    assert "over 3 observation(s) per run" in text
+    assert "force (mean over replicates)" in text
+    means = ds["force"].values.mean(axis=1)
+    assert f"| {means[0]:.4g} |" in section(text, "## Runs")
+
+
+def test_several_responses_get_a_tradeoff_summary() -> None:
+    ds = study_dataset(CATALOG / "isac_l9.toml", seed=3)
+    text = report_text(ds, json.loads(ds.attrs["responses"]))
+    block = section(text, "## Trade-off summary")
+    tables_are_well_formed(block)
+    for f in json.loads(ds.attrs["factors"]):
+        assert f"| {f} |" in block
+
+
+def test_sweep_report(tmp_path: Path) -> None:
+    design = designs.sweep({"a": 3, "b": 2}, {"a": 1, "b": 0})
+    coords = {
+        "a": ("run", np.array([1.0, 2.0, 3.0])[design.levels["a"]], {"units": "mm"}),
+        "b": ("run", np.array([5.0, 6.0])[design.levels["b"]], {"units": "deg"}),
+        "swept_factor": ("run", design.labels["swept_factor"]),
+    }
+    y = np.array([1.0, 2.0, 3.0, 4.0])
+    ds = xr.Dataset({"y": ("run", y, {"units": "MPa"})}, coords=coords)
+    ds.attrs = {"design": "sweep", "factors": json.dumps(["a", "b"]), "responses": '["y"]'}
+    files = write_analysis(ds, tmp_path)
+    text = (tmp_path / "report.md").read_text(encoding="utf-8")
+    tables_are_well_formed(text)
+    assert "### a" in text
+    assert "| a [mm] | y [MPa] |" in text
+    assert links(text) == ["sweep_y.png"]
+    assert {f.name for f in files} >= {"analysis.txt", "report.md", "sweep_y.png"}
+
+
+def test_write_report_links_only_existing_figures(tmp_path: Path) -> None:
+    ds = study_dataset(CATALOG / "isac_l9.toml")
+    paths = write_report(ds, tmp_path, ["max_jerk"], [tmp_path / "main_effects_max_jerk.png"])
+    assert [p.name for p in paths] == ["report.md", "confirmation.toml"]
+    assert links(paths[0].read_text(encoding="utf-8")) == ["main_effects_max_jerk.png"]
+
+
+def test_interaction_figure_plots_cell_means_with_units() -> None:
+    ds = l27_dataset()
+    ax = interaction_figure(ds, "force", "A", "B").axes[0]
+    assert ax.get_xlabel() == "A [mm]"
+    assert ax.get_ylabel() == "force [N]"
+    lines = ax.get_lines()
+    assert [line.get_label() for line in lines] == ["B = 10 deg", "B = 20 deg", "B = 30 deg"]
+    y, a, b = ds["force"].values, ds["A_level"].values, ds["B_level"].values
+    for j, line in enumerate(lines):
+        np.testing.assert_allclose(line.get_xdata(), [10.0, 20.0, 30.0])
+        expected = [y[(a == i) & (b == j)].mean() for i in range(3)]
+        np.testing.assert_allclose(line.get_ydata(), expected, rtol=1e-12)
+    ax_c = interaction_figure(ds, "force", "C", "A").axes[0]  # text levels → level numbers
+    assert ax_c.get_xlabel() == "C (level)"
+
+
+def test_sn_figure_plots_level_means_of_the_sn_ratio() -> None:
+    ds = l27_dataset(replicates=3)
+    fig = sn_figure(ds, "force")
+    ax = fig.axes[0]
+    assert ax.get_ylabel() == "S/N ratio [dB]"
+    assert "smaller is better" in fig.get_suptitle()
+    y = ds["force"].values
+    sn = -10 * np.log10((y**2).mean(axis=1))  # smaller-is-better definition
+    a = ds["A_level"].values
+    np.testing.assert_allclose(
+        ax.get_lines()[0].get_ydata(), [sn[a == i].mean() for i in range(3)], rtol=1e-12
+    )
+
+
+def test_analyze_command_writes_report_and_figures(tmp_path: Path) -> None:
+    from studies.cli import main
+
+    ds = study_dataset(CATALOG / "isac_l9.toml")
+    path = tmp_path / "results.nc"
+    ds.to_netcdf(path, engine="netcdf4")
+    assert main(["analyze", str(path)]) == 0
+    names = {p.name for p in tmp_path.iterdir()}
+    assert {"analysis.txt", "report.md", "confirmation.toml"} <= names
+    for r in json.loads(ds.attrs["responses"]):
+        assert {f"main_effects_{r}.png", f"sn_{r}.png"} <= names
+
+
+def test_full_factorial_report_shows_the_observed_run_and_no_sn(tmp_path: Path) -> None:
+    design = designs.full_factorial({"a": 3, "b": 2})
+    a, b = design.levels["a"], design.levels["b"]
+    coords = {
+        "a": ("run", np.array([1.0, 2.0, 3.0])[a], {"units": "mm"}),
+        "a_level": ("run", a),
+        "b": ("run", np.array([5.0, 6.0])[b], {"units": "deg"}),
+        "b_level": ("run", b),
+    }
+    y = (a + 1.0) * (b + 2.0)  # smallest at a = 0, b = 0: run 1, value 2
+    flat = np.full(6, 7.0)
+    ds = xr.Dataset(
+        {"y": ("run", y, {"units": "MPa", "better": "smaller"}),
+         "flat": ("run", flat, {"units": "N", "better": "smaller"})},
+        coords=coords,
+    )  # fmt: skip
+    ds.attrs = {"design": "full_factorial", "factors": '["a", "b"]', "responses": '["y", "flat"]'}
+    files = write_analysis(ds, tmp_path)
+    assert not [f for f in files if f.name.startswith("sn_")]  # one deterministic run each
+    text = (tmp_path / "report.md").read_text(encoding="utf-8")
+    tables_are_well_formed(text)
+    assert "Observed at these levels: 2 MPa (run 1)" in text
+    assert "### Signal-to-noise ratio" not in text
+    assert "Does not vary over the runs (7 N in every run with a value)" in text
+    assert "## Trade-off summary" not in text  # only one response varies
