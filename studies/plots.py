@@ -52,9 +52,9 @@ def main_effects_figure(
         ax.set_xlabel(_label(f, unit) if numeric else f"{f} (level)")
         if not numeric:
             ax.set_xticks(x)
-    axes[0].set_ylabel(_label(ra.attrs["long_name"], ra.attrs["units"]))
+    axes[0].set_ylabel(_label(response, ra.attrs["units"]))
     axes[0].legend(loc="best", fontsize="small")
-    fig.suptitle(f"Main effects on {response}")
+    fig.suptitle(f"Main effects on {response}: {ra.attrs['long_name']}")
     return fig
 
 
@@ -81,8 +81,8 @@ def sweep_figure(ds: xr.Dataset, response: str) -> Figure:
         ax.plot(part[f].values, part[response].values, marker="o")
         ax.set_xlabel(_label(f, ds[f].attrs.get("units", "")))
     y = ds[response]
-    axes[0].set_ylabel(_label(y.attrs.get("long_name", response), y.attrs.get("units", "")))
-    fig.suptitle(f"Sweep: {response}")
+    axes[0].set_ylabel(_label(response, y.attrs.get("units", "")))
+    fig.suptitle(f"Sweep: {response}: {y.attrs.get('long_name', '')}")
     return fig
 
 
