@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -55,7 +56,7 @@ def bench_cam(cases: int, step: float, repeat: int) -> dict[str, Any]:
             CAM_STUDY.format(responses=json.dumps(responses), step=step, widths=widths)
         )
         everything = slice(0, plan.runs)
-        seconds = best_time(lambda p=plan, s=everything: evaluate_chunk(p, s), repeat)
+        seconds = best_time(partial(evaluate_chunk, plan, everything), repeat)
         figures[label] = {
             "cases": plan.runs,
             "seconds": seconds,

@@ -123,8 +123,8 @@ def valve_reference(
             def event(th, x, index=index, offset=signs[index] * HYSTERESIS[index]):
                 return _functions(params, excitation, th, x)[index] + offset
 
-            event.terminal = True
-            event.direction = -signs[index]
+            event.terminal = True  # type: ignore[attr-defined]
+            event.direction = -signs[index]  # type: ignore[attr-defined]
             events.append(event)
         sol = solve_ivp(
             rhs,
@@ -151,6 +151,6 @@ def valve_reference(
         values = _functions(params, excitation, theta, state)
         signs = [1.0 if f > 0 else -1.0 for f in values]
         for i in fired:
-            signs[i] = events[i].direction
+            signs[i] = events[i].direction  # type: ignore[attr-defined]
         switches.append((theta, "+".join(("drive", "seat_gap", "seat_force")[i] for i in fired)))
     raise RuntimeError(f"valve reference: more than {MAX_SEGMENTS} mode switches")
