@@ -265,7 +265,8 @@ def test_main_effects_figure_has_one_panel_per_factor(l9):
     axes = fig.axes
     assert len(axes) == 3
     assert axes[0].get_xlabel() == "A [deg]"
-    assert axes[0].get_ylabel() == "max contact stress [MPa]"
+    assert axes[0].get_ylabel() == "stress [MPa]"
+    assert "max contact stress" in fig.get_suptitle()
     line, grand = axes[0].get_lines()
     np.testing.assert_allclose(line.get_xdata(), VALUES["A"])
     assert grand.get_linestyle() == "--"
