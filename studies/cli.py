@@ -15,8 +15,12 @@ import argparse
 import json
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from studies.definition import StudyError, catalog_names, read_study
+
+if TYPE_CHECKING:
+    from studies.study_run import RunResult
 
 EXIT_STUDY_ERROR = 2
 
@@ -55,6 +59,12 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--outputs", type=Path, default=Path("outputs"), help="run-folder root")
     run.add_argument("--chunk-size", type=int, default=2048, help="design points per chunk")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
+    run.add_argument(
+        "--force",
+        action="store_true",
+        help="recompute even if an identical definition already ran on this clean commit",
+    )
+    run.add_argument("--resume", metavar="RUN_ID", help="finish an interrupted or failed run")
     run.set_defaults(func=_cmd_run)
 
     check = sub.add_parser("check", help="validate a study without running it")
@@ -110,24 +120,46 @@ def _indent(text: str) -> str:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
+    from studies import provenance, tracking
     from studies.plan import plan_study
-    from studies.study_run import run_plan
+    from studies.study_run import resume_run, run_plan
 
+    if args.resume:
+        _report(resume_run(args.resume, args.outputs, progress=not args.no_progress))
+        return 0
     if args.all == bool(args.study):
         print("error: name one study or use --all", file=sys.stderr)
         return EXIT_STUDY_ERROR
     names = catalog_names() if args.all else [args.study]
     plans = [plan_study(n) for n in names]
+    commit, dirty = provenance.git_state()
     for plan in plans:
-        result = run_plan(plan, args.outputs, args.chunk_size, progress=not args.no_progress)
-        t = result.record.timings
-        print(
-            f"{plan.definition.name}: {plan.runs} design points ({plan.design.name}), "
-            f"compile {t['compile_s']:.2f} s, run {t['run_s']:.3f} s"
+        text = plan.definition.text
+        earlier = (
+            None
+            if args.force or dirty
+            else tracking.finished_identical(args.outputs, tracking.definition_hash(text), commit)
         )
-        for f in result.files:
-            print(f"  {f}")
+        if earlier is not None:
+            print(
+                f"{plan.definition.name}: identical definition already ran on commit "
+                f"{commit[:10]}: reusing run {earlier['run_id']} (--force recomputes)"
+            )
+            print(f"  {Path(earlier['folder']) / 'results.nc'}")
+            continue
+        result = run_plan(plan, args.outputs, args.chunk_size, progress=not args.no_progress)
+        _report(result)
     return 0
+
+
+def _report(result: RunResult) -> None:
+    t = result.record.timings
+    print(
+        f"{result.record.study}: {result.record.runs} design points ({result.record.design}), "
+        f"compile {t['compile_s']:.2f} s, run {t['run_s']:.3f} s"
+    )
+    for f in result.files:
+        print(f"  {f}")
 
 
 def _cmd_check(args: argparse.Namespace) -> int:

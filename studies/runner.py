@@ -44,33 +44,48 @@ def evaluate(
     plan: Plan,
     chunk_size: int = DEFAULT_CHUNK_SIZE,
     progress: bool = True,
-    on_chunk: Callable[[slice, SceneOutput], None] | None = None,
+    on_chunk: Callable[[int, SceneOutput], None] | None = None,
+    done: dict[int, SceneOutput] | None = None,
 ) -> Evaluation:
-    """Evaluate every design point of ``plan``; ``on_chunk`` sees each finished chunk."""
+    """Evaluate every design point of ``plan``.
+
+    ``on_chunk(index, output)`` sees each newly finished chunk (the run record checkpoints it);
+    ``done`` holds chunks finished by an earlier, interrupted run, which are not recomputed.
+    """
     if chunk_size < 1:
         msg = f"chunk_size = {chunk_size} must be a positive number of design points"
         raise ValueError(msg)
+    parts: dict[int, SceneOutput] = dict(done or {})
+    todo = [(i, part) for i, part in enumerate(chunks(plan.runs, chunk_size)) if i not in parts]
     t0 = time.perf_counter()
-    evaluate_chunk(plan, slice(0, 1))
+    if todo:
+        evaluate_chunk(plan, slice(todo[0][1].start, todo[0][1].start + 1))
     compile_s = time.perf_counter() - t0
-    parts: list[SceneOutput] = []
     t1 = time.perf_counter()
+    computed = sum(part.stop - part.start for _, part in todo)
     bar = tqdm(
-        total=plan.runs, unit="pt", desc=plan.definition.name, disable=not progress, leave=False
+        total=plan.runs,
+        initial=plan.runs - computed,
+        unit="pt",
+        desc=plan.definition.name,
+        disable=not progress,
+        leave=False,
     )
     with bar:
-        for part in chunks(plan.runs, chunk_size):
+        for index, part in todo:
             out = evaluate_chunk(plan, part)
-            parts.append(out)
+            parts[index] = out
             if on_chunk is not None:
-                on_chunk(part, out)
+                on_chunk(index, out)
             bar.update(part.stop - part.start)
     run_s = time.perf_counter() - t1
-    scalars = {k: np.concatenate([p.scalars[k] for p in parts]) for k in parts[0].scalars}
-    curves = {k: np.concatenate([p.curves[k] for p in parts]) for k in parts[0].curves}
+    ordered = [parts[i] for i in sorted(parts)]
+    scalars = {k: np.concatenate([p.scalars[k] for p in ordered]) for k in ordered[0].scalars}
+    curves = {k: np.concatenate([p.curves[k] for p in ordered]) for k in ordered[0].curves}
     timings = {
         "compile_s": compile_s,
         "run_s": run_s,
-        "points_per_s": plan.runs / run_s if run_s > 0 else float("inf"),
+        "points_computed": computed,
+        "points_per_s": computed / run_s if run_s > 0 else float("inf"),
     }
     return Evaluation(scalars, curves, timings)

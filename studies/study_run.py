@@ -1,15 +1,21 @@
 """Run a study end to end: plan → evaluate → Dataset → netCDF → analysis → run record.
 
 The run folder and registry row are created only after the study has passed validation, so a
-malformed study writes nothing. A run that fails while computing keeps its folder with
-``run.json`` status ``failed`` and the error, and the registry says so.
+malformed study writes nothing. Every finished chunk is checkpointed under ``chunks/`` in the
+run folder; a run that fails or is interrupted keeps its folder with ``run.json`` status
+``failed`` and the error, and :func:`resume_run` (``python -m studies run --resume RUN_ID``)
+finishes it from its last finished chunk. The checkpoints are removed once ``results.nc`` is
+written.
 """
 
 from __future__ import annotations
 
+import json
+import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import xarray as xr
 
 from studies import provenance, tracking
@@ -17,6 +23,9 @@ from studies.plan import Plan, plan_study
 from studies.report import write_analysis
 from studies.results import build_dataset, write_netcdf
 from studies.runner import DEFAULT_CHUNK_SIZE, evaluate
+from studies.scenes import SceneOutput
+
+CHECKPOINTS = "chunks"
 
 DEFAULT_OUTPUTS = Path("outputs")
 
@@ -46,6 +55,7 @@ def run_plan(
     chunk_size: int = DEFAULT_CHUNK_SIZE,
     progress: bool = True,
 ) -> RunResult:
+    """Run a validated plan in a new run folder under ``outputs``."""
     d = plan.definition
     commit, dirty = provenance.git_state()
     run_id = tracking.new_run_id(d.text)
@@ -66,15 +76,50 @@ def run_plan(
         versions=provenance.versions(),
         host=provenance.host(),
         settings=dict(d.settings),
+        chunk_size=chunk_size,
     )
+    return _execute(plan, outputs, record, progress, done={})
+
+
+def resume_run(run_id: str, outputs: Path = DEFAULT_OUTPUTS, progress: bool = True) -> RunResult:
+    """Finish an interrupted or failed run from its checkpointed chunks."""
+    row = tracking.find_run(outputs, run_id)
+    if row is None:
+        raise KeyError(f"no unique run matches {run_id!r} under {outputs}")
+    folder = Path(row["folder"])
+    record = tracking.RunRecord(**json.loads((folder / "run.json").read_text(encoding="utf-8")))
+    if record.status == "finished":
+        raise ValueError(f"run {record.run_id} is already finished: nothing to resume")
+    plan = plan_study(folder / "study.toml")
+    done = {
+        int(path.stem): _load_chunk(path) for path in sorted((folder / CHECKPOINTS).glob("*.npz"))
+    }
+    record.status, record.error = "running", ""
+    return _execute(plan, outputs, record, progress, done)
+
+
+def _execute(
+    plan: Plan,
+    outputs: Path,
+    record: tracking.RunRecord,
+    progress: bool,
+    done: dict[int, SceneOutput],
+) -> RunResult:
+    folder = Path(record.folder)
     record.write()
     tracking.register(outputs, record)
     try:
-        ev = evaluate(plan, chunk_size=chunk_size, progress=progress)
+        ev = evaluate(
+            plan,
+            chunk_size=record.chunk_size,
+            progress=progress,
+            on_chunk=lambda index, out: _save_chunk(folder, index, out),
+            done=done,
+        )
         attrs = {
-            "run_id": run_id,
-            "git_commit": commit,
-            "git_dirty": dirty,
+            "run_id": record.run_id,
+            "git_commit": record.git_commit,
+            "git_dirty": record.git_dirty,
             "versions": record.versions,
             "timings": ev.timings,
             "created": record.started,
@@ -87,7 +132,25 @@ def run_plan(
         record.write()
         tracking.register(outputs, record)
         raise
+    shutil.rmtree(folder / CHECKPOINTS, ignore_errors=True)
     record.status, record.finished, record.timings = "finished", tracking.now(), ev.timings
     record.write()
     tracking.register(outputs, record)
     return RunResult(record, ds, folder, (folder / "study.toml", folder / "run.json", *files))
+
+
+def _save_chunk(folder: Path, index: int, out: SceneOutput) -> None:
+    path = folder / CHECKPOINTS / f"{index:06d}.npz"
+    path.parent.mkdir(exist_ok=True)
+    arrays = {f"scalar:{k}": v for k, v in out.scalars.items()}
+    arrays |= {f"curve:{k}": v for k, v in out.curves.items()}
+    tmp = path.with_suffix(".tmp.npz")
+    np.savez(tmp, **arrays)  # type: ignore[arg-type]
+    tmp.replace(path)  # a chunk file is either complete or absent
+
+
+def _load_chunk(path: Path) -> SceneOutput:
+    with np.load(path) as data:
+        scalars = {k.split(":", 1)[1]: data[k] for k in data.files if k.startswith("scalar:")}
+        curves = {k.split(":", 1)[1]: data[k] for k in data.files if k.startswith("curve:")}
+    return SceneOutput(scalars, curves)

@@ -65,6 +65,7 @@ class RunRecord:
     finished: str = ""
     timings: dict[str, float] = field(default_factory=dict)
     error: str = ""
+    chunk_size: int = 2048
 
     def write(self) -> None:
         path = Path(self.folder) / "run.json"
@@ -118,6 +119,16 @@ def list_runs(outputs: Path, study: str | None = None) -> list[dict[str, Any]]:
             query += " WHERE study = ?"
             args = (study,)
         return [dict(r) for r in con.execute(query + " ORDER BY started DESC, run_id DESC", args)]
+
+
+def finished_identical(outputs: Path, definition_sha256: str, commit: str) -> dict[str, Any] | None:
+    """The newest finished run of the same definition on the same clean commit, if any."""
+    for row in list_runs(outputs):
+        same = row["definition_sha256"] == definition_sha256 and row["git_commit"] == commit
+        clean = row["status"] == "finished" and not row["git_dirty"]
+        if same and clean and (Path(row["folder"]) / "results.nc").exists():
+            return row
+    return None
 
 
 def find_run(outputs: Path, run_id: str) -> dict[str, Any] | None:
