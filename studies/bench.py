@@ -17,8 +17,11 @@ from typing import Any
 import numpy as np
 
 from studies import provenance, tracking
-from studies.plan import plan_text
+from studies.plan import Plan, plan_text
 from studies.runner import evaluate_chunk
+from studies.scenes.rocker import grid_deg
+from studies.scenes.valve import ValveScene, valve_rows
+from studies.valve_accuracy import reference_lift
 
 CAM_STUDY = """
 name = "bench_cam"
@@ -68,7 +71,81 @@ def bench_cam(cases: int, step: float, repeat: int) -> dict[str, Any]:
     return figures
 
 
-BENCHMARKS: dict[str, Callable[[int, float, int], dict[str, Any]]] = {"cam": bench_cam}
+VALVE_STUDY = """
+name = "bench_valve"
+scene = "valve"
+responses = ["max_lift", "follows_cam", "bounce_count", "seating_velocity"]
+design = "full_factorial"
+[settings]
+integrator = "{integrator}"
+angle_step = {step}
+[factors.cam_speed]
+levels = {speeds}
+[factors.spring_preload]
+levels = {preloads}
+"""
+VALVE_PRELOADS = 20
+SWITCH_AWARE_CASES = 1000
+SCIPY_SPEEDS = (3000.0, 4500.0, 6000.0)
+SCIPY_RTOLS = (1e-10, 1e-6)
+
+
+def _valve_plan(integrator: str, cases: int, step: float) -> Plan:
+    """The default valve train at camshaft speeds 3000–6000 rpm × spring preloads."""
+    preloads = min(VALVE_PRELOADS, cases)
+    speeds = np.linspace(3000.0, 6000.0, max(cases // preloads, 1)).round(6).tolist()
+    levels = np.linspace(180.0, 240.0, preloads).round(6).tolist()
+    text = VALVE_STUDY.format(integrator=integrator, step=step, speeds=speeds, preloads=levels)
+    return plan_text(text)
+
+
+def bench_valve(cases: int, step: float, repeat: int) -> dict[str, Any]:
+    """Valve cases/s: the lane kernel vs one case per prange iteration (same RK4, same run),
+    the switch-aware RK4, and scipy's event-restarted DOP853 (the accuracy reference)."""
+    figures: dict[str, Any] = {}
+    for integrator, n in [
+        ("lanes", cases),
+        ("rk4", cases),
+        ("rk4_switch_aware", min(cases, SWITCH_AWARE_CASES)),
+    ]:
+        plan = _valve_plan(integrator, n, step)
+        seconds = best_time(partial(evaluate_chunk, plan, slice(0, plan.runs)), repeat)
+        figures[integrator] = {
+            "cases": plan.runs,
+            "seconds": seconds,
+            "cases_per_s": plan.runs / seconds,
+        }
+    figures["lanes_over_one_case_speedup"] = (
+        figures["lanes"]["cases_per_s"] / figures["rk4"]["cases_per_s"]
+    )
+    plan = plan_text(
+        VALVE_STUDY.format(integrator="rk4", step=step, speeds=list(SCIPY_SPEEDS), preloads=[205.8])
+    )
+    scene = plan.scene
+    assert isinstance(scene, ValveScene)
+    ctx = scene.context(plan.points, plan.settings, [], [])
+    ((key, idx),) = ctx["groups"].items()
+    excitation = scene.excitation(ctx, key, step)
+    start, stop = scene.window(ctx, key)
+    theta = np.radians(grid_deg(start, step, stop))
+    rows = valve_rows(plan.points, idx)
+    for rtol in SCIPY_RTOLS:
+        t0 = time.perf_counter()
+        for row in rows:
+            reference_lift(excitation, row, theta, "DOP853", rtol)
+        seconds = time.perf_counter() - t0
+        figures[f"scipy_dop853_rtol_{rtol:g}"] = {
+            "cases": len(rows),
+            "seconds": seconds,
+            "cases_per_s": len(rows) / seconds,
+        }
+    return figures
+
+
+BENCHMARKS: dict[str, Callable[[int, float, int], dict[str, Any]]] = {
+    "cam": bench_cam,
+    "valve": bench_valve,
+}
 
 
 def run_benchmark(name: str, cases: int, step: float, repeat: int, outputs: Path) -> Path:

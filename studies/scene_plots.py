@@ -9,7 +9,11 @@ what the stored variables allow (nothing for scenes or studies without them):
 * ``reed`` — ``frequency_map.png`` (f₁ over length × thickness, band edges and in-band cells
   marked), ``mode_shapes.png`` (stored mode shapes);
 * ``luffing`` — ``pass_fail_map.png`` (every design point: passes, or which checks fail) and
-  ``motor_power.png`` (required motor power against the rated sizes).
+  ``motor_power.png`` (required motor power against the rated sizes);
+* ``rocker``, ``valve`` — ``valve_lift.png`` (stored valve-lift curves, theoretical and
+  actual), ``jump_speed_map.png`` (jump speed over the first two factors);
+* ``valve_accuracy`` — ``error_vs_cost.png`` (error against the reference vs cost per case,
+  a line per integrator, points labelled by step).
 
 A figure has one line per level of a "line" factor and one panel per combination of up to two
 other factors; further factors are held at their middle level (named in the title).
@@ -28,6 +32,7 @@ from matplotlib.figure import Figure
 DPI = 120
 PANEL = (3.6, 2.8)  # inches per panel
 CRANK_CYCLE_DEG = 720.0
+VALVE_MARGIN_DEG = 10.0
 LUFFING_CHECKS = ("motor", "ratio", "coupling", "deflection", "slope", "key", "bearing")
 
 
@@ -421,6 +426,136 @@ def motor_power_figure(ds: xr.Dataset) -> Figure | None:
     return fig
 
 
+# --- rocker and valve -----------------------------------------------------------------------
+def _short(ds: xr.Dataset, name: str) -> str:
+    units = ds[name].attrs.get("units", "")
+    return f"{name} [{units}]" if units not in ("", "-", "1") else name
+
+
+def valve_lift_figure(ds: xr.Dataset) -> Figure | None:
+    """Stored valve-lift curves (theoretical Y dashed, actual y solid), a line per first factor."""
+    names = [c for c in ("valve_lift", "actual_lift") if c in ds]
+    if not names:
+        return None
+    factors = _factors(ds)
+    line = "cam_speed" if "cam_speed" in factors else (factors[0] if factors else None)
+    layout = _Layout(ds, [line] if line else [])
+    fig, axes = layout.figure((4.6, 3.2))
+    angle = ds["cam_angle"].values
+    shown = np.zeros(angle.size, dtype=bool)
+    for name in names:
+        shown |= (np.nan_to_num(ds[name].values) > 0.0).any(axis=0)
+    if shown.any():
+        span = angle[shown]
+        axes[0, 0].set_xlim(span.min() - VALVE_MARGIN_DEG, span.max() + VALVE_MARGIN_DEG)
+    for i, j, where in layout.panels():
+        ax = axes[i, j]
+        for k, (label, cond) in enumerate(_lines(ds, line)):
+            for n, run in enumerate(_runs(ds, where | cond)):
+                for name in names:
+                    ax.plot(
+                        angle,
+                        ds[name].values[run],
+                        color=f"C{k}",
+                        lw=1.0,
+                        ls="--" if name == "valve_lift" else "-",
+                        label=label if n == 0 and name == names[-1] and label else None,
+                    )
+        ax.set_title(layout.title(where), fontsize="small")
+        ax.grid(alpha=0.3)
+    for ax in axes[-1]:
+        ax.set_xlabel("cam angle [deg]")
+    for ax in axes[:, 0]:
+        ax.set_ylabel("valve lift [mm]")
+    if line:
+        axes[0, 0].legend(title=line, fontsize="x-small", title_fontsize="x-small")
+    kinds = "\n(dashed: theoretical Y, solid: actual y)" if len(names) == 2 else ""
+    fig.suptitle(f"Valve lift{kinds}{layout.held_note()}")
+    return fig
+
+
+def jump_speed_map_figure(ds: xr.Dataset) -> Figure | None:
+    """Jump speed over the first two factors, values written in the cells."""
+    factors = _factors(ds)
+    if "jump_speed" not in ds or len(factors) < 2:
+        return None
+    x, y = factors[0], factors[1]
+    layout = _Layout(ds, [x, y])
+    fig, axes = layout.figure((4.6, 3.6))
+    xs, ys = _level_values(ds, x), _level_values(ds, y)
+    values = ds["jump_speed"].values
+    mesh = None
+    for i, j, where in layout.panels():
+        ax = axes[i, j]
+        grid = _grid(ds, "jump_speed", x, y, where)
+        mesh = ax.pcolormesh(
+            xs,
+            ys,
+            grid,
+            shading="nearest",
+            cmap="viridis",
+            vmin=np.nanmin(values),
+            vmax=np.nanmax(values),
+        )
+        for (r, c), value in np.ndenumerate(grid):
+            text = f"{value:.0f}" if np.isfinite(value) else "none"
+            ax.text(
+                xs[c], ys[r], text, ha="center", va="center", fontsize="xx-small", color="white"
+            )
+        ax.set_title(layout.title(where), fontsize="small")
+    for ax in axes[-1]:
+        ax.set_xlabel(_short(ds, x))
+    for ax in axes[:, 0]:
+        ax.set_ylabel(_short(ds, y))
+    if mesh is not None:
+        fig.colorbar(mesh, ax=axes, label=_short(ds, "jump_speed"), shrink=0.8)
+    fig.suptitle(
+        "Jump speed: lowest camshaft speed with separation\n(none: not in the searched range)"
+        f"{layout.held_note()}",
+        fontsize="medium",
+    )
+    return fig
+
+
+def error_vs_cost_figure(ds: xr.Dataset) -> Figure | None:
+    """Error against the reference vs measured cost per case, a line per integrator."""
+    factors = _factors(ds)
+    if not {"reference_error", "cost_per_case"} <= set(ds.data_vars):
+        return None
+    if not {"integrator", "angle_step"} <= set(factors):
+        return None
+    layout = _Layout(ds, ["integrator", "angle_step"])
+    fig, axes = layout.figure((3.8, 3.0))
+    for i, j, where in layout.panels():
+        ax = axes[i, j]
+        for k, (label, cond) in enumerate(_lines(ds, "integrator")):
+            runs = _runs(ds, where | cond)
+            runs = runs[np.argsort(-ds["angle_step"].values[runs])]
+            cost, error = ds["cost_per_case"].values[runs], ds["reference_error"].values[runs]
+            ax.loglog(cost, error, marker="o", color=f"C{k}", label=label)
+            for run, cx, ey in zip(runs, cost, error, strict=True):
+                ax.annotate(
+                    f"{ds['angle_step'].values[run]:g}°",
+                    (cx, ey),
+                    fontsize="xx-small",
+                    xytext=(3, 3),
+                    textcoords="offset points",
+                )
+        ax.set_title(layout.title(where), fontsize="small")
+        ax.grid(alpha=0.3, which="both")
+    for ax in axes[-1]:
+        ax.set_xlabel(f"{_short(ds, 'cost_per_case')} (timing)")
+    for ax in axes[:, 0]:
+        ax.set_ylabel(f"{_short(ds, 'reference_error')}: max |y − y_ref|")
+    axes[0, 0].legend(title="integrator", fontsize="x-small", title_fontsize="x-small")
+    fig.suptitle(
+        "Error against the scipy reference vs cost per case (labels: RK4 step)"
+        f"{layout.held_note()}",
+        fontsize="medium",
+    )
+    return fig
+
+
 # --- dispatch -------------------------------------------------------------------------------
 FIGURES: dict[str, dict[str, Callable[[xr.Dataset], Figure | None]]] = {
     "crank": {
@@ -430,6 +565,9 @@ FIGURES: dict[str, dict[str, Callable[[xr.Dataset], Figure | None]]] = {
     },
     "reed": {"frequency_map": frequency_map_figure, "mode_shapes": mode_shapes_figure},
     "luffing": {"pass_fail_map": pass_fail_map_figure, "motor_power": motor_power_figure},
+    "rocker": {"valve_lift": valve_lift_figure},
+    "valve": {"valve_lift": valve_lift_figure, "jump_speed_map": jump_speed_map_figure},
+    "valve_accuracy": {"error_vs_cost": error_vs_cost_figure},
 }
 
 

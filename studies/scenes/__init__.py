@@ -14,12 +14,18 @@ from studies.scenes.cam import CamScene
 from studies.scenes.crank import CrankScene
 from studies.scenes.luffing import LuffingScene
 from studies.scenes.reed import ReedScene
+from studies.scenes.rocker import RockerScene
+from studies.scenes.valve import ValveScene
+from studies.scenes.valve_accuracy import ValveAccuracyScene
 
 SCENES: dict[str, type[Scene]] = {
     CamScene.name: CamScene,
     CrankScene.name: CrankScene,
     ReedScene.name: ReedScene,
     LuffingScene.name: LuffingScene,
+    RockerScene.name: RockerScene,
+    ValveScene.name: ValveScene,
+    ValveAccuracyScene.name: ValveAccuracyScene,
 }
 
 

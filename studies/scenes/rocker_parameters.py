@@ -60,9 +60,7 @@ CAM_LAW_PARAMETERS: tuple[Parameter, ...] = (
         5.0,
         source=SYNTHETIC,
     ),
-    Parameter(
-        "ramp_width", "deg", 0.0, "six-segment ramp width", 0.0, 90.0, source=SYNTHETIC
-    ),
+    Parameter("ramp_width", "deg", 0.0, "six-segment ramp width", 0.0, 90.0, source=SYNTHETIC),
     Parameter(
         "ramp_velocity",
         "mm/rad",
@@ -84,7 +82,9 @@ CAM_LAW_PARAMETERS: tuple[Parameter, ...] = (
 )
 
 GEOMETRY_PARAMETERS: tuple[Parameter, ...] = (
-    Parameter("base_radius", "mm", 12.5, "cam base-circle radius r0", 0.0, 200.0, True, source=SPEC3),
+    Parameter(
+        "base_radius", "mm", 12.5, "cam base-circle radius r0", 0.0, 200.0, True, source=SPEC3
+    ),
     Parameter("pad_radius", "mm", 30.0, "rocker pad radius rs", 0.0, 500.0, True, source=SPEC3),
     Parameter(
         "pad_arm", "mm", 39.61, "pivot O to pad centre A, la = |OA|", 0.0, 500.0, True, source=SPEC3
@@ -109,7 +109,9 @@ GEOMETRY_PARAMETERS: tuple[Parameter, ...] = (
         True,
         source=SPEC3,
     ),
-    Parameter("ball_radius", "mm", 10.0, "adjusting-screw ball radius ρb", 0.0, 100.0, source=SPEC3),
+    Parameter(
+        "ball_radius", "mm", 10.0, "adjusting-screw ball radius ρb", 0.0, 100.0, source=SPEC3
+    ),
     Parameter(
         "stem_height",
         "mm",
@@ -159,7 +161,9 @@ SETTINGS: tuple[Parameter, ...] = (
 TAPPET, ROCKER = ("tappet",), ("tappet", "rocker")
 
 RESPONSES: tuple[Response, ...] = (
-    Response("max_tappet_lift", "mm", "flat-tappet lift at the nose (scaled to valve_lift)", TAPPET),
+    Response(
+        "max_tappet_lift", "mm", "flat-tappet lift at the nose (scaled to valve_lift)", TAPPET
+    ),
     Response(
         "min_radius_of_curvature",
         "mm",
@@ -189,7 +193,9 @@ RESPONSES: tuple[Response, ...] = (
         ROCKER,
         "larger",
     ),
-    Response("valve_opening_angle", "deg", "cam angle where the valve opens (lash taken up)", ROCKER),
+    Response(
+        "valve_opening_angle", "deg", "cam angle where the valve opens (lash taken up)", ROCKER
+    ),
     Response("valve_closing_angle", "deg", "cam angle where the valve closes", ROCKER),
     Response(
         "valve_open_duration", "deg", "cam angle over which the valve is open", ROCKER, "larger"

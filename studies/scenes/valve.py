@@ -1,0 +1,310 @@
+"""Scene ``valve``: single-DOF valve-train dynamics driven through the rocker (SPEC §4).
+
+The excitation is the theoretical valve lift Y(θ) of the ``rocker`` scene's chain, so this
+scene extends :class:`~studies.scenes.rocker.RockerScene` and adds two stages:
+
+* ``dynamics`` — fixed-step RK4 of [V2] over the integration window (valve opening − 2° …
+  closure + ``closing_window``, snapped outward to whole multiples of 2°), with the integrator
+  of the settings: :func:`engine_kernels.valve_lanes.valve_response_lanes` (``lanes``),
+  :func:`engine_kernels.valve.valve_response_batch` (``rk4``, ``rk4_switch_aware``), or one
+  :func:`engine_kernels.valve.valve_response` call per point when curves are stored;
+* ``jump_speed`` — :func:`engine_kernels.valve.jump_speed` per design point (scan over
+  geometric speeds, then bisection), at ``angle_step``.
+
+Kinematic responses run only ``tappet`` and ``rocker``. Points sharing the cam and rocker
+parameters share one excitation table (cached per chain and step): it is the table every
+lane of a block reads. Jumps, bounces, an unstable run or an invalid chain are results
+(``follows_cam``, ``status``, ``run_ok``), never exceptions. How a tolerance picks the step is
+described in :mod:`studies.scenes.valve_parameters`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from engine_kernels import rocker, valve, valve_lanes
+from studies.scenes.checks import PointProblems
+from studies.scenes.rocker import (
+    CACHE_SIZE,
+    GRID_UNIT_DEG,
+    HALF_TURN_DEG,
+    BoundedCache,
+    RockerScene,
+    open_range,
+    step_deg,
+)
+from studies.scenes.rocker_parameters import RESPONSES as ROCKER_RESPONSES
+from studies.scenes.valve_parameters import (
+    CURVES,
+    JUMP_NOT_RUN,
+    MAX_HALVINGS,
+    PARAMETERS,
+    RESPONSES,
+    SETTINGS,
+    STATUS_NOT_RUN,
+)
+
+MM, DEG, RPM = 1e3, math.degrees(1.0), 30.0 / math.pi
+WINDOW_PROBE_DEG = 0.25
+"""Grid on which the valve opening and closing angles that set the window are found."""
+PRE_OPEN_DEG = 2.0
+JUMP_SCAN_POINTS = 16
+N_OUT = len(valve.VALVE_OUTPUT_NAMES)
+N_CURVES = len(valve.VALVE_CURVE_NAMES)
+ESTIMATE_RESPONSES = ("error_estimate", "step_doubling_difference")
+KINEMATIC_RESPONSES = frozenset(r.name for r in ROCKER_RESPONSES)
+
+# response -> (output column, factor from SI to the response's units)
+_OUTPUT: dict[str, tuple[int, float]] = {
+    "max_lift": (valve.O_MAX_LIFT, MM),
+    "max_opening_velocity": (valve.O_MAX_VELOCITY, 1.0),
+    "max_closing_velocity": (valve.O_MIN_VELOCITY, 1.0),
+    "max_acceleration": (valve.O_MAX_ACCELERATION, 1.0),
+    "min_acceleration": (valve.O_MIN_ACCELERATION, 1.0),
+    "jump_start": (valve.O_JUMP_START, DEG),
+    "jump_duration": (valve.O_JUMP_DURATION, DEG),
+    "jump_max_gap": (valve.O_JUMP_GAP, MM),
+    "bounce_count": (valve.O_BOUNCE_COUNT, 1.0),
+    "bounce_height": (valve.O_BOUNCE_HEIGHT, MM),
+    "seating_velocity": (valve.O_SEATING_VELOCITY, 1.0),
+    "max_contact_force": (valve.O_MAX_CONTACT_FORCE, 1.0),
+    "substeps": (valve.O_SUBSTEPS, 1.0),
+    "step_ratio": (valve.O_STEP_RATIO, 1.0),
+    "mode_transitions": (valve.O_TRANSITIONS, 1.0),
+    "status": (valve.O_STATUS, 1.0),
+    "error_estimate": (valve.O_ERROR_ESTIMATE, MM),
+    "step_doubling_difference": (valve.O_ERROR_ESTIMATE, valve.ERROR_ORDER_DIVISOR * MM),
+}
+_CURVE_ROW = {
+    "actual_lift": (valve.C_LIFT, MM),
+    "actual_velocity": (valve.C_VELOCITY, 1.0),
+    "actual_acceleration": (valve.C_ACCELERATION, 1.0),
+    "drive_force": (valve.C_DRIVE_FORCE, 1.0),
+    "seat_force": (valve.C_SEAT_FORCE, 1.0),
+}
+# parameter name -> column of the valve kernels' parameter rows
+_PARAM_COLUMN = {
+    "cam_speed": valve.P_SPEED,
+    "equivalent_mass": valve.P_MASS,
+    "drive_stiffness": valve.P_DRIVE_STIFFNESS,
+    "drive_damping": valve.P_DRIVE_DAMPING,
+    "spring_rate": valve.P_SPRING_RATE,
+    "spring_preload": valve.P_PRELOAD,
+    "seat_stiffness": valve.P_SEAT_STIFFNESS,
+    "seat_damping": valve.P_SEAT_DAMPING,
+    "external_damping": valve.P_EXTERNAL_DAMPING,
+}
+
+
+def valve_rows(points: dict[str, np.ndarray], idx: np.ndarray) -> np.ndarray:
+    """Kernel parameter rows (``engine_kernels.valve.P_*``, SI) of the design points idx."""
+    rows = np.zeros((len(idx), len(valve.VALVE_PARAM_NAMES)))
+    for name, column in _PARAM_COLUMN.items():
+        rows[:, column] = points[name][idx]
+    return rows
+
+
+def kernel_settings(settings: dict[str, Any], integrator: str, estimate: bool) -> np.ndarray:
+    """The ``S_*`` integer settings row for an integrator name."""
+    return valve.valve_settings(
+        max_substeps=int(settings["max_substeps"]),
+        switch_aware=integrator == "rk4_switch_aware",
+        estimate_error=estimate,
+    )
+
+
+def integrate(
+    excitation: tuple[np.ndarray, float, float],
+    rows: np.ndarray,
+    integrator: str,
+    flags: np.ndarray,
+    curves: bool,
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """Run one integrator over the rows on one excitation; outputs (n, O_*) and curves."""
+    table, table_step, start = excitation
+    out = np.empty((rows.shape[0], N_OUT))
+    if curves:
+        trace = np.empty((rows.shape[0], N_CURVES, (table.shape[1] - 1) // 2 + 1))
+        for j in range(rows.shape[0]):
+            valve.valve_response(table, table_step, start, rows[j], flags, out[j], trace[j])
+        return out, trace
+    if integrator == "lanes":
+        valve_lanes.valve_response_lanes(table, table_step, start, rows, flags, out)
+    else:
+        valve.valve_response_batch(table, table_step, start, rows, flags, out)
+    return out, None
+
+
+def jump_setting_problems(settings: dict[str, Any]) -> list[str]:
+    if settings["jump_speed_low"] < settings["jump_speed_high"]:
+        return []
+    return [
+        (
+            "settings jump_speed_low and jump_speed_high: the low end of the jump speed search "
+            f"({settings['jump_speed_low'] * RPM:g} rpm) must be below the high end "
+            f"({settings['jump_speed_high'] * RPM:g} rpm)"
+        )
+    ]
+
+
+def stability_problems(
+    points: dict[str, np.ndarray], settings: dict[str, Any], steps: np.ndarray
+) -> list[str]:
+    """Points whose RK4 step [rad] needs more sub-steps than ``max_substeps`` (SPEC §4)."""
+    found = PointProblems()
+    limit = int(settings["max_substeps"])
+    rows = valve_rows(points, np.arange(len(steps)))
+    for i, (row, step) in enumerate(zip(rows, steps, strict=True)):
+        needed, ratio = valve.stability_substeps(row, step)
+        if needed > limit:
+            found.add(
+                i,
+                f"angle_step = {step_deg(step):g} deg at cam_speed = {row[valve.P_SPEED] * RPM:g} "
+                f"rpm with seat_stiffness = {row[valve.P_SEAT_STIFFNESS] / 1e3:g} N/mm gives "
+                f"|h λ| = {ratio:.3g}: {needed} RK4 sub-steps per step would be needed to keep "
+                f"|h λ| ≤ {valve.STEP_RATIO_TARGET:g}, more than max_substeps = {limit} (use a "
+                "smaller angle_step or a larger max_substeps)",
+            )
+    return found.messages()
+
+
+class ValveScene(RockerScene):
+    name = "valve"
+    description = "valve-train dynamics through the rocker: jump, bounce, seating, jump speed"
+    parameters = PARAMETERS
+    settings = SETTINGS
+    responses = RESPONSES
+    curves = CURVES
+    stage_order: tuple[str, ...] = ("tappet", "rocker", "dynamics", "jump_speed")
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.window_cache = BoundedCache(CACHE_SIZE)
+
+    # --- checks ---------------------------------------------------------------------------
+    def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+        problems = super().check_points(points, settings) + jump_setting_problems(settings)
+        steps = np.full(len(points["cam_speed"]), settings["angle_step"])
+        return problems + stability_problems(points, settings, steps)
+
+    # --- excitation -----------------------------------------------------------------------
+    def window(self, ctx: dict[str, Any], key: tuple) -> tuple[float, float]:
+        """Integration window [deg]: opening − 2° … closure + closing window, on 2° marks."""
+        closing_window = math.degrees(ctx["settings"]["closing_window"])
+        spacing = step_deg(ctx["settings"]["tappet_step"])
+
+        def make() -> tuple[float, float]:
+            probe = self.chain(ctx, key, (-HALF_TURN_DEG, WINDOW_PROBE_DEG, HALF_TURN_DEG))
+            opening, closing = open_range(probe)
+            if math.isnan(opening):
+                return -HALF_TURN_DEG, HALF_TURN_DEG
+            start = math.floor((opening - PRE_OPEN_DEG) / GRID_UNIT_DEG) * GRID_UNIT_DEG
+            stop = math.ceil((closing + closing_window) / GRID_UNIT_DEG) * GRID_UNIT_DEG
+            return max(start, -HALF_TURN_DEG), min(stop, HALF_TURN_DEG)
+
+        return self.window_cache.get((key, spacing, closing_window), make)
+
+    def excitation(
+        self, ctx: dict[str, Any], key: tuple, step: float
+    ) -> tuple[np.ndarray, float, float]:
+        """(Y, Y', Y'') table at half the RK4 ``step`` [deg] over the window, its step, start."""
+        start, stop = self.window(ctx, key)
+        chain = self.chain(ctx, key, (start, step / 2.0, stop))
+        table = np.ascontiguousarray(chain.curves[: rocker.ROW_VALVE_ACCELERATION + 1])
+        return table, math.radians(step / 2.0), math.radians(start)
+
+    def chain_valid(self, ctx: dict[str, Any], key: tuple) -> bool:
+        probe = self.chain(ctx, key, (-HALF_TURN_DEG, WINDOW_PROBE_DEG, HALF_TURN_DEG))
+        return probe.status == rocker.ROCKER_OK
+
+    # --- stages ---------------------------------------------------------------------------
+    def stage_dynamics(self, ctx: dict[str, Any]) -> None:
+        n = ctx["n"]
+        ctx["out"] = np.full((n, N_OUT), np.nan)
+        ctx["step_used"] = np.full(n, np.nan)
+        want = any(c in _CURVE_ROW for c in ctx["curves"])
+        axis = self.curve_coordinate(ctx["settings"])
+        ctx["traces"] = np.full((n, N_CURVES, axis.size if want else 0), np.nan)
+        for key, idx in ctx["groups"].items():
+            if not self.chain_valid(ctx, key):
+                ctx["out"][idx, valve.O_STATUS] = STATUS_NOT_RUN
+                continue
+            self.run_group(ctx, key, idx, want)
+
+    def run_group(self, ctx: dict[str, Any], key: tuple, idx: np.ndarray, want: bool) -> None:
+        """Integrate the points ``idx`` of one chain, halving the step under a tolerance."""
+        settings = ctx["settings"]
+        tolerance = settings["tolerance"]
+        estimate = tolerance > 0.0 or bool(ctx["responses"] & set(ESTIMATE_RESPONSES))
+        flags = kernel_settings(settings, settings["integrator"], estimate)
+        rows = valve_rows(ctx["points"], idx)
+        coarse = step_deg(settings["angle_step"])
+        first = round((self.window(ctx, key)[0] + HALF_TURN_DEG) / coarse)
+        pending = np.arange(len(idx))
+        for level in range(MAX_HALVINGS + 1 if tolerance > 0.0 else 1):
+            step = coarse / 2**level
+            excitation = self.excitation(ctx, key, step)
+            out, trace = integrate(excitation, rows[pending], settings["integrator"], flags, want)
+            ctx["out"][idx[pending]] = out
+            ctx["step_used"][idx[pending]] = step
+            if trace is not None:
+                kept = trace[:, :, :: 2**level]
+                ctx["traces"][idx[pending], :, first : first + kept.shape[2]] = kept
+            difference = valve.ERROR_ORDER_DIVISOR * out[:, valve.O_ERROR_ESTIMATE]
+            pending = pending[~(difference <= tolerance)]
+            if pending.size == 0:
+                break
+
+    def stage_jump_speed(self, ctx: dict[str, Any]) -> None:
+        settings = ctx["settings"]
+        flags = kernel_settings(settings, settings["integrator"], False)
+        ctx["jump"] = np.full((ctx["n"], 2), np.nan)
+        for key, idx in ctx["groups"].items():
+            if not self.chain_valid(ctx, key):
+                ctx["jump"][idx, 1] = JUMP_NOT_RUN
+                continue
+            table, table_step, start = self.excitation(ctx, key, step_deg(settings["angle_step"]))
+            for i, row in zip(idx, valve_rows(ctx["points"], idx), strict=True):
+                ctx["jump"][i] = valve.jump_speed(
+                    table,
+                    table_step,
+                    start,
+                    row,
+                    flags,
+                    settings["jump_speed_low"],
+                    settings["jump_speed_high"],
+                    JUMP_SCAN_POINTS,
+                    settings["jump_speed_tolerance"],
+                )
+
+    # --- outputs --------------------------------------------------------------------------
+    def scalar(self, ctx: dict[str, Any], response: str) -> np.ndarray:
+        if response in KINEMATIC_RESPONSES:
+            return super().scalar(ctx, response)
+        if response in ("jump_speed", "jump_speed_status"):
+            jump = ctx["jump"]
+            return jump[:, 0] * RPM if response == "jump_speed" else jump[:, 1]
+        out = ctx["out"]
+        if response in _OUTPUT:
+            column, scale = _OUTPUT[response]
+            return out[:, column] * scale
+        status = out[:, valve.O_STATUS]
+        if response == "run_ok":
+            return (status == valve.STATUS_OK).astype(float)
+        if response == "follows_cam":
+            duration = out[:, valve.O_JUMP_DURATION]
+            return np.where(np.isnan(duration), np.nan, (duration == 0.0).astype(float))
+        if response == "angle_step_used":
+            return ctx["step_used"].copy()
+        difference = valve.ERROR_ORDER_DIVISOR * out[:, valve.O_ERROR_ESTIMATE]
+        met = (difference <= ctx["settings"]["tolerance"]).astype(float)
+        return met if ctx["settings"]["tolerance"] > 0.0 else np.ones(ctx["n"])
+
+    def curve_values(self, ctx: dict[str, Any], name: str) -> np.ndarray:
+        if name not in _CURVE_ROW:
+            return super().curve_values(ctx, name)
+        row, scale = _CURVE_ROW[name]
+        return ctx["traces"][:, row, :] * scale

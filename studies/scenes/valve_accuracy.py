@@ -1,0 +1,186 @@
+"""Scene ``valve_accuracy``: the ``valve`` scene with its integrator and step as factors.
+
+In the ``valve`` scene the integrator and the RK4 step are accuracy settings, fixed for a
+study. To measure the speed–accuracy trade (SPEC §4) they must vary between design points, so
+this scene declares them as parameters (``integrator``, ``angle_step``) and adds two stages:
+
+* ``reference`` — the error of each run against scipy's event-restarted reference
+  (:mod:`studies.valve_accuracy`), computed once per distinct set of the other parameters
+  (e.g. once per camshaft speed × seat stiffness pair) and reused by every integrator and step;
+* ``cost`` — measured seconds per case of the integrator's batch kernel (a timing).
+
+Every ``valve`` response is available; the design points of one (integrator, step) pair are
+evaluated together by the ``valve`` machinery with those settings.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import partial
+from typing import Any
+
+import numpy as np
+
+from studies import valve_accuracy as acc
+from studies.scenes.base import Parameter, Response, SceneOutput
+from studies.scenes.checks import PointProblems
+from studies.scenes.rocker import CACHE_SIZE, BoundedCache, angle_step_problem, grid_deg, step_deg
+from studies.scenes.valve import (
+    MM,
+    WINDOW_PROBE_DEG,
+    ValveScene,
+    integrate,
+    jump_setting_problems,
+    kernel_settings,
+    stability_problems,
+    valve_rows,
+)
+from studies.scenes.valve_parameters import (
+    ANGLE_STEP,
+    DYNAMIC_RESPONSES,
+    INTEGRATOR,
+    PARAMETERS,
+    WINDOW_SETTINGS,
+)
+from studies.scenes.valve_parameters import SETTINGS as VALVE_SETTINGS
+
+REFERENCE_METHODS = ("DOP853", "Radau")
+REF, COST = ("tappet", "rocker", "reference"), ("tappet", "rocker", "cost")
+MS = 1e3
+
+SETTINGS: tuple[Parameter, ...] = (
+    *(s for s in VALVE_SETTINGS if s.name == "tappet_step"),
+    *WINDOW_SETTINGS,
+    Parameter(
+        "reference_method",
+        "-",
+        "DOP853",
+        "scipy solve_ivp method of the reference (event restarts at every mode switch)",
+        choices=REFERENCE_METHODS,
+    ),
+    Parameter(
+        "reference_rtol", "1", 1e-10, "relative tolerance of the reference solver", 1e-13, 1e-4
+    ),
+)
+
+RESPONSES: tuple[Response, ...] = (
+    *DYNAMIC_RESPONSES,
+    Response(
+        "reference_error",
+        "mm",
+        "max |y − y_ref| over the grid against the scipy reference (lanes: the same RK4 scheme "
+        "as rk4)",
+        REF,
+    ),
+    Response(
+        "cost_per_case",
+        "ms",
+        "measured time per case of the batch kernel (a wall-clock timing: varies from run to "
+        "run and machine to machine)",
+        COST,
+    ),
+)
+
+
+class ValveAccuracyScene(ValveScene):
+    name = "valve_accuracy"
+    description = "valve dynamics vs integrator and step: error against scipy, cost per case"
+    parameters = (*PARAMETERS, INTEGRATOR, ANGLE_STEP)
+    settings = SETTINGS
+    responses = RESPONSES
+    curves = ()
+    curve_axis = None
+    stage_order = ("tappet", "rocker", "dynamics", "jump_speed", "reference", "cost")
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.reference_cache = BoundedCache(CACHE_SIZE)
+
+    def kinematic_grid(self, settings: dict[str, Any]) -> tuple[float, float, float]:
+        return -180.0, WINDOW_PROBE_DEG, 180.0
+
+    def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+        found = PointProblems()
+        steps = points["angle_step"]
+        for i, step in enumerate(steps):
+            problem = angle_step_problem(step, "angle_step")
+            if problem:
+                found.add(i, problem)
+        problems = found.messages() + self.chain_point_problems(points)
+        return (
+            problems + jump_setting_problems(settings) + stability_problems(points, settings, steps)
+        )
+
+    def evaluate(
+        self,
+        points: dict[str, np.ndarray],
+        settings: dict[str, Any],
+        responses: list[str],
+        curves: list[str],
+    ) -> SceneOutput:
+        scalars = {r: np.full(len(points["angle_step"]), np.nan) for r in responses}
+        steps = [step_deg(s) for s in points["angle_step"]]
+        spacing = acc.common_spacing({*steps, acc.REFERENCE_TABLE_DEG})
+        pairs: dict[tuple[str, float], list[int]] = {}
+        for i, pair in enumerate(zip(points["integrator"], steps, strict=True)):
+            pairs.setdefault(pair, []).append(i)
+        for (integrator, step), members in pairs.items():
+            idx = np.array(members)
+            local = dict(settings, integrator=integrator, angle_step=math.radians(step))
+            local |= {"tolerance": 0.0, "reference_spacing": spacing}
+            out = super().evaluate({k: v[idx] for k, v in points.items()}, local, responses, [])
+            for r in responses:
+                scalars[r][idx] = out.scalars[r]
+        return SceneOutput(scalars)
+
+    def stage_reference(self, ctx: dict[str, Any]) -> None:
+        settings = ctx["settings"]
+        step = step_deg(settings["angle_step"])
+        spacing = settings["reference_spacing"]
+        flags = kernel_settings(settings, settings["integrator"], False)
+        ctx["reference_error"] = np.full(ctx["n"], np.nan)
+        for key, idx in ctx["groups"].items():
+            if not self.chain_valid(ctx, key):
+                continue
+            excitation = self.excitation(ctx, key, step)
+            fine = self.excitation(ctx, key, 2.0 * acc.REFERENCE_TABLE_DEG)
+            window = self.window(ctx, key)
+            theta = np.radians(grid_deg(window[0], spacing, window[1]))
+            solver = (settings["reference_method"], settings["reference_rtol"])
+            for i, row in zip(idx, valve_rows(ctx["points"], idx), strict=True):
+                reference = self.reference_cache.get(
+                    (key, window, spacing, tuple(row), solver),
+                    partial(acc.reference_lift, fine, row, theta, *solver),
+                )
+                lift = acc.trajectory_lift(excitation, row, flags)
+                ctx["reference_error"][i] = acc.max_error(lift, reference, round(step / spacing))
+
+    def stage_cost(self, ctx: dict[str, Any]) -> None:
+        settings = ctx["settings"]
+        integrator = settings["integrator"]
+        flags = kernel_settings(settings, integrator, False)
+        ctx["cost"] = np.full(ctx["n"], np.nan)
+        for key, idx in ctx["groups"].items():
+            if not self.chain_valid(ctx, key):
+                continue
+            excitation = self.excitation(ctx, key, step_deg(settings["angle_step"]))
+
+            run = partial(_run_kernel, excitation, integrator, flags)
+            for i, row in zip(idx, valve_rows(ctx["points"], idx), strict=True):
+                ctx["cost"][i] = acc.seconds_per_case(run, row)
+
+    def scalar(self, ctx: dict[str, Any], response: str) -> np.ndarray:
+        if response == "reference_error":
+            return ctx["reference_error"] * MM
+        if response == "cost_per_case":
+            return ctx["cost"] * MS
+        return super().scalar(ctx, response)
+
+
+def _run_kernel(
+    excitation: tuple[np.ndarray, float, float],
+    integrator: str,
+    flags: np.ndarray,
+    rows: np.ndarray,
+) -> object:
+    return integrate(excitation, rows, integrator, flags, False)

@@ -1,0 +1,102 @@
+"""Accuracy and cost of the valve integrators: reference solution, trajectory error, timing.
+
+The error of a fixed-step run is measured against scipy's event-restarted ``solve_ivp``
+(:mod:`studies.reference.valve_ivp`, DOP853 or Radau at rtol ~1e-10) on the same model and
+the same excitation: the chain's valve lift sampled every ``REFERENCE_TABLE_DEG`` and
+interpolated as the kernels do. The error is the largest ``|y − y_ref|`` over the run's grid
+points (the whole integration window). The reference is evaluated on one grid holding the
+nodes of every step of a chunk and of the ``REFERENCE_TABLE_DEG`` grid, so for the usual steps
+(2°/2^k) it is solved once per design point whatever the chunking. The lane kernel integrates exactly the plain RK4 scheme
+of the one-case kernel (in SIMD lanes), so the trajectory of a ``lanes`` run is taken from the
+one-case kernel at the same step; only its cost differs.
+
+Cost per case is a wall-clock timing: the batch kernel of the integrator runs copies of the
+design point (at least ``COST_CASES``, two lane blocks so both cores work, and enough for one
+run to last ``MIN_SECONDS``) and the best of ``COST_REPEATS`` runs is divided by the number of
+cases. It varies from run to run and machine to machine; compare integrators within one run.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Iterable
+from fractions import Fraction
+
+import numpy as np
+
+from engine_kernels import valve
+from studies.reference.valve_ivp import table_excitation, valve_reference
+
+REFERENCE_TABLE_DEG = 1.0 / 64.0
+COST_CASES = 64
+MAX_COST_CASES = 8192
+MIN_SECONDS = 0.02
+COST_REPEATS = 3
+MAX_DENOMINATOR = 1_000_000
+
+Excitation = tuple[np.ndarray, float, float]
+
+
+def common_spacing(steps_deg: Iterable[float]) -> float:
+    """Largest spacing [deg] whose grid holds the nodes of every step (their common divisor)."""
+    fractions = [Fraction(s).limit_denominator(MAX_DENOMINATOR) for s in steps_deg]
+    denominator = math.lcm(*(f.denominator for f in fractions))
+    numerator = math.gcd(*(int(f * denominator) for f in fractions))
+    return numerator / denominator
+
+
+def reference_lift(
+    fine: Excitation, row: np.ndarray, theta: np.ndarray, method: str, rtol: float
+) -> np.ndarray:
+    """Reference valve lift [m] at the cam angles ``theta`` [rad] (scipy, event restarts).
+
+    fine   : (table, table_step [rad], start [rad]) of Y, Y', Y'' at a fine spacing.
+    row    : valve parameter row (``engine_kernels.valve.P_*``, SI).
+    method : ``"DOP853"`` or ``"Radau"``; rtol: relative tolerance of the solver.
+    """
+    excitation = table_excitation(*fine)
+    return valve_reference(excitation, row, theta, method=method, rtol=rtol).lift
+
+
+def trajectory_lift(excitation: Excitation, row: np.ndarray, flags: np.ndarray) -> np.ndarray:
+    """Valve lift [m] at every grid point of one fixed-step run (one-case kernel)."""
+    table, table_step, start = excitation
+    out = np.empty(len(valve.VALVE_OUTPUT_NAMES))
+    curves = np.empty((len(valve.VALVE_CURVE_NAMES), (table.shape[1] - 1) // 2 + 1))
+    valve.valve_response(table, table_step, start, row, flags, out, curves)
+    return curves[valve.C_LIFT]
+
+
+def max_error(lift: np.ndarray, reference: np.ndarray, stride: int) -> float:
+    """Largest |lift − reference| [m], the reference on a grid ``stride`` times finer."""
+    return float(np.max(np.abs(lift - reference[::stride])))
+
+
+def seconds_per_case(
+    run: Callable[[np.ndarray], object],
+    row: np.ndarray,
+    min_seconds: float = MIN_SECONDS,
+    repeats: int = COST_REPEATS,
+) -> float:
+    """Best wall-clock seconds per case of ``run`` on copies of ``row``.
+
+    Starts with ``COST_CASES`` copies and doubles them until one run lasts ``min_seconds``
+    (at most ``MAX_COST_CASES``): shorter runs measure the scheduler of a loaded machine
+    rather than the kernel. Then the best of ``repeats`` runs counts.
+    """
+    cases = COST_CASES
+    while True:
+        rows = np.ascontiguousarray(np.tile(row, (cases, 1)))
+        elapsed = _seconds(run, rows)
+        if elapsed >= min_seconds or cases >= MAX_COST_CASES:
+            break
+        cases *= 2
+    best = min([elapsed] + [_seconds(run, rows) for _ in range(repeats - 1)])
+    return best / cases
+
+
+def _seconds(run: Callable[[np.ndarray], object], rows: np.ndarray) -> float:
+    t0 = time.perf_counter()
+    run(rows)
+    return time.perf_counter() - t0

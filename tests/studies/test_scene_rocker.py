@@ -1,0 +1,203 @@
+"""The ``rocker`` scene: target lift, virtual work, convexity flags, stages, checks, caching."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from numpy.polynomial import polynomial as poly
+
+from studies.definition import StudyError
+from studies.plan import plan_text
+from studies.runner import evaluate
+from studies.scenes import rocker as rocker_scene
+from studies.scenes.rocker import RockerScene
+from studies.scenes.rocker_parameters import CONVEX_POLYDYNE
+
+
+def study(
+    responses: str = '["max_valve_lift"]',
+    curves: str = "[]",
+    parameters: str = "",
+    factors: str = "[factors.valve_lift]\nlevels = [6.0, 7.815]",
+    settings: str = "",
+    scene: str = "rocker",
+) -> str:
+    return f"""
+name = "rocker_test"
+scene = "{scene}"
+responses = {responses}
+curves = {curves}
+[settings]
+{settings}
+[parameters]
+{parameters}
+{factors}
+"""
+
+
+def spy_stages(scene, calls: list[str]) -> dict:
+    original = dict(scene.stages)
+
+    def spy(name, fn):
+        def wrapped(*args, **kwargs):
+            calls.append(name)
+            return fn(*args, **kwargs)
+
+        return wrapped
+
+    for name, fn in original.items():
+        scene.stages[name] = spy(name, fn)
+    return original
+
+
+def test_chain_reaches_the_target_lift_and_the_published_tappet_lift() -> None:
+    ev = evaluate(
+        plan_text(study('["max_valve_lift", "max_tappet_lift", "cam_convex", "chain_ok"]')),
+        progress=False,
+    )
+    # By construction [R3], [R6]: the nose of the chain gives the target valve lift exactly
+    # (the nose, θ = 0, is a grid point).
+    np.testing.assert_allclose(ev.scalars["max_valve_lift"], [6.0, 7.815], rtol=1e-9)
+    # SPEC §3: 7.815 mm of valve lift is "about 6.30 mm" of tappet lift.
+    assert ev.scalars["max_tappet_lift"][1] == pytest.approx(6.30, abs=0.01)
+    assert (ev.scalars["cam_convex"] == 1).all()
+    assert (ev.scalars["chain_ok"] == 1).all()
+
+
+def test_force_ratio_curve_obeys_virtual_work() -> None:
+    # Power balance (frictionless): cam force × h'(φ) ω = valve force × Y'(θ) ω, so the
+    # force ratio i = h'(φ)/Y'(θ), with h' from the closed-form polydyne law at the tappet
+    # angle φ in contact (numpy polynomial, independent of the kernels).
+    rise = 80.0
+    plan = plan_text(
+        study(
+            '["max_tappet_lift"]',
+            '["valve_velocity", "force_ratio", "tappet_angle"]',
+            parameters=f'law = "polydyne"\nrise_angle = {rise}',
+            factors="[factors.lash]\nlevels = [0.05, 0.1]",
+        )
+    )
+    ev = evaluate(plan, progress=False)
+    coefficients = np.array(CONVEX_POLYDYNE)
+    for i, height in enumerate(ev.scalars["max_tappet_lift"]):
+        phi = np.radians(ev.curves["tappet_angle"][i])
+        x = (np.clip(-np.abs(phi), -math.radians(rise), 0.0) + math.radians(rise)) / math.radians(
+            rise
+        )
+        tappet_velocity = -np.sign(phi) * height * poly.polyval(x, poly.polyder(coefficients))
+        tappet_velocity /= math.radians(rise)
+        valve_velocity = ev.curves["valve_velocity"][i]
+        usable = np.abs(valve_velocity) > 2.0
+        assert usable.sum() > 200
+        np.testing.assert_allclose(
+            ev.curves["force_ratio"][i][usable],
+            tappet_velocity[usable] / valve_velocity[usable],
+            rtol=2e-3,
+        )
+
+
+def test_concave_cam_is_a_flag_not_an_error() -> None:
+    # SPEC §3: a 3-4-5 law as high as 6.30 mm needs at least ±83° to stay convex; at ±65° the
+    # closed form r0 + h + h'' = 12.5 + 6.30 (1 + ...) goes negative near the nose.
+    ev = evaluate(
+        plan_text(
+            study(
+                '["cam_convex", "min_radius_of_curvature", "chain_status", "chain_ok"]',
+                parameters='law = "poly345"',
+                factors="[factors.rise_angle]\nlevels = [65.0, 85.0]",
+            )
+        ),
+        progress=False,
+    )
+    np.testing.assert_array_equal(ev.scalars["cam_convex"], [0.0, 1.0])
+    assert ev.scalars["min_radius_of_curvature"][0] < 0.0 < ev.scalars["min_radius_of_curvature"][1]
+    assert ev.scalars["chain_status"][0] % 2 == 1  # ROCKER_CONCAVE_CAM flag
+    np.testing.assert_array_equal(ev.scalars["chain_ok"], [0.0, 1.0])
+
+
+def test_kinematic_responses_run_only_the_needed_stages() -> None:
+    plan = plan_text(study('["max_tappet_lift", "min_radius_of_curvature"]'))
+    assert plan.stages == ("tappet",)
+    calls: list[str] = []
+    original = spy_stages(plan.scene, calls)
+    try:
+        evaluate(plan, progress=False)
+    finally:
+        plan.scene.stages.update(original)
+    assert set(calls) == {"tappet"}
+
+
+def test_points_sharing_a_chain_compute_it_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    counted: list[int] = []
+    kernel = rocker_scene.cb.cam_kinematics_batch
+
+    def counting(*args):
+        counted.append(1)
+        return kernel(*args)
+
+    monkeypatch.setattr(rocker_scene.cb, "cam_kinematics_batch", counting)
+    plan = plan_text(
+        study(
+            '["max_valve_lift"]',
+            scene="valve",
+            factors="[factors.cam_speed]\nlevels = [3000.0, 4000.0, 5000.0]\n"
+            "[factors.spring_rate]\nlevels = [20.0, 30.0]",
+        )
+    )
+    scene = RockerScene()
+    for _ in range(2):
+        scene.evaluate(plan.points, plan.settings, ["max_valve_lift"], [])
+    assert len(counted) == 1
+
+
+LIFTS = "[factors.valve_lift]\nlevels = [6.0, 7.815]"
+
+
+@pytest.mark.parametrize(
+    ("parameters", "settings", "factors", "expected"),
+    [
+        (
+            "pad_arm = 5.0",
+            "",
+            LIFTS,
+            (
+                "design points 0–1: base_radius + pad_radius = 42.5 mm must lie between "
+                "|pad_arm − centre_distance| = 25.28 mm and pad_arm + centre_distance = 35.28 mm"
+            ),
+        ),
+        ("ball_radius = 40.0", "", LIFTS, "lash + ball_radius + stem_height = 41.7 mm"),
+        (
+            "valve_arm = 12.0",
+            "",
+            "[factors.valve_lift]\nlevels = [6.0, 25.0]",
+            "design point 1: valve_lift = 25 mm is out of reach of this rocker",
+        ),
+        ("", "angle_step = 0.3", LIFTS, "setting angle_step = 0.3 deg is not allowed"),
+        (
+            'law = "polydyne"\npolydyne_coefficients = [0.0, 0.0, 3.0, -2.5]',
+            "",
+            LIFTS,
+            "violate f(1) = 1, f'(1) = 0",
+        ),
+        (
+            "ramp_height = 0.3\nramp_width = 10.0\nramp_velocity = 1.0",
+            "",
+            LIFTS,
+            "ramp_width = 10 deg cannot carry a 0.3 mm ramp",
+        ),
+        (
+            "rise_angle = 145.0\nramp_height = 0.3\nramp_width = 15.0\nramp_velocity = 1.5",
+            "",
+            LIFTS,
+            "rise_angle + ramp_width = 160 deg exceeds 150 deg",
+        ),
+    ],
+)
+def test_bad_inputs_name_parameter_value_and_allowed(
+    parameters: str, settings: str, factors: str, expected: str
+) -> None:
+    with pytest.raises(StudyError) as info:
+        plan_text(study(parameters=parameters, settings=settings, factors=factors))
+    assert expected in str(info.value)

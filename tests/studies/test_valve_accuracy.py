@@ -1,0 +1,95 @@
+"""The speed–accuracy study: reference solved once per pair, convergence, spacing, timing logic."""
+
+from __future__ import annotations
+
+import math
+from fractions import Fraction
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from studies import valve_accuracy as acc
+from studies.definition import StudyError
+from studies.plan import plan_study, plan_text
+from studies.study_run import run_plan
+
+
+def test_valve_step_accuracy_runs_with_one_reference_per_pair(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    solves: list[float] = []
+    reference = acc.reference_lift
+
+    def counting(fine, row, theta, method, rtol):
+        solves.append(row[0])
+        return reference(fine, row, theta, method, rtol)
+
+    monkeypatch.setattr(acc, "reference_lift", counting)
+    plan = plan_study("valve_step_accuracy")
+    plan.scene.reference_cache.entries.clear()
+    result = run_plan(plan, tmp_path, progress=False)
+    ds = result.dataset
+    assert ds.sizes["run"] == 48
+    assert len(solves) == 4  # camshaft speed × seat stiffness pairs
+    assert (result.folder / "error_vs_cost.png").stat().st_size > 10_000
+    assert "timing" in ds["cost_per_case"].attrs["long_name"]
+    assert (ds["cost_per_case"] > 0.0).all()
+    # The lane kernel integrates the same RK4 scheme as rk4: the same trajectory error.
+    lanes = ds.where(ds["integrator"] == "lanes", drop=True)
+    rk4 = ds.where(ds["integrator"] == "rk4", drop=True)
+    np.testing.assert_array_equal(lanes["reference_error"], rk4["reference_error"])
+    # Convergence towards the reference: the switch-aware runs at 0.125 deg are at least five
+    # times closer to it than at 1 deg, for every speed and seat stiffness.
+    aware = ds.where(ds["integrator"] == "rk4_switch_aware", drop=True)
+    coarse = aware.where(aware["angle_step"] == 1.0, drop=True)["reference_error"].values
+    fine = aware.where(aware["angle_step"] == 0.125, drop=True)["reference_error"].values
+    assert (fine * 5.0 < coarse).all()
+
+
+def test_accuracy_scene_checks_each_step_factor() -> None:
+    text = """
+name = "acc"
+scene = "valve_accuracy"
+responses = ["reference_error"]
+[factors.angle_step]
+levels = [0.5, 0.3]
+[factors.integrator]
+levels = ["rk4", "lanes"]
+"""
+    with pytest.raises(StudyError) as info:
+        plan_text(text)
+    assert "design points 2–3: angle_step = 0.3 deg is not allowed" in str(info.value)
+
+
+@given(st.lists(st.integers(1, 400), min_size=1, max_size=5), st.sampled_from([64, 100, 1000]))
+def test_common_spacing_is_the_largest_common_divisor(numerators: list[int], scale: int) -> None:
+    # Brute force: the largest d (in 1/scale units) dividing every step.
+    steps = [n / scale for n in numerators]
+    best = max(d for d in range(1, min(numerators) + 1) if all(n % d == 0 for n in numerators))
+    assert Fraction(acc.common_spacing(steps)).limit_denominator(10**6) == Fraction(best, scale)
+
+
+def test_max_error_compares_on_the_shared_nodes() -> None:
+    # The fine reference holds three nodes per coarse one; only the shared nodes count.
+    reference = np.array([0.0, 9.0, 9.0, 1.0, 9.0, 9.0, 2.5])
+    assert acc.max_error(np.array([0.0, 1.0, 2.0]), reference, 3) == pytest.approx(0.5)
+
+
+def test_seconds_per_case_grows_the_batch_until_it_is_long_enough() -> None:
+    sizes: list[int] = []
+    row = np.arange(3.0)
+
+    def run(rows: np.ndarray) -> None:
+        sizes.append(rows.shape[0])
+        np.testing.assert_array_equal(rows, np.tile(row, (rows.shape[0], 1)))
+
+    seconds = acc.seconds_per_case(run, row, min_seconds=math.inf, repeats=2)
+    doublings = int(math.log2(acc.MAX_COST_CASES // acc.COST_CASES))
+    assert sizes == [acc.COST_CASES * 2**k for k in range(doublings + 1)] + [acc.MAX_COST_CASES]
+    assert 0.0 <= seconds < math.inf
+    sizes.clear()
+    acc.seconds_per_case(run, row, min_seconds=0.0, repeats=3)
+    assert sizes == [acc.COST_CASES] * 3
