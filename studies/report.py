@@ -22,8 +22,10 @@ def write_analysis(ds: xr.Dataset, folder: Path, responses: list[str] | None = N
     scalar = [r for r in names if r in ds and ds[r].dims == ("run",)]
     missing = [r for r in names if r not in ds]
     if missing:
-        raise KeyError(f"responses not in the results: {', '.join(missing)} "
-                       f"(available: {', '.join(map(str, ds.data_vars))})")
+        raise KeyError(
+            f"responses not in the results: {', '.join(missing)} "
+            f"(available: {', '.join(map(str, ds.data_vars))})"
+        )
     header = _header(ds)
     if ds.attrs.get("design") == "sweep":
         body = [analysis.format_sweep(ds, scalar)]
@@ -45,6 +47,8 @@ def write_analysis(ds: xr.Dataset, folder: Path, responses: list[str] | None = N
 def _header(ds: xr.Dataset) -> str:
     title = ds.attrs.get("title", "results")
     run = ds.attrs.get("run_id", "")
-    return (f"{title}\nrun {run} — design {ds.attrs.get('design', '?')}, "
-            f"{ds.sizes['run']} design points, commit {ds.attrs.get('git_commit', '?')[:10]}"
-            f"{' (dirty)' if ds.attrs.get('git_dirty') else ''}")
+    return (
+        f"{title}\nrun {run} — design {ds.attrs.get('design', '?')}, "
+        f"{ds.sizes['run']} design points, commit {ds.attrs.get('git_commit', '?')[:10]}"
+        f"{' (dirty)' if ds.attrs.get('git_dirty') else ''}"
+    )

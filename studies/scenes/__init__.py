@@ -55,18 +55,31 @@ def describe_scene(scene: Scene) -> str:
             lines.append(f"    {'':<28} {s.long_name}")
     lines.append("  responses (scalar per design point; needs = stages that run):")
     for r in scene.responses:
-        lines.append(f"    {r.name:<34} {r.units:<9} {r.long_name}  "
-                     f"[needs {', '.join(r.needs)}; {r.sense} is better]")
+        lines.append(
+            f"    {r.name:<34} {r.units:<9} {r.long_name}  "
+            f"[needs {', '.join(r.needs)}; {r.sense} is better]"
+        )
     if scene.curves:
         axis = scene.curve_axis
-        lines.append(f"  curves (per design point × {axis.name if axis else 'angle'}; stored only "
-                     "when listed in 'curves'):")
+        lines.append(
+            f"  curves (per design point × {axis.name if axis else 'angle'}; stored only "
+            "when listed in 'curves'):"
+        )
         for c in scene.curves:
-            lines.append(f"    {c.name:<34} {c.units:<9} {c.long_name}  [needs {', '.join(c.needs)}]")
+            lines.append(
+                f"    {c.name:<34} {c.units:<9} {c.long_name}  [needs {', '.join(c.needs)}]"
+            )
     return "\n".join(lines)
 
 
 __all__ = [
-    "SCENES", "Curve", "CurveAxis", "Parameter", "Response", "Scene", "SceneOutput",
-    "describe_scene", "get_scene",
+    "SCENES",
+    "Curve",
+    "CurveAxis",
+    "Parameter",
+    "Response",
+    "Scene",
+    "SceneOutput",
+    "describe_scene",
+    "get_scene",
 ]
