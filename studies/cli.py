@@ -65,6 +65,11 @@ def _parser() -> argparse.ArgumentParser:
         help="recompute even if an identical definition already ran on this clean commit",
     )
     run.add_argument("--resume", metavar="RUN_ID", help="finish an interrupted or failed run")
+    run.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="run chunks on a Dask cluster (scheduler address, or 'local')",
+    )
     run.set_defaults(func=_cmd_run)
 
     check = sub.add_parser("check", help="validate a study without running it")
@@ -122,6 +127,7 @@ def _indent(text: str) -> str:
 def _cmd_run(args: argparse.Namespace) -> int:
     from studies import provenance, tracking
     from studies.plan import plan_study
+    from studies.runner import dask_executor
     from studies.study_run import resume_run, run_plan
 
     if args.resume:
@@ -133,6 +139,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     names = catalog_names() if args.all else [args.study]
     plans = [plan_study(n) for n in names]
     commit, dirty = provenance.git_state()
+    executor = dask_executor(args.scheduler) if args.scheduler else None
     for plan in plans:
         text = plan.definition.text
         earlier = (
@@ -147,7 +154,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
             )
             print(f"  {Path(earlier['folder']) / 'results.nc'}")
             continue
-        result = run_plan(plan, args.outputs, args.chunk_size, progress=not args.no_progress)
+        result = run_plan(plan, args.outputs, args.chunk_size, not args.no_progress, executor)
         _report(result)
     return 0
 

@@ -3,12 +3,19 @@
 Chunks bound memory (curves are runs × angles) and are the unit of work for executors. The
 first design point is evaluated alone first: that call compiles (or loads from the on-disk
 cache) every kernel the study needs, so ``compile_s`` and ``run_s`` are reported apart.
+
+By default chunks run here, one after another (each chunk is already parallel inside its
+compiled kernels). Any ``concurrent.futures.Executor`` can run them instead — a Dask cluster's
+``Client.get_executor()`` (see :func:`dask_executor`) or a process pool started with the
+``spawn`` method (the kernels' threading layer must not be forked). Every chunk is the
+same pure function of the plan, so results are identical whichever executor ran them.
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterator
+from concurrent.futures import Executor, Future, as_completed
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -46,11 +53,13 @@ def evaluate(
     progress: bool = True,
     on_chunk: Callable[[int, SceneOutput], None] | None = None,
     done: dict[int, SceneOutput] | None = None,
+    executor: Executor | None = None,
 ) -> Evaluation:
     """Evaluate every design point of ``plan``.
 
     ``on_chunk(index, output)`` sees each newly finished chunk (the run record checkpoints it);
-    ``done`` holds chunks finished by an earlier, interrupted run, which are not recomputed.
+    ``done`` holds chunks finished by an earlier, interrupted run, which are not recomputed;
+    ``executor`` runs the chunks elsewhere (``compile_s`` then counts only the local warm-up).
     """
     if chunk_size < 1:
         msg = f"chunk_size = {chunk_size} must be a positive number of design points"
@@ -72,8 +81,7 @@ def evaluate(
         leave=False,
     )
     with bar:
-        for index, part in todo:
-            out = evaluate_chunk(plan, part)
+        for index, part, out in _results(plan, todo, executor):
             parts[index] = out
             if on_chunk is not None:
                 on_chunk(index, out)
@@ -89,3 +97,34 @@ def evaluate(
         "points_per_s": computed / run_s if run_s > 0 else float("inf"),
     }
     return Evaluation(scalars, curves, timings)
+
+
+def _results(
+    plan: Plan, todo: list[tuple[int, slice]], executor: Executor | None
+) -> Iterator[tuple[int, slice, SceneOutput]]:
+    """Finished chunks, here in order, or from ``executor`` as they complete."""
+    if executor is None:
+        for index, part in todo:
+            yield index, part, evaluate_chunk(plan, part)
+        return
+    futures: dict[Future[SceneOutput], tuple[int, slice]] = {
+        executor.submit(evaluate_chunk, plan, part): (index, part) for index, part in todo
+    }
+    for future in as_completed(futures):
+        index, part = futures[future]
+        yield index, part, future.result()
+
+
+def dask_executor(scheduler: str) -> Executor:
+    """An executor on a Dask cluster: ``scheduler`` is an address or ``local``.
+
+    ``local`` starts a cluster of worker processes on this machine. Needs the ``cluster``
+    extra (``pip install engine-studies[cluster]``).
+    """
+    try:
+        from dask.distributed import Client  # noqa: PLC0415  (optional dependency)
+    except ImportError:
+        msg = "--scheduler needs dask.distributed: pip install 'engine-studies[cluster]'"
+        raise ValueError(msg) from None
+    client = Client() if scheduler == "local" else Client(scheduler)
+    return client.get_executor()

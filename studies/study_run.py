@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import shutil
+from concurrent.futures import Executor
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -54,8 +55,9 @@ def run_plan(
     outputs: Path = DEFAULT_OUTPUTS,
     chunk_size: int = DEFAULT_CHUNK_SIZE,
     progress: bool = True,
+    executor: Executor | None = None,
 ) -> RunResult:
-    """Run a validated plan in a new run folder under ``outputs``."""
+    """Run a validated plan in a new run folder under ``outputs`` (chunks on ``executor``)."""
     d = plan.definition
     commit, dirty = provenance.git_state()
     run_id = tracking.new_run_id(d.text)
@@ -78,7 +80,7 @@ def run_plan(
         settings=dict(d.settings),
         chunk_size=chunk_size,
     )
-    return _execute(plan, outputs, record, progress, done={})
+    return _execute(plan, outputs, record, progress, {}, executor)
 
 
 def resume_run(run_id: str, outputs: Path = DEFAULT_OUTPUTS, progress: bool = True) -> RunResult:
@@ -104,6 +106,7 @@ def _execute(
     record: tracking.RunRecord,
     progress: bool,
     done: dict[int, SceneOutput],
+    executor: Executor | None = None,
 ) -> RunResult:
     folder = Path(record.folder)
     record.write()
@@ -115,6 +118,7 @@ def _execute(
             progress=progress,
             on_chunk=lambda index, out: _save_chunk(folder, index, out),
             done=done,
+            executor=executor,
         )
         attrs = {
             "run_id": record.run_id,
