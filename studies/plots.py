@@ -8,6 +8,7 @@ switch), so the module is safe to import in any program; PNGs are rendered by Ag
 from __future__ import annotations
 
 import json
+import textwrap
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -20,6 +21,13 @@ from studies.analysis import range_analysis, sweep_runs
 
 PANEL_SIZE = (3.0, 3.0)  # inches per factor panel
 DPI = 120
+TITLE_CHARS_PER_INCH = 11  # what fits at the default title size
+
+
+def _title(fig: Figure, text: str) -> None:
+    """A figure title wrapped to the figure's width (narrow sweeps have one panel)."""
+    width = int(fig.get_figwidth() * TITLE_CHARS_PER_INCH)
+    fig.suptitle(textwrap.fill(text, width), fontsize="medium")
 
 
 def _label(name: str, units: str) -> str:
@@ -54,7 +62,7 @@ def main_effects_figure(
             ax.set_xticks(x)
     axes[0].set_ylabel(_label(response, ra.attrs["units"]))
     axes[0].legend(loc="best", fontsize="small")
-    fig.suptitle(f"Main effects on {response}: {ra.attrs['long_name']}")
+    _title(fig, f"Main effects on {response}: {ra.attrs['long_name']}")
     return fig
 
 
@@ -82,7 +90,7 @@ def sweep_figure(ds: xr.Dataset, response: str) -> Figure:
         ax.set_xlabel(_label(f, ds[f].attrs.get("units", "")))
     y = ds[response]
     axes[0].set_ylabel(_label(response, y.attrs.get("units", "")))
-    fig.suptitle(f"Sweep: {response}: {y.attrs.get('long_name', '')}")
+    _title(fig, f"Sweep of {response}: {y.attrs.get('long_name', '')}")
     return fig
 
 
@@ -116,7 +124,7 @@ def sn_figure(ds: xr.Dataset, response: str, kind: str | None = None) -> Figure:
     name = taguchi.sn_name(response)
     fig = main_effects_figure(view, name)
     fig.axes[0].set_ylabel("S/N ratio [dB]")
-    fig.suptitle(f"S/N ratio of {response} ({view[name].attrs['sn_kind']} is better)")
+    _title(fig, f"S/N ratio of {response} ({view[name].attrs['sn_kind']} is better)")
     return fig
 
 
@@ -145,7 +153,7 @@ def interaction_figure(ds: xr.Dataset, response: str, a: str, b: str) -> Figure:
     y = ds[response]
     ax.set_ylabel(_label(y.attrs.get("long_name", response), y.attrs.get("units", "")))
     ax.legend(loc="best", fontsize="small")
-    fig.suptitle(f"Interaction {a} x {b} on {response}")
+    _title(fig, f"Interaction {a} × {b} on {response}")
     return fig
 
 

@@ -3,6 +3,7 @@
 :func:`save_scene_figures` dispatches on the ``scene`` attribute of a results Dataset and writes
 what the stored variables allow (nothing for scenes or studies without them):
 
+* ``cam`` — ``cam_curves.png`` (every stored curve over cam angle, a line per design point);
 * ``crank`` — ``torque_curve.png`` (engine or cylinder torque over crank angle, one line per
   engine speed), ``torque_harmonics.png`` (harmonic orders of the engine torque, FFT of the
   stored curve), ``approximation_error.png`` (two-term error vs λ, one line per speed);
@@ -556,8 +557,43 @@ def error_vs_cost_figure(ds: xr.Dataset) -> Figure | None:
     return fig
 
 
+# --- cam ------------------------------------------------------------------------------------
+MAX_LEGEND_RUNS = 12
+
+
+def cam_curves_figure(ds: xr.Dataset) -> Figure | None:
+    """Every stored cam curve over cam angle, one panel per curve, one line per design point."""
+    names = [str(v) for v in ds.data_vars if ds[v].dims == ("run", "cam_angle")]
+    if not names:
+        return None
+    factors = json.loads(ds.attrs.get("factors", "[]"))
+    fig = Figure(figsize=(6.0, 2.4 * len(names)), layout="constrained")
+    axes = fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
+    colours = _run_colours(ds.sizes["run"])
+    for ax, name in zip(axes, names, strict=True):
+        for run in range(ds.sizes["run"]):
+            label = ", ".join(
+                f"{f} {ds[f].values[run]:g} {ds[f].attrs.get('units', '')}" for f in factors
+            )
+            ax.plot(ds["cam_angle"], ds[name].isel(run=run), color=colours[run], lw=1, label=label)
+        ax.set_ylabel(f"{name} [{ds[name].attrs.get('units', '')}]")
+    axes[-1].set_xlabel(f"cam angle from the nose [{ds['cam_angle'].attrs.get('units', '')}]")
+    if ds.sizes["run"] <= MAX_LEGEND_RUNS:
+        axes[0].legend(fontsize="x-small", loc="upper right")
+    fig.suptitle("Cam curves per design point", fontsize="medium")
+    return fig
+
+
+def _run_colours(n: int) -> list[tuple[float, float, float, float]]:
+    from matplotlib import colormaps  # noqa: PLC0415  (only when a figure is drawn)
+
+    cmap = colormaps["viridis"]
+    return [cmap(i / max(n - 1, 1)) for i in range(n)]
+
+
 # --- dispatch -------------------------------------------------------------------------------
 FIGURES: dict[str, dict[str, Callable[[xr.Dataset], Figure | None]]] = {
+    "cam": {"cam_curves": cam_curves_figure},
     "crank": {
         "torque_curve": torque_curve_figure,
         "torque_harmonics": torque_harmonics_figure,
