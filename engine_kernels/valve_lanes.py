@@ -1,191 +1,237 @@
 """Valve dynamics [V2] for blocks of cases in SIMD lanes (SPEC §4, STYLE "Hot integrators").
 
-Same model, RK4 stepping, stability guard and outputs as
-:func:`engine_kernels.valve.valve_response` (plain RK4, no switch location): cases are taken
-``LANES`` at a time; inside a block every grid step loads the shared excitation once and then
-updates all lanes in a loop of branch-free arithmetic that the compiler turns into vector
-instructions. Per-lane data (coefficients, state, observations) live in rows of one flat
-array, so the lane loops read and write unit-stride rows the compiler knows are disjoint. Blocks run in a ``prange``; each writes only
-its own output rows. A block whose lanes need sub-steps runs the sub-stepped path for all its
-lanes, each with its own count (lanes past their count hold their state).
+Same model, plain fixed-step RK4, stability guard, observations and outputs as
+:func:`engine_kernels.valve.valve_response` (no switch location, no curves), with the same
+arithmetic, so both give the same numbers, ``LANES`` cases at a time. The cases are grouped
+by the RK4 sub-step count the stability guard gives each of them, so a block steps all its
+lanes together with one count while each case keeps exactly its own: a case's results do not
+depend on which other cases share its block. Every grid step reads the shared excitation once
+and then runs loops over the lanes: one observes the grid point, one takes the RK4 step (two
+loops run faster than one fused loop, which runs out of registers). Only when some lane's
+seat phase changed (first closure, a bounce) does a scalar loop record it.
 
-Use ``engine_kernels.valve.valve_response_batch`` for switch-aware stepping or curves.
+Per-lane data (coefficients per unit mass, state, observations) are rows of one flat array,
+row ``r`` of lane ``l`` at ``r·LANES + l``: with compile-time row offsets the compiler can
+prove that rows never overlap. What else keeps the lane loops vectorised (checked in
+tests/engine_kernels/test_valve_lanes.py): every helper called in them is inlined by Numba
+(``jit_inline``) and takes scalars or this array but calls nothing itself (Numba's builtin
+``max``/``min`` are calls: ``valve_model.larger`` and friends are selects), and no row is
+loaded under a condition. Blocks run in a ``prange``, in an order that spreads the costly
+(sub-stepped) ones over the threads; each block writes only its own cases' output rows.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from engine_kernels._jit import batch, jit, prange
-from engine_kernels.valve import (
-    ENERGY_INTERVAL,
-    ERROR_ORDER_DIVISOR,
-    N_STATS,
+from engine_kernels._jit import batch, jit, jit_inline, prange
+from engine_kernels.valve import ERROR_ORDER_DIVISOR, rk4_valve_step
+from engine_kernels.valve_guard import error_estimate_is_stable, prepare_case
+from engine_kernels.valve_model import (
     O_ERROR_ESTIMATE,
-    P_DRIVE_DAMPING,
-    P_DRIVE_STIFFNESS,
-    P_EXTERNAL_DAMPING,
     P_INITIAL_LIFT,
     P_INITIAL_VELOCITY,
     P_MASS,
-    P_PRELOAD,
-    P_SEAT_DAMPING,
-    P_SEAT_STIFFNESS,
-    P_SPEED,
-    P_SPRING_RATE,
     S_ESTIMATE_ERROR,
+    drive_push,
+    excitation_lift_slope,
+    specific_acceleration,
+    specific_coefficients,
+    specific_forces,
+)
+from engine_kernels.valve_observations import (
+    ENERGY_INTERVAL,
+    N_STATS,
     TRANSITION_BAND,
-    _rk4_step,
-    error_estimate_is_stable,
-    excitation_at,
     finish_observations,
-    observe_closure,
     observe_energy,
-    observe_extremes,
-    observe_power,
-    observe_separation,
-    observe_transitions,
-    prepare_case,
-    reset_observations,
-    valve_acceleration,
+    observe_valve,
+    record_closure_events,
+    start_observations,
 )
 
 LANES = 32
 
-# Rows of the flat per-block array: lane row r of lane l sits at r·LANES + l, followed by the
-# N_STATS observation rows. One flat array with compile-time offsets lets the compiler prove
-# that rows never overlap, which is what allows the lane loops to vectorise.
-_SPEED = 0
-_INV_MASS = 1
-_MASS = 2
-_K = 3
-_B = 4
-_KS = 5
-_PS0 = 6
-_KZ = 7
-_BZ = 8
-_GAMMA = 9
-_DEPTH = 10
-_TAU = 11
-_LIFT = 12
-_VELOCITY = 13
-_ACC = 14
-_SUBSTEPS = 15
-_DIFFERENCE = 16
-_LIFT0 = 17
-_VELOCITY0 = 18
-N_LANE_ROWS = 19
+# Rows of the flat per-block array, followed by the N_STATS observation rows. Coefficients
+# are per unit mass (see engine_kernels.valve_model.specific_coefficients).
+_K = 0
+_B = 1
+_KS = 2
+_PS0 = 3
+_KZ = 4
+_BZ = 5
+_GAMMA = 6
+_DEPTH = 7
+_SPEED = 8
+_B_SPEED = 9
+_BAND = 10
+_MASS = 11
+_TAU = 12
+_HALF_TAU = 13
+_SIXTH_TAU = 14
+_TIME_STEP = 15
+_LIFT = 16
+_VELOCITY = 17
+_ACC = 18
+_PREV_LIFT = 19
+_PREV_VELOCITY = 20
+_DIFFERENCE = 21
+N_LANE_ROWS = 22
 _STATS = N_LANE_ROWS * LANES
 
 
-@jit
-def _load_lanes(rows, steps, data):
-    """Fill the lane rows of ``data`` from ``LANES`` parameter rows and sub-step counts."""
-    for l in range(LANES):
-        row = rows[l]
-        data[_SPEED * LANES + l] = row[P_SPEED]
-        data[_MASS * LANES + l] = row[P_MASS]
-        data[_INV_MASS * LANES + l] = 1.0 / row[P_MASS]
-        data[_K * LANES + l] = row[P_DRIVE_STIFFNESS]
-        data[_B * LANES + l] = row[P_DRIVE_DAMPING]
-        data[_KS * LANES + l] = row[P_SPRING_RATE]
-        data[_PS0 * LANES + l] = row[P_PRELOAD]
-        data[_KZ * LANES + l] = row[P_SEAT_STIFFNESS]
-        data[_BZ * LANES + l] = row[P_SEAT_DAMPING]
-        data[_GAMMA * LANES + l] = row[P_EXTERNAL_DAMPING]
-        data[_DEPTH * LANES + l] = row[P_PRELOAD] / row[P_SEAT_STIFFNESS]
-        data[_SUBSTEPS * LANES + l] = steps[l]
-        data[_LIFT0 * LANES + l] = row[P_INITIAL_LIFT]
-        data[_VELOCITY0 * LANES + l] = row[P_INITIAL_VELOCITY]
+@jit_inline
+def _lane_forces(data, l, lift, velocity, push):
+    """Drive and seat forces per unit mass of lane ``l`` (``specific_forces``) [N/kg]."""
+    return specific_forces(
+        lift,
+        velocity,
+        push,
+        data[_K * LANES + l],
+        data[_B * LANES + l],
+        data[_PS0 * LANES + l],
+        data[_KZ * LANES + l],
+        data[_BZ * LANES + l],
+    )
+
+
+@jit_inline
+def _lane_acceleration(data, l, lift, velocity, drive, seat):
+    """Acceleration [m/s²] of lane ``l`` from its specific forces."""
+    return specific_acceleration(
+        lift,
+        velocity,
+        drive,
+        seat,
+        data[_KS * LANES + l],
+        data[_PS0 * LANES + l],
+        data[_GAMMA * LANES + l],
+        data[_DEPTH * LANES + l],
+    )
+
+
+@jit_inline
+def _lane_step(data, l, lift, velocity, acc, ym, sm, y1, s1):
+    """RK4 step of lane ``l`` from its first-stage ``acc``; excitation Y [m], Y' [m/rad]."""
+    k = data[_K * LANES + l]
+    b_speed = data[_B_SPEED * LANES + l]
+    lift, velocity = rk4_valve_step(
+        lift,
+        velocity,
+        acc,
+        data[_TAU * LANES + l],
+        data[_HALF_TAU * LANES + l],
+        data[_SIXTH_TAU * LANES + l],
+        drive_push(ym, sm, k, b_speed),
+        drive_push(y1, s1, k, b_speed),
+        k,
+        data[_B * LANES + l],
+        data[_KS * LANES + l],
+        data[_PS0 * LANES + l],
+        data[_KZ * LANES + l],
+        data[_BZ * LANES + l],
+        data[_GAMMA * LANES + l],
+        data[_DEPTH * LANES + l],
+    )
+    data[_LIFT * LANES + l] = lift
+    data[_VELOCITY * LANES + l] = velocity
 
 
 @jit
-def _observe_lanes(data, angle, drive_lift, drive_slope, ym, dm, y1, d1, advance):
-    """Observe every lane at a grid point and, if ``advance``, take its RK4 grid step.
-
-    The excitation (Y [m], Y' [m/rad]) is shared: at the grid point, its half step and its end.
-    Observation and step share one loop so each lane's data are loaded once per grid step.
-    """
+def _start_lanes(data, angle, drive_lift, slope):
+    """First grid point of every lane: acceleration into ``_ACC``, observations started."""
     for l in range(LANES):
-        speed = data[_SPEED * LANES + l]
         lift = data[_LIFT * LANES + l]
         velocity = data[_VELOCITY * LANES + l]
-        drive_velocity = speed * drive_slope
-        inv_mass = data[_INV_MASS * LANES + l]
+        push = drive_push(drive_lift, slope, data[_K * LANES + l], data[_B_SPEED * LANES + l])
+        drive, seat = _lane_forces(data, l, lift, velocity, push)
+        acc = _lane_acceleration(data, l, lift, velocity, drive, seat)
+        data[_ACC * LANES + l] = acc
+        start_observations(
+            data,
+            _STATS + l,
+            LANES,
+            angle,
+            lift,
+            velocity,
+            acc,
+            drive_lift,
+            data[_SPEED * LANES + l] * slope,
+            drive,
+            seat,
+            data[_DEPTH * LANES + l],
+        )
+
+
+@jit
+def _observe_lanes(data, angle, drive_lift, slope):
+    """Grid point of every lane: acceleration into ``_ACC``, observations updated.
+
+    Returns the number of lanes whose seat phase changed (``record_closure_events``).
+    """
+    events = 0
+    for l in range(LANES):
+        lift = data[_LIFT * LANES + l]
+        velocity = data[_VELOCITY * LANES + l]
+        push = drive_push(drive_lift, slope, data[_K * LANES + l], data[_B_SPEED * LANES + l])
+        drive, seat = _lane_forces(data, l, lift, velocity, push)
+        acc = _lane_acceleration(data, l, lift, velocity, drive, seat)
+        data[_ACC * LANES + l] = acc
+        event = observe_valve(
+            data,
+            _STATS + l,
+            LANES,
+            angle,
+            lift,
+            velocity,
+            acc,
+            drive_lift,
+            data[_SPEED * LANES + l] * slope,
+            drive,
+            seat,
+            data[_DEPTH * LANES + l],
+            data[_BAND * LANES + l],
+        )
+        events += 1 if event else 0
+    return events
+
+
+@jit
+def _record_events_lanes(data):
+    """Record closure and bounce events of every lane (scalar; only after an event)."""
+    for l in range(LANES):
+        record_closure_events(
+            data,
+            _STATS + l,
+            LANES,
+            data[_PREV_LIFT * LANES + l],
+            data[_PREV_VELOCITY * LANES + l],
+            data[_LIFT * LANES + l],
+            data[_VELOCITY * LANES + l],
+            data[_DEPTH * LANES + l],
+        )
+
+
+@jit
+def _energy_lanes(data, drive_lift, slope):
+    """Energy checks of every lane at a grid point (``observe_energy``)."""
+    for l in range(LANES):
+        lift = data[_LIFT * LANES + l]
+        velocity = data[_VELOCITY * LANES + l]
         k = data[_K * LANES + l]
-        b = data[_B * LANES + l]
-        ks = data[_KS * LANES + l]
-        ps0 = data[_PS0 * LANES + l]
-        kz = data[_KZ * LANES + l]
-        bz = data[_BZ * LANES + l]
-        gamma = data[_GAMMA * LANES + l]
-        depth = data[_DEPTH * LANES + l]
-        acc = valve_acceleration(
+        push = drive_push(drive_lift, slope, k, data[_B_SPEED * LANES + l])
+        drive, _ = _lane_forces(data, l, lift, velocity, push)
+        observe_energy(
+            data,
+            _STATS + l,
+            LANES,
+            data[_TIME_STEP * LANES + l],
             lift,
             velocity,
             drive_lift,
-            drive_velocity,
-            inv_mass,
+            data[_SPEED * LANES + l] * slope,
+            drive,
             k,
-            b,
-            ks,
-            ps0,
-            kz,
-            bz,
-            gamma,
-            depth,
-        )
-        data[_ACC * LANES + l] = acc
-        # observe_valve piece by piece: each piece inlines, so this loop vectorises.
-        at = _STATS + l
-        drive = k * (drive_lift - lift) + b * (drive_velocity - velocity)
-        seat = kz * (depth - lift) - bz * velocity
-        observe_extremes(data, at, LANES, lift, velocity, acc, drive)
-        observe_separation(data, at, LANES, angle, lift, drive_lift, drive, depth)
-        observe_closure(data, at, LANES, lift, velocity, depth)
-        observe_transitions(data, at, LANES, lift, drive, seat, depth, TRANSITION_BAND * ps0)
-        observe_power(data, at, LANES, drive, drive_velocity)
-        if advance:
-            lift, velocity = _rk4_step(
-                lift,
-                velocity,
-                acc,
-                data[_TAU * LANES + l],
-                ym,
-                speed * dm,
-                y1,
-                speed * d1,
-                inv_mass,
-                k,
-                b,
-                ks,
-                ps0,
-                kz,
-                bz,
-                gamma,
-                depth,
-            )
-            data[_LIFT * LANES + l] = lift
-            data[_VELOCITY * LANES + l] = velocity
-
-
-@jit
-def _observe_energy_lanes(data, grid_step, drive_lift, drive_slope):
-    """Energy checks for every lane (see ``observe_energy``)."""
-    for l in range(LANES):
-        speed = data[_SPEED * LANES + l]
-        observe_energy(
-            data,
-            _STATS,
-            l,
-            LANES,
-            grid_step / speed,
-            data[_LIFT * LANES + l],
-            data[_VELOCITY * LANES + l],
-            drive_lift,
-            speed * drive_slope,
-            data[_MASS * LANES + l],
-            data[_K * LANES + l],
             data[_KS * LANES + l],
             data[_PS0 * LANES + l],
             data[_KZ * LANES + l],
@@ -194,168 +240,212 @@ def _observe_energy_lanes(data, grid_step, drive_lift, drive_slope):
 
 
 @jit
-def _substep_lanes(data, excitation, table_step, node, half, j):
-    """Sub-step ``j`` of a grid step for every lane, each with its own sub-step count.
+def _step_lanes(data, ym, sm, y1, s1):
+    """RK4 grid step of every lane from the acceleration in ``_ACC``.
 
-    Lanes past their count keep their state; the excitation is interpolated per lane.
+    Keeps the state it starts from in ``_PREV_*`` (for ``record_closure_events``).
     """
     for l in range(LANES):
-        steps = data[_SUBSTEPS * LANES + l]
-        active = j < steps
-        stage = j if active else 0
-        speed = data[_SPEED * LANES + l]
-        ya, yda = excitation_at(excitation, table_step, node + 2.0 * half * stage / steps, speed)
-        ym, ydm = excitation_at(
-            excitation, table_step, node + 2.0 * half * (stage + 0.5) / steps, speed
-        )
-        yb, ydb = excitation_at(
-            excitation, table_step, node + 2.0 * half * (stage + 1) / steps, speed
-        )
         lift = data[_LIFT * LANES + l]
         velocity = data[_VELOCITY * LANES + l]
-        inv_mass = data[_INV_MASS * LANES + l]
-        k = data[_K * LANES + l]
-        b = data[_B * LANES + l]
-        ks = data[_KS * LANES + l]
-        ps0 = data[_PS0 * LANES + l]
-        kz = data[_KZ * LANES + l]
-        bz = data[_BZ * LANES + l]
-        gamma = data[_GAMMA * LANES + l]
-        depth = data[_DEPTH * LANES + l]
-        acc = valve_acceleration(
-            lift, velocity, ya, yda, inv_mass, k, b, ks, ps0, kz, bz, gamma, depth
-        )
-        new_lift, new_velocity = _rk4_step(
-            lift,
-            velocity,
-            acc,
-            data[_TAU * LANES + l],
-            ym,
-            ydm,
-            yb,
-            ydb,
-            inv_mass,
-            k,
-            b,
-            ks,
-            ps0,
-            kz,
-            bz,
-            gamma,
-            depth,
-        )
-        data[_LIFT * LANES + l] = new_lift if active else lift
-        data[_VELOCITY * LANES + l] = new_velocity if active else velocity
+        data[_PREV_LIFT * LANES + l] = lift
+        data[_PREV_VELOCITY * LANES + l] = velocity
+        _lane_step(data, l, lift, velocity, data[_ACC * LANES + l], ym, sm, y1, s1)
 
 
 @jit
-def _lane_pass(excitation, table_step, table_start, half, data, trace, compare):
+def _remember_lanes(data):
+    """Keep the state of every lane at a grid point in ``_PREV_*`` before sub-stepping."""
+    for l in range(LANES):
+        data[_PREV_LIFT * LANES + l] = data[_LIFT * LANES + l]
+        data[_PREV_VELOCITY * LANES + l] = data[_VELOCITY * LANES + l]
+
+
+@jit
+def _substep_lanes(data, ya, sa, ym, sm, yb, sb):
+    """RK4 sub-step of every lane; excitation at its start, middle and end."""
+    for l in range(LANES):
+        lift = data[_LIFT * LANES + l]
+        velocity = data[_VELOCITY * LANES + l]
+        push = drive_push(ya, sa, data[_K * LANES + l], data[_B_SPEED * LANES + l])
+        drive, seat = _lane_forces(data, l, lift, velocity, push)
+        acc = _lane_acceleration(data, l, lift, velocity, drive, seat)
+        _lane_step(data, l, lift, velocity, acc, ym, sm, yb, sb)
+
+
+@jit
+def _record_lanes(data, trace, n, compare):
+    """Record the lift of every lane at grid point ``n`` or compare with a finer trace."""
+    for l in range(LANES):
+        lift = data[_LIFT * LANES + l]
+        if compare:
+            difference = abs(lift - trace[2 * n, l])
+            data[_DIFFERENCE * LANES + l] = max(data[_DIFFERENCE * LANES + l], difference)
+        else:
+            trace[n, l] = lift
+
+
+@jit
+def _lane_pass(excitation, table_step, table_start, half, substeps, params, cases, data, trace):
     """Integrate all lanes of a block at RK4 grid step ``2·half·table_step``.
 
-    Records the lift per grid point in ``trace`` (grid point × lane) or, with ``compare``,
-    keeps the largest difference from a trace recorded at half this step in ``_DIFFERENCE``.
+    substeps : int  RK4 sub-steps per grid step, the same for every lane of the block.
+    cases    : 1-D int64  Parameter rows of the lanes (their initial state).
+    Records the lift per grid point in ``trace`` (grid point × lane) when ``half`` is 1 or,
+    when it is 2, keeps the largest difference from that trace in ``_DIFFERENCE``.
     """
     n_steps = (excitation.shape[1] - 1) // (2 * half)
     grid_step = 2.0 * half * table_step
     record = trace.shape[0] > 0
-    most = 1
+    compare = half == 2
     for l in range(LANES):
-        data[_LIFT * LANES + l] = data[_LIFT0 * LANES + l]
-        data[_VELOCITY * LANES + l] = data[_VELOCITY0 * LANES + l]
+        speed = data[_SPEED * LANES + l]
+        tau = grid_step / speed / substeps
+        data[_TAU * LANES + l] = tau
+        data[_HALF_TAU * LANES + l] = 0.5 * tau
+        data[_SIXTH_TAU * LANES + l] = tau / 6.0
+        data[_TIME_STEP * LANES + l] = grid_step / speed
+        data[_LIFT * LANES + l] = params[cases[l], P_INITIAL_LIFT]
+        data[_VELOCITY * LANES + l] = params[cases[l], P_INITIAL_VELOCITY]
         data[_DIFFERENCE * LANES + l] = 0.0
-        data[_TAU * LANES + l] = grid_step / data[_SPEED * LANES + l] / data[_SUBSTEPS * LANES + l]
-        most = max(most, int(data[_SUBSTEPS * LANES + l]))
-        reset_observations(
-            data, _STATS, l, LANES, data[_LIFT * LANES + l], data[_VELOCITY * LANES + l]
-        )
     for n in range(n_steps + 1):
         node = 2 * half * n
         drive_lift = excitation[0, node]
-        drive_slope = excitation[1, node]
-        if n % ENERGY_INTERVAL == 0:
-            _observe_energy_lanes(data, grid_step, drive_lift, drive_slope)
-        if record:
-            for l in range(LANES):
-                lift = data[_LIFT * LANES + l]
-                if compare:
-                    data[_DIFFERENCE * LANES + l] = max(
-                        data[_DIFFERENCE * LANES + l], abs(lift - trace[2 * n, l])
-                    )
-                else:
-                    trace[n, l] = lift
+        slope = excitation[1, node]
         angle = table_start + n * grid_step
-        if n == n_steps or most > 1:
-            _observe_lanes(data, angle, drive_lift, drive_slope, 0.0, 0.0, 0.0, 0.0, False)
-            if n == n_steps:
-                _observe_energy_lanes(data, grid_step, drive_lift, drive_slope)
-            if n < n_steps:
-                for j in range(most):
-                    _substep_lanes(data, excitation, table_step, node, half, j)
-        else:
-            _observe_lanes(
+        if record:
+            _record_lanes(data, trace, n, compare)
+        if n == 0:
+            _start_lanes(data, angle, drive_lift, slope)
+        elif _observe_lanes(data, angle, drive_lift, slope) > 0:
+            _record_events_lanes(data)
+        if n % ENERGY_INTERVAL == 0 or n == n_steps:
+            _energy_lanes(data, drive_lift, slope)
+        if n == n_steps:
+            break
+        if substeps == 1:
+            _step_lanes(
                 data,
-                angle,
-                drive_lift,
-                drive_slope,
                 excitation[0, node + half],
                 excitation[1, node + half],
                 excitation[0, node + 2 * half],
                 excitation[1, node + 2 * half],
-                True,
             )
+            continue
+        _remember_lanes(data)
+        for j in range(substeps):
+            ya, sa = excitation_lift_slope(excitation, table_step, node + 2.0 * half * j / substeps)
+            ym, sm = excitation_lift_slope(
+                excitation, table_step, node + 2.0 * half * (j + 0.5) / substeps
+            )
+            yb, sb = excitation_lift_slope(
+                excitation, table_step, node + 2.0 * half * (j + 1) / substeps
+            )
+            _substep_lanes(data, ya, sa, ym, sm, yb, sb)
 
 
 @jit
-def _lane_block(excitation, table_step, table_start, params, settings, first, out):
-    """Prepare, integrate and report one block of up to ``LANES`` cases."""
-    count = min(LANES, params.shape[0] - first)
-    substeps = np.zeros(LANES, dtype=np.int64)
-    runnable = -1
-    for l in range(count):
-        substeps[l] = prepare_case(
-            excitation, table_step, params[first + l], settings, out[first + l]
-        )
-        if substeps[l] > 0 and runnable < 0:
-            runnable = l
-    if runnable < 0:
-        return
-    # Lanes that must not run (padding, invalid, over the sub-step cap) copy a runnable one,
-    # so they can neither fail nor slow the block down; their results are not written.
-    rows = np.empty((LANES, params.shape[1]))
-    steps = np.empty(LANES, dtype=np.int64)
-    for l in range(LANES):
-        source = l if (l < count and substeps[l] > 0) else runnable
-        rows[l] = params[first + source]
-        steps[l] = substeps[source]
-    grid_step = 2.0 * table_step
+def _lane_block(excitation, table_step, table_start, params, settings, block, substeps, out):
+    """Integrate and report one block: up to ``LANES`` cases with the same sub-step count.
+
+    block : 1-D int64  Row indices of the block's cases in ``params`` and ``out``.
+    Lanes past the block's cases repeat its first case; their results are not written.
+    """
+    count = block.shape[0]
+    cases = np.empty(LANES, dtype=np.int64)
     data = np.empty((N_LANE_ROWS + N_STATS) * LANES)
-    _load_lanes(rows, steps, data)
+    for l in range(LANES):
+        cases[l] = block[l if l < count else 0]
+        k, b, ks, ps0, kz, bz, gamma, depth, speed, b_speed = specific_coefficients(
+            params[cases[l]]
+        )
+        data[_K * LANES + l] = k
+        data[_B * LANES + l] = b
+        data[_KS * LANES + l] = ks
+        data[_PS0 * LANES + l] = ps0
+        data[_KZ * LANES + l] = kz
+        data[_BZ * LANES + l] = bz
+        data[_GAMMA * LANES + l] = gamma
+        data[_DEPTH * LANES + l] = depth
+        data[_SPEED * LANES + l] = speed
+        data[_B_SPEED * LANES + l] = b_speed
+        data[_BAND * LANES + l] = TRANSITION_BAND * ps0
+        data[_MASS * LANES + l] = params[cases[l], P_MASS]
     estimate = settings[S_ESTIMATE_ERROR] != 0 and excitation.shape[1] >= 5
     trace = np.empty(((excitation.shape[1] - 1) // 2 + 1 if estimate else 0, LANES))
-    _lane_pass(excitation, table_step, table_start, 1, data, trace, False)
+    _lane_pass(excitation, table_step, table_start, 1, substeps, params, cases, data, trace)
     for l in range(count):
-        if substeps[l] > 0:
-            finish_observations(
-                data,
-                _STATS,
-                l,
-                LANES,
-                grid_step,
-                data[_LIFT * LANES + l],
-                data[_VELOCITY * LANES + l],
-                data[_PS0 * LANES + l],
-                data[_DEPTH * LANES + l],
-                out[first + l],
-            )
-    if estimate:
-        _lane_pass(excitation, table_step, table_start, 2, data, trace, True)
-        for l in range(count):
-            if substeps[l] > 0 and error_estimate_is_stable(
-                params[first + l], table_step, substeps[l], settings
-            ):
-                out[first + l, O_ERROR_ESTIMATE] = (
-                    data[_DIFFERENCE * LANES + l] / ERROR_ORDER_DIVISOR
-                )
+        finish_observations(
+            data,
+            _STATS + l,
+            LANES,
+            2.0 * table_step,
+            data[_LIFT * LANES + l],
+            data[_VELOCITY * LANES + l],
+            data[_MASS * LANES + l],
+            data[_PS0 * LANES + l],
+            data[_DEPTH * LANES + l],
+            out[cases[l]],
+        )
+    if not estimate:
+        return
+    _lane_pass(excitation, table_step, table_start, 2, substeps, params, cases, data, trace)
+    for l in range(count):
+        if error_estimate_is_stable(params[cases[l]], table_step, substeps, settings):
+            out[cases[l], O_ERROR_ESTIMATE] = data[_DIFFERENCE * LANES + l] / ERROR_ORDER_DIVISOR
+
+
+@jit
+def block_starts(substeps, order):
+    """Split cases sorted by sub-step count into blocks of ≤ ``LANES`` with one count each.
+
+    substeps : 1-D int64  Sub-steps per case from the stability guard (0: not integrated).
+    order    : 1-D int64  Case indices sorted by ``substeps``.
+    Returns the block boundaries as positions in ``order`` (block b is
+    ``order[starts[b]:starts[b + 1]]``); cases with 0 sub-steps are left out.
+    """
+    n = order.shape[0]
+    starts = np.empty(n + 1, dtype=np.int64)
+    blocks = 0
+    i = 0
+    while i < n and substeps[order[i]] == 0:
+        i += 1
+    while i < n:
+        starts[blocks] = i
+        blocks += 1
+        count = substeps[order[i]]
+        end = min(i + LANES, n)
+        i += 1
+        while i < end and substeps[order[i]] == count:
+            i += 1
+    starts[blocks] = n
+    return starts[: blocks + 1]
+
+
+@jit
+def spread_order(n):
+    """The integers 0…n−1 in bit-reversed (van der Corput) order.
+
+    Every contiguous run of the result samples the whole range about evenly, so when blocks
+    sorted by cost are run in this order, any contiguous share of a ``prange`` (Numba gives
+    each thread one) gets a fair mix of cheap and costly blocks.
+    Reference: Niederreiter, *Random Number Generation and Quasi-Monte Carlo Methods*, §3.1.
+    """
+    bits = 0
+    while (1 << bits) < n:
+        bits += 1
+    order = np.empty(n, dtype=np.int64)
+    count = 0
+    for i in range(1 << bits):
+        reversed_i = 0
+        rest = i
+        for _ in range(bits):
+            reversed_i = (reversed_i << 1) | (rest & 1)
+            rest >>= 1
+        if reversed_i < n:
+            order[count] = reversed_i
+            count += 1
+    return order
 
 
 @batch
@@ -366,6 +456,16 @@ def valve_response_lanes(excitation, table_step, table_start, params, settings, 
     (``settings[S_SWITCH_AWARE]`` is ignored: this kernel is plain fixed-step RK4).
     Reference: SPEC §4; STYLE "Hot integrators process a block of cases in SIMD lanes".
     """
-    n_blocks = (params.shape[0] + LANES - 1) // LANES
-    for block in prange(n_blocks):
-        _lane_block(excitation, table_step, table_start, params, settings, block * LANES, out)
+    n_cases = params.shape[0]
+    substeps = np.empty(n_cases, dtype=np.int64)
+    for i in prange(n_cases):
+        substeps[i] = prepare_case(excitation, table_step, params[i], settings, out[i])
+    order = np.argsort(substeps, kind="mergesort")
+    starts = block_starts(substeps, order)
+    schedule = spread_order(starts.shape[0] - 1)
+    for i in prange(schedule.shape[0]):
+        b = schedule[i]
+        block = order[starts[b] : starts[b + 1]]
+        _lane_block(
+            excitation, table_step, table_start, params, settings, block, substeps[block[0]], out
+        )

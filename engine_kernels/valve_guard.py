@@ -1,0 +1,126 @@
+"""Stability guard of the valve integrators: input checks and RK4 sub-step counts (SPEC §4).
+
+Explicit RK4 is stable only while ``|h λ|`` stays inside its stability region for every
+eigenvalue of the active linear system. Before a case is integrated, the largest eigenvalue
+modulus over the four linear modes of [V2] (contact+seat, contact, seat, free) sets the
+number of equal sub-steps that keeps ``|h λ| ≤ STEP_RATIO_TARGET`` (2.0, a margin under
+``RK4_STABILITY_BOUND`` = 2.6); past ``max_substeps`` the case is not integrated and its
+status is ``STATUS_SUBSTEP_LIMIT`` (with the needed count in ``O_SUBSTEPS``). The check of the
+run itself, from the physics, is in :mod:`engine_kernels.valve_observations`.
+"""
+
+from __future__ import annotations
+
+import math
+
+from engine_kernels._jit import jit
+from engine_kernels.rk4 import stable_substeps
+from engine_kernels.valve_model import (
+    O_STATUS,
+    O_STEP_RATIO,
+    O_SUBSTEPS,
+    P_DRIVE_DAMPING,
+    P_DRIVE_STIFFNESS,
+    P_EXTERNAL_DAMPING,
+    P_MASS,
+    P_SEAT_DAMPING,
+    P_SEAT_STIFFNESS,
+    P_SPEED,
+    P_SPRING_RATE,
+    S_MAX_SUBSTEPS,
+    S_STABILITY_GUARD,
+    STATUS_INVALID_INPUT,
+    STATUS_SUBSTEP_LIMIT,
+    valve_spectral_radius,
+)
+
+# Sub-steps keep |h λ| at or below this, with a margin under RK4_STABILITY_BOUND: each linear
+# mode is stable up to the bound, but the switching, clipped system still pumps energy at
+# hard seat impacts when a mode sits right at it.
+STEP_RATIO_TARGET = 2.0
+
+
+@jit
+def valid_valve_parameters(params, excitation):
+    """True if the parameter row and excitation table can be integrated (SPEC §4 inputs).
+
+    params     : 1-D array  Parameter row (``P_*``, SI units).
+    excitation : 2-D array  Excitation table (3, n); at least one RK4 step (n ≥ 3).
+    """
+    for c in range(params.shape[0]):
+        if not math.isfinite(params[c]):
+            return False
+    if params[P_SPEED] <= 0.0 or params[P_MASS] <= 0.0 or params[P_SEAT_STIFFNESS] <= 0.0:
+        return False
+    for c in (
+        P_DRIVE_STIFFNESS,
+        P_DRIVE_DAMPING,
+        P_SPRING_RATE,
+        P_SEAT_DAMPING,
+        P_EXTERNAL_DAMPING,
+    ):
+        if params[c] < 0.0:
+            return False
+    return excitation.shape[1] >= 3
+
+
+@jit
+def stability_substeps(params, grid_step):
+    """Sub-steps per grid step needed by the RK4 bound, and ``|h λ|_max`` of the full step.
+
+    params    : 1-D array  Parameter row (``P_*``).
+    grid_step : float      Grid step Δθ [rad]; the time step is Δθ/ω.
+    """
+    radius = valve_spectral_radius(
+        params[P_MASS],
+        params[P_DRIVE_STIFFNESS],
+        params[P_DRIVE_DAMPING],
+        params[P_SPRING_RATE],
+        params[P_SEAT_STIFFNESS],
+        params[P_SEAT_DAMPING],
+        params[P_EXTERNAL_DAMPING],
+    )
+    step = grid_step / params[P_SPEED]
+    return stable_substeps(step, radius, STEP_RATIO_TARGET), step * radius
+
+
+@jit
+def prepare_case(excitation, table_step, params, settings, out):
+    """Validate one case and apply the stability guard before integrating it.
+
+    Sets every output to NaN, then ``O_SUBSTEPS`` and ``O_STEP_RATIO`` (|h λ|_max per
+    sub-step), and the status if the case cannot run. Returns the RK4 sub-steps per grid step,
+    or 0 when the case must not be integrated (``STATUS_INVALID_INPUT`` or
+    ``STATUS_SUBSTEP_LIMIT``, the needed count left in ``O_SUBSTEPS``).
+
+    excitation : 2-D array  Excitation table (3, n) at spacing ``table_step`` [m, m/rad, m/rad²].
+    table_step : float      Table spacing [rad]; the RK4 grid step is twice it.
+    params     : 1-D array  Parameter row (``P_*``).
+    settings   : 1-D int64  ``S_*`` settings.
+    out        : 1-D array  Output row (``O_*``).
+    """
+    out[:] = math.nan
+    if not valid_valve_parameters(params, excitation):
+        out[O_STATUS] = STATUS_INVALID_INPUT
+        return 0
+    needed, ratio = stability_substeps(params, 2.0 * table_step)
+    guard = settings[S_STABILITY_GUARD] != 0
+    substeps = needed if guard else 1
+    out[O_SUBSTEPS] = needed
+    out[O_STEP_RATIO] = ratio / substeps
+    if guard and needed > settings[S_MAX_SUBSTEPS]:
+        out[O_STATUS] = STATUS_SUBSTEP_LIMIT
+        return 0
+    out[O_SUBSTEPS] = substeps
+    return substeps
+
+
+@jit
+def error_estimate_is_stable(params, table_step, substeps, settings):
+    """True if the step-doubling run (each sub-step twice as long) keeps the RK4 bound.
+
+    Where it would not, the estimate means nothing and ``O_ERROR_ESTIMATE`` stays NaN.
+    Arguments as in :func:`prepare_case`; ``substeps`` is the count it returned.
+    """
+    coarse, _ = stability_substeps(params, 4.0 * table_step)
+    return coarse <= substeps or settings[S_STABILITY_GUARD] == 0

@@ -1,0 +1,166 @@
+"""Valve dynamics [V2] in SIMD lanes: same numbers as the one-case kernel, vectorised loops.
+
+The expected values come from the one-case kernel (``valve.valve_response_batch``): the same
+model, arithmetic and observations integrated one case at a time with plain loops and
+branches, an independent second implementation of the block-and-lane bookkeeping. Reference
+valve train as in test_valve.py (SPEC §4 thesis data plus stated assumptions).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numba
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import settings as hypothesis_settings
+from hypothesis import strategies as st
+
+from engine_kernels import valve, valve_lanes
+from engine_kernels._jit import FASTMATH
+
+RPM = 2 * math.pi / 60
+MASS = 0.033 + 0.015 / 3 + 5e-6 / 33.28e-3**2
+PARAMS = np.array([3500 * RPM, MASS, 1.17e7, 150.0, 3.0e4, 205.8, 5.0e7, 900.0, 0.0, 0.0, 0.0])
+HEIGHT, HALF = 4e-3, 1.4  # 1 - cos event: Y = HEIGHT (1 + cos(pi theta / HALF)), |theta| < HALF
+
+
+def cosine_event_table(step_deg, start_deg=-100.0, stop_deg=110.0):
+    """Excitation table at half the RK4 step (SPEC §9): rows Y, Y', Y''."""
+    theta = np.radians(np.arange(start_deg, stop_deg + step_deg / 4, step_deg / 2))
+    wave = math.pi / HALF
+    inside = np.abs(theta) < HALF
+    rows = (
+        np.where(inside, HEIGHT * (1 + np.cos(wave * theta)), 0.0),
+        np.where(inside, -HEIGHT * wave * np.sin(wave * theta), 0.0),
+        np.where(inside, -HEIGHT * wave**2 * np.cos(wave * theta), 0.0),
+    )
+    return np.stack(rows), math.radians(step_deg / 2), theta[0]
+
+
+def mixed_batch(n, seed):
+    """Cases that separate, bounce, need sub-steps, hit the sub-step cap or are invalid."""
+    rng = np.random.default_rng(seed)
+    rows = np.tile(PARAMS, (n, 1))
+    rows[:, valve.P_SPEED] = rng.uniform(300, 9000, n) * RPM
+    rows[:, valve.P_SPRING_RATE] = rng.uniform(1e4, 6e4, n)
+    rows[:, valve.P_SEAT_DAMPING] = rng.uniform(0.0, 900.0, n)
+    rows[::9, valve.P_SEAT_STIFFNESS] = 1e10
+    rows[3, valve.P_MASS] = -1.0
+    rows[5, valve.P_SPEED] = 20 * RPM
+    rows[9, valve.P_SPEED] = 20 * RPM
+    return rows
+
+
+def run_both(rows, settings, step_deg=0.5):
+    excitation, step, start = cosine_event_table(step_deg)
+    single = np.empty((rows.shape[0], len(valve.VALVE_OUTPUT_NAMES)))
+    lanes = np.empty_like(single)
+    valve.valve_response_batch(excitation, step, start, rows, settings, single)
+    valve_lanes.valve_response_lanes(excitation, step, start, rows, settings, lanes)
+    return single, lanes
+
+
+def test_lanes_match_one_case_kernel():
+    # 75 cases: two full blocks of 32 and a partial one before grouping by sub-step count.
+    rows = mixed_batch(75, 7)
+    single, lanes = run_both(rows, valve.valve_settings(estimate_error=True))
+    status = single[:, valve.O_STATUS]
+    covered = {valve.STATUS_OK, valve.STATUS_SUBSTEP_LIMIT, valve.STATUS_INVALID_INPUT}
+    assert covered <= set(status)
+    assert (single[:, valve.O_SUBSTEPS] > 1).any()
+    assert (single[:, valve.O_JUMP_DURATION] > 0).any()
+    assert (single[:, valve.O_BOUNCE_COUNT] > 0).any()
+    assert np.isfinite(single[:, valve.O_ERROR_ESTIMATE]).any()
+    np.testing.assert_array_equal(lanes[:, valve.O_STATUS], status)
+    # Same arithmetic in both kernels: agreement to round-off (here even bit for bit).
+    np.testing.assert_allclose(lanes, single, rtol=1e-12, atol=0.0)
+
+
+def test_lane_results_do_not_depend_on_block_neighbours():
+    # Each case keeps its own sub-step count, whatever cases share its block: a shuffled
+    # batch and cases run alone give exactly the same rows.
+    rows = mixed_batch(40, 11)
+    excitation, step, start = cosine_event_table(0.5)
+    settings = valve.valve_settings()
+    together = np.empty((rows.shape[0], len(valve.VALVE_OUTPUT_NAMES)))
+    valve_lanes.valve_response_lanes(excitation, step, start, rows, settings, together)
+    order = np.random.default_rng(3).permutation(rows.shape[0])
+    shuffled = np.empty_like(together)
+    valve_lanes.valve_response_lanes(excitation, step, start, rows[order], settings, shuffled)
+    np.testing.assert_array_equal(shuffled, together[order])
+    for i in (0, 5, 17):
+        alone = np.empty((1, together.shape[1]))
+        valve_lanes.valve_response_lanes(excitation, step, start, rows[i : i + 1], settings, alone)
+        np.testing.assert_array_equal(alone[0], together[i])
+
+
+def test_lane_driver_as_plain_python_gives_the_same_rows():
+    # The batch driver (guard, grouping, block order, prange) run as plain Python around the
+    # compiled blocks: a check of its bookkeeping independent of Numba's parallel lowering.
+    rows = mixed_batch(40, 5)
+    excitation, step, start = cosine_event_table(1.0)
+    settings = valve.valve_settings(estimate_error=True)
+    compiled = np.empty((rows.shape[0], len(valve.VALVE_OUTPUT_NAMES)))
+    python = np.empty_like(compiled)
+    valve_lanes.valve_response_lanes(excitation, step, start, rows, settings, compiled)
+    valve_lanes.valve_response_lanes.py_func(excitation, step, start, rows, settings, python)
+    np.testing.assert_array_equal(python, compiled)
+
+
+def test_lanes_handle_batches_without_runnable_cases():
+    excitation, step, start = cosine_event_table(0.5)
+    settings = valve.valve_settings()
+    empty = np.empty((0, len(valve.VALVE_OUTPUT_NAMES)))
+    valve_lanes.valve_response_lanes(excitation, step, start, np.empty((0, 11)), settings, empty)
+    refused = np.tile(PARAMS, (3, 1))
+    refused[:, valve.P_MASS] = 0.0
+    out = np.zeros((3, len(valve.VALVE_OUTPUT_NAMES)))
+    valve_lanes.valve_response_lanes(excitation, step, start, refused, settings, out)
+    assert (out[:, valve.O_STATUS] == valve.STATUS_INVALID_INPUT).all()
+    assert np.isnan(out[:, valve.O_MAX_LIFT]).all()
+
+
+@hypothesis_settings(max_examples=40, deadline=None)
+@given(st.lists(st.integers(min_value=0, max_value=4), max_size=150))
+def test_blocks_hold_one_substep_count_each(counts):
+    # Closed form: a count held by c cases fills ceil(c / LANES) blocks; refused cases (0)
+    # get none.
+    substeps = np.array(counts, dtype=np.int64)
+    order = np.argsort(substeps, kind="mergesort")
+    starts = valve_lanes.block_starts(substeps, order)
+    blocks = [order[a:b] for a, b in itertools.pairwise(starts)]
+    assert all(0 < len(block) <= valve_lanes.LANES for block in blocks)
+    assert all(len(set(substeps[block])) == 1 for block in blocks)
+    cases = np.concatenate(blocks) if blocks else np.empty(0, dtype=np.int64)
+    assert sorted(cases.tolist()) == np.flatnonzero(substeps).tolist()
+    expected = sum(math.ceil(np.sum(substeps == c) / valve_lanes.LANES) for c in range(1, 5))
+    assert len(blocks) == expected
+
+
+def test_spread_order_balances_contiguous_shares():
+    # Numba splits a prange into equal contiguous shares, one per thread. Blocks sorted by
+    # cost and run in this order must give each half a fair mix: the mean sorted index of
+    # either half stays near the middle (the plain order would be off by n/4).
+    for n in range(1, 200):
+        order = valve_lanes.spread_order(n)
+        assert sorted(order.tolist()) == list(range(n))
+        if n >= 8:
+            for half in np.array_split(order, 2):
+                assert abs(half.mean() - (n - 1) / 2) <= 0.07 * n
+
+
+@pytest.mark.parametrize("loop", ["_observe_lanes", "_step_lanes", "_substep_lanes"])
+def test_lane_loops_vectorise(loop):
+    # The point of the lane kernel (STYLE, "Hot integrators"): each loop over lanes must
+    # compile to vector arithmetic. A call or a load under a branch in the loop body stops
+    # that silently, so look at the LLVM IR of a fresh (uncached) compilation.
+    function = getattr(valve_lanes, loop).py_func
+    compiled = numba.njit(fastmath=FASTMATH)(function)
+    data = np.zeros((valve_lanes.N_LANE_ROWS + valve.N_STATS) * valve_lanes.LANES)
+    arguments = {"_observe_lanes": 3, "_step_lanes": 4, "_substep_lanes": 6}[loop]
+    compiled(data, *([0.0] * arguments))
+    llvm = compiled.inspect_llvm(compiled.signatures[0])
+    assert " x double>" in llvm
