@@ -16,11 +16,12 @@ from typing import Any
 
 import numpy as np
 
+from engine_kernels import valve, valve_lanes
 from studies import provenance, tracking
 from studies.plan import Plan, plan_text
 from studies.runner import evaluate_chunk
 from studies.scenes.rocker import grid_deg
-from studies.scenes.valve import ValveScene, valve_rows
+from studies.scenes.valve import ValveScene, kernel_settings, valve_rows
 from studies.valve_accuracy import reference_lift
 
 CAM_STUDY = """
@@ -100,9 +101,10 @@ def _valve_plan(integrator: str, cases: int, step: float) -> Plan:
 
 
 def bench_valve(cases: int, step: float, repeat: int) -> dict[str, Any]:
-    """Valve cases/s: the lane kernel vs one case per prange iteration (same RK4, same run),
-    the switch-aware RK4, and scipy's event-restarted DOP853 (the accuracy reference)."""
-    figures: dict[str, Any] = {}
+    """Valve cases/s: the lane kernel vs one case per prange iteration on identical inputs
+    (kernel only, and end to end through the study engine), the switch-aware RK4, and scipy's
+    event-restarted DOP853 (the accuracy reference)."""
+    figures: dict[str, Any] = {"kernel": _valve_kernels(cases, step, repeat)}
     for integrator, n in [
         ("lanes", cases),
         ("rk4", cases),
@@ -110,25 +112,21 @@ def bench_valve(cases: int, step: float, repeat: int) -> dict[str, Any]:
     ]:
         plan = _valve_plan(integrator, n, step)
         seconds = best_time(partial(evaluate_chunk, plan, slice(0, plan.runs)), repeat)
-        figures[integrator] = {
+        figures[f"scene_{integrator}"] = {
             "cases": plan.runs,
             "seconds": seconds,
             "cases_per_s": plan.runs / seconds,
         }
-    figures["lanes_over_one_case_speedup"] = (
-        figures["lanes"]["cases_per_s"] / figures["rk4"]["cases_per_s"]
+    figures["scene_lanes_over_one_case"] = (
+        figures["scene_lanes"]["cases_per_s"] / figures["scene_rk4"]["cases_per_s"]
     )
-    plan = plan_text(
+    scene, ctx, key, idx = _valve_case(
         VALVE_STUDY.format(integrator="rk4", step=step, speeds=list(SCIPY_SPEEDS), preloads=[205.8])
     )
-    scene = plan.scene
-    assert isinstance(scene, ValveScene)
-    ctx = scene.context(plan.points, plan.settings, [], [])
-    ((key, idx),) = ctx["groups"].items()
     excitation = scene.excitation(ctx, key, step)
     start, stop = scene.window(ctx, key)
     theta = np.radians(grid_deg(start, step, stop))
-    rows = valve_rows(plan.points, idx)
+    rows = valve_rows(ctx["points"], idx)
     for rtol in SCIPY_RTOLS:
         t0 = time.perf_counter()
         for row in rows:
@@ -139,6 +137,37 @@ def bench_valve(cases: int, step: float, repeat: int) -> dict[str, Any]:
             "seconds": seconds,
             "cases_per_s": len(rows) / seconds,
         }
+    return figures
+
+
+def _valve_case(text: str) -> tuple[ValveScene, dict[str, Any], tuple, np.ndarray]:
+    """Scene, context, chain key and points of a valve study with one cam/rocker chain."""
+    plan = plan_text(text)
+    scene = plan.scene
+    assert isinstance(scene, ValveScene)
+    ctx = scene.context(plan.points, plan.settings, [], [])
+    ((key, idx),) = ctx["groups"].items()
+    return scene, ctx, key, idx
+
+
+def _valve_kernels(cases: int, step: float, repeat: int) -> dict[str, Any]:
+    """The two compiled kernels alone on the same excitation table and parameter rows."""
+    scene, ctx, key, idx = _valve_case(_valve_plan("lanes", cases, step).definition.text)
+    table, table_step, start = scene.excitation(ctx, key, step)
+    first, last = scene.window(ctx, key)
+    rows = valve_rows(ctx["points"], idx)
+    flags = kernel_settings(ctx["settings"], "lanes", estimate=False)
+    out = np.empty((rows.shape[0], len(valve.VALVE_OUTPUT_NAMES)))
+    figures: dict[str, Any] = {"integrated_span_deg": last - first, "step_deg": step}
+    for name, kernel in [
+        ("lanes", valve_lanes.valve_response_lanes),
+        ("one_case", valve.valve_response_batch),
+    ]:
+        seconds = best_time(partial(kernel, table, table_step, start, rows, flags, out), repeat)
+        figures[name] = {"cases": len(rows), "seconds": seconds, "cases_per_s": len(rows) / seconds}
+    figures["lanes_over_one_case"] = (
+        figures["lanes"]["cases_per_s"] / figures["one_case"]["cases_per_s"]
+    )
     return figures
 
 
