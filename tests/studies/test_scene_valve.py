@@ -265,12 +265,16 @@ def test_bad_settings_are_refused_before_running(
 def test_valve_benchmark_reports_lanes_one_case_and_scipy(tmp_path: Path) -> None:
     path = run_benchmark("valve", cases=40, step=1.0, repeat=1, outputs=tmp_path)
     figures = json.loads(path.read_text(encoding="utf-8"))["figures"]
-    for name in ("lanes", "rk4", "rk4_switch_aware", "scipy_dop853_rtol_1e-10"):
+    for name in ("scene_lanes", "scene_rk4", "scene_rk4_switch_aware", "scipy_dop853_rtol_1e-10"):
         assert figures[name]["cases"] > 0
         assert figures[name]["cases_per_s"] > 0.0
-    assert figures["lanes"]["cases"] == 40
-    ratio = figures["lanes"]["cases_per_s"] / figures["rk4"]["cases_per_s"]
-    assert figures["lanes_over_one_case_speedup"] == pytest.approx(ratio)
+    assert figures["scene_lanes"]["cases"] == 40
+    ratio = figures["scene_lanes"]["cases_per_s"] / figures["scene_rk4"]["cases_per_s"]
+    assert figures["scene_lanes_over_one_case"] == pytest.approx(ratio)
+    kernel = figures["kernel"]
+    assert kernel["lanes"]["cases"] == kernel["one_case"]["cases"] == 40
+    ratio = kernel["lanes"]["cases_per_s"] / kernel["one_case"]["cases_per_s"]
+    assert kernel["lanes_over_one_case"] == pytest.approx(ratio)
 
 
 def test_results_do_not_depend_on_the_chunk_size() -> None:
