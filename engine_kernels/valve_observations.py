@@ -174,7 +174,8 @@ def observe_valve(
 ):
     """Update the running observations of one case at a grid point after the first.
 
-    Tracks extremes, separation (drive force ≤ 0 while off the seat), the seat phase and
+    Tracks extremes, separation (drive force ≤ 0 while off the seat, before the first
+    closure), the seat phase and
     bounce height, mode transitions, and the cam's work for the energy balance. Returns True
     if the seat phase changed in a way :func:`record_closure_events` must record.
 
@@ -202,11 +203,14 @@ def observe_extremes(stats, at, w, lift, velocity, acceleration, drive):
 
 @jit_inline
 def observe_separation(stats, at, w, angle, lift, drive_lift, drive, seat_depth):
-    """Jump: drive force ≤ 0 while the valve is off its seat (observe_valve).
+    """Jump: drive force ≤ 0 while the valve is off its seat before its first closure.
 
-    The angle only grows, so the first separated angle is the smallest one.
+    After the first closure the cam is on its base circle and leaving the seat is a bounce
+    (:func:`observe_closure`), not a jump: counting it here would turn the jump speed into a
+    bounce speed. The angle only grows, so the first separated angle is the smallest one.
     """
-    separated = (lift > seat_depth) & (drive <= 0.0)
+    not_closed = stats[at + _PHASE * w] < PHASE_CLOSED
+    separated = (lift > seat_depth) & (drive <= 0.0) & not_closed
     start = angle if separated else math.inf
     stats[at + _JUMP_START * w] = smaller(stats[at + _JUMP_START * w], start)
     stats[at + _JUMP_STEPS * w] += 1.0 if separated else 0.0

@@ -74,9 +74,13 @@ def test_ohc125_dynamics_runs_and_separates_on_the_rise(tmp_path: Path) -> None:
     assert (slow["follows_cam"] == 1).all()
     assert (fast["follows_cam"] == 0).all()
     assert (fast["jump_start"] < 0.0).all()
-    # Separation means a gap, following the cam means none.
+    # Following the cam means no gap. Separation (drive force <= 0) can start with the damper
+    # pulling while y is still a hair below Y, so a jump may end with a zero gap; never < 0.
     gap = ds["jump_max_gap"].values
-    np.testing.assert_array_equal(ds["follows_cam"].values == 1, gap == 0.0)
+    follows = ds["follows_cam"].values == 1
+    assert (gap[follows] == 0.0).all()
+    assert (gap >= 0.0).all()
+    assert np.isfinite(ds["jump_start"].values[~follows]).all()
 
 
 def test_jump_speed_map_runs_and_falls_with_mass(tmp_path: Path) -> None:
