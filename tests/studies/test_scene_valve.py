@@ -297,3 +297,20 @@ def test_results_do_not_depend_on_the_chunk_size() -> None:
     parts = evaluate(plan, chunk_size=3, progress=False)
     for name, values in whole.scalars.items():
         np.testing.assert_array_equal(parts.scalars[name], values)
+
+
+def test_a_bounce_after_closure_is_not_a_jump() -> None:
+    # SPEC §4: jump = separation from the drive during the event; bounce = leaving the seat
+    # again after the first closure. At camshaft 3500 rpm and 150 N preload the valve follows
+    # the cam but bounces once after closing at 73 deg: it must not be reported as a jump
+    # (a jump starting after the closing angle would make the jump speed a bounce speed).
+    text = study(
+        responses='["follows_cam", "jump_start", "bounce_count", "valve_closing_angle"]',
+        parameters="cam_speed = 3500.0",
+        factors="[factors.spring_preload]\nlevels = [150.0, 205.8]",
+    )
+    ev = evaluate(plan_text(text), progress=False)
+    bounced = ev.scalars["bounce_count"] >= 1
+    assert bounced.any()
+    assert (ev.scalars["follows_cam"][bounced] == 1).all()
+    assert np.isnan(ev.scalars["jump_start"][bounced]).all()
