@@ -298,7 +298,7 @@ def format_tables(
     anova_text = shown.to_string(
         formatters=dict.fromkeys(["SS", "MS", "F", "P", "contribution %"], _number), na_rep=""
     )
-    ss_unit = f" (SS in ({units})^2)" if units else ""
+    ss_unit = f" (SS in ({units})^2)" if units not in ("", "1", "-") else ""
     lines = [
         (
             f"Range analysis of {response} ({ra.attrs['long_name']}){unit}; "
