@@ -7,10 +7,10 @@ Stages (each one compiled batch driver; a study runs only those its responses an
 * ``pressure`` — cylinder pressure on the cycle grid: the single-zone Wiebe cycle
   (:func:`engine_kernels.combustion.cycle_pressure_batch`) or a measured table
   (:mod:`studies.pressure_tables`);
-* ``forces`` — :func:`engine_kernels.crank.crank_forces_batch`: gas, inertia, rod, side,
+* ``forces`` — :func:`engine_kernels.crank_forces.crank_forces_batch`: gas, inertia, rod, side,
   tangential and radial forces and the torque of one cylinder;
-* ``multicylinder`` — :func:`engine_kernels.crank.crank_multicylinder_batch`: summed torque of
-  the layout, its harmonic orders and the free first- and second-order forces.
+* ``multicylinder`` — :func:`engine_kernels.crank_layout.crank_multicylinder_batch`: summed
+  torque of the layout, its harmonic orders and the free first- and second-order forces.
 
 The kinematics model (``exact`` or two-term ``approximate``) is a study setting; it sets the
 piston motion used for the inertia forces, the torque and the kinematic curves.
@@ -25,6 +25,8 @@ import numpy as np
 
 from engine_kernels import combustion as cb
 from engine_kernels import crank as ck
+from engine_kernels import crank_forces as cf
+from engine_kernels import crank_layout as cl
 from studies.pressure_tables import read_pressure_table, resample_pressure
 from studies.scenes.base import Scene, SceneOutput
 from studies.scenes.checks import PointProblems
@@ -136,11 +138,11 @@ def layout_angles(points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray
         if kind == "given":
             firing[i, : z[i]] = points["firing_angles"][i, : z[i]]
         elif kind == "shared_crankpins":
-            ck.v_crank_firing_angles(order, gamma, firing[i])
+            cl.v_crank_firing_angles(order, gamma, firing[i])
         else:
-            ck.even_firing_angles(order, firing[i])
+            cl.even_firing_angles(order, firing[i])
         if points["layout"][i] == "v":
-            ck.v_axis_angles(order, gamma, axis[i])
+            cl.v_axis_angles(order, gamma, axis[i])
     return firing, axis
 
 
@@ -288,13 +290,13 @@ class CrankScene(Scene):
         self, params: np.ndarray, pressure: np.ndarray, store: bool
     ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
         n, m = pressure.shape
-        out = np.empty((n, ck.N_FORCE_OUT))
-        curves = _empty_curves(n, ck.N_FORCE_CURVES, store, m)
-        ck.crank_forces_batch(params, pressure, out, curves)
-        scalars = {FORCE_NAMES.get(k, k): v for k, v in zip(ck.FORCE_OUTPUTS, out.T, strict=True)}
+        out = np.empty((n, cf.N_FORCE_OUT))
+        curves = _empty_curves(n, cf.N_FORCE_CURVES, store, m)
+        cf.crank_forces_batch(params, pressure, out, curves)
+        scalars = {FORCE_NAMES.get(k, k): v for k, v in zip(cf.FORCE_OUTPUTS, out.T, strict=True)}
         named = {
             FORCE_NAMES.get(k, k): v
-            for k, v in zip(ck.FORCE_CURVES, curves.transpose(1, 0, 2), strict=True)
+            for k, v in zip(cf.FORCE_CURVES, curves.transpose(1, 0, 2), strict=True)
         }
         return scalars, named
 
@@ -307,11 +309,11 @@ class CrankScene(Scene):
         store: bool,
     ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
         n, m = pressure.shape
-        out = np.empty((n, ck.N_MULTI_OUT))
+        out = np.empty((n, cl.N_MULTI_OUT))
         harmonics = np.empty((n, MAX_ORDER_HALVES))
         curves = _empty_curves(n, 1, store, m)
-        ck.crank_multicylinder_batch(params, pressure, firing, axis, out, harmonics, curves)
-        scalars = dict(zip(ck.MULTI_OUTPUTS, out.T, strict=True))
+        cl.crank_multicylinder_batch(params, pressure, firing, axis, out, harmonics, curves)
+        scalars = dict(zip(cl.MULTI_OUTPUTS, out.T, strict=True))
         for q in range(MAX_ORDER_HALVES):
             scalars[order_name(q + 1)] = harmonics[:, q]
         scalars["dominant_torque_order"] = (np.argmax(harmonics, axis=1) + 1) / 2.0

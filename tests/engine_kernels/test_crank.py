@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from engine_kernels import combustion as cb
-from engine_kernels import crank
+from engine_kernels import crank, crank_forces, crank_layout
 
 RPM = math.pi / 30.0
 # 12V150 (SPEC §5): bore 150 mm, rated 2600 rpm, 23 MPa max pressure; stroke 180 mm is the
@@ -77,17 +77,17 @@ def kinematics(rows, m=720, curves=True):
 def forces(rows, pressure, curves=True):
     params = np.ascontiguousarray(np.atleast_2d(rows))
     m = pressure.shape[1]
-    out = np.empty((params.shape[0], crank.N_FORCE_OUT))
-    cur = np.empty((params.shape[0], crank.N_FORCE_CURVES, m if curves else 0))
-    crank.crank_forces_batch(params, pressure, out, cur)
+    out = np.empty((params.shape[0], crank_forces.N_FORCE_OUT))
+    cur = np.empty((params.shape[0], crank_forces.N_FORCE_CURVES, m if curves else 0))
+    crank_forces.crank_forces_batch(params, pressure, out, cur)
     return out, cur
 
 
 def multicylinder(row, pressure, firing, axis, n_orders=24):
-    out = np.empty((1, crank.N_MULTI_OUT))
+    out = np.empty((1, crank_layout.N_MULTI_OUT))
     harmonics = np.empty((1, n_orders))
     cur = np.empty((1, 1, pressure.shape[1]))
-    crank.crank_multicylinder_batch(
+    crank_layout.crank_multicylinder_batch(
         row[None, :], pressure, firing[None, :], axis[None, :], out, harmonics, cur
     )
     return out[0], harmonics[0], cur[0, 0]
@@ -232,7 +232,7 @@ def test_power_balance_torque_times_speed_equals_force_times_velocity(alpha, lam
     # Law: T·r·ω = P·ẋ (virtual work of the frictionless slider-crank).
     r, omega = 0.07, 300.0
     beta = crank.rod_angle(lam, alpha)
-    power_crank = crank.tangential_force(force, alpha, beta) * r * omega
+    power_crank = crank_forces.tangential_force(force, alpha, beta) * r * omega
     power_piston = force * crank.piston_velocity_exact(r, lam, omega, alpha)
     assert power_crank == pytest.approx(power_piston, abs=1e-9 * abs(force) * r * omega + 1e-12)
 
@@ -243,31 +243,35 @@ def test_force_components_are_consistent_and_balance_power():
     pressure, _ = cycle_12v150(m)
     out, cur = forces(params_row(), pressure)
     _, kin = kinematics(params_row(), m=m)
-    p, s = cur[0, crank.FC_PISTON_FORCE], cur[0, crank.FC_ROD_FORCE]
+    p, s = cur[0, crank_forces.FC_PISTON_FORCE], cur[0, crank_forces.FC_ROD_FORCE]
     scale = np.abs(s).max()
-    np.testing.assert_allclose(s**2, p**2 + cur[0, crank.FC_SIDE_FORCE] ** 2, atol=1e-9 * scale**2)
+    np.testing.assert_allclose(
+        s**2, p**2 + cur[0, crank_forces.FC_SIDE_FORCE] ** 2, atol=1e-9 * scale**2
+    )
     np.testing.assert_allclose(
         s**2,
-        cur[0, crank.FC_TANGENTIAL_FORCE] ** 2 + cur[0, crank.FC_RADIAL_FORCE] ** 2,
+        cur[0, crank_forces.FC_TANGENTIAL_FORCE] ** 2 + cur[0, crank_forces.FC_RADIAL_FORCE] ** 2,
         atol=1e-9 * scale**2,
     )
     np.testing.assert_allclose(
-        cur[0, crank.FC_TORQUE] * OMEGA,
+        cur[0, crank_forces.FC_TORQUE] * OMEGA,
         p * kin[0, crank.KC_VELOCITY],
         atol=1e-9 * scale * RADIUS * OMEGA,
     )
     # Gas force [F1] from its definition, at the grid peak of the pressure curve.
     expected_peak = math.pi * BORE**2 / 4 * (pressure.max() - 101325.0)
-    assert out[0, crank.FORCE_MAX_GAS_FORCE] == pytest.approx(expected_peak, rel=1e-14)
-    assert out[0, crank.FORCE_MAX_TORQUE] == pytest.approx(cur[0, crank.FC_TORQUE].max())
-    assert out[0, crank.FORCE_MAX_SIDE_FORCE] == pytest.approx(
-        np.abs(cur[0, crank.FC_SIDE_FORCE]).max()
+    assert out[0, crank_forces.FORCE_MAX_GAS_FORCE] == pytest.approx(expected_peak, rel=1e-14)
+    assert out[0, crank_forces.FORCE_MAX_TORQUE] == pytest.approx(
+        cur[0, crank_forces.FC_TORQUE].max()
+    )
+    assert out[0, crank_forces.FORCE_MAX_SIDE_FORCE] == pytest.approx(
+        np.abs(cur[0, crank_forces.FC_SIDE_FORCE]).max()
     )
     # [F2], [F3] amplitudes: mj r ω², λ mj r ω², mr r ω².
     first = 3.5 * RADIUS * OMEGA**2
-    assert out[0, crank.FORCE_FIRST_ORDER_AMPLITUDE] == pytest.approx(first)
-    assert out[0, crank.FORCE_SECOND_ORDER_AMPLITUDE] == pytest.approx(LAMBDA * first)
-    assert out[0, crank.FORCE_ROTATING_INERTIA] == pytest.approx(3.0 * RADIUS * OMEGA**2)
+    assert out[0, crank_forces.FORCE_FIRST_ORDER_AMPLITUDE] == pytest.approx(first)
+    assert out[0, crank_forces.FORCE_SECOND_ORDER_AMPLITUDE] == pytest.approx(LAMBDA * first)
+    assert out[0, crank_forces.FORCE_ROTATING_INERTIA] == pytest.approx(3.0 * RADIUS * OMEGA**2)
 
 
 def test_two_term_inertia_force_is_first_plus_second_order():
@@ -277,14 +281,14 @@ def test_two_term_inertia_force_is_first_plus_second_order():
     pressure = np.full((1, m), 101325.0)
     _, cur = forces(params_row(model=crank.MODEL_TWO_TERM), pressure)
     expected = -3.5 * RADIUS * OMEGA**2 * (np.cos(alpha) + LAMBDA * np.cos(2 * alpha))
-    np.testing.assert_allclose(cur[0, crank.FC_INERTIA_FORCE], expected, atol=1e-9)
+    np.testing.assert_allclose(cur[0, crank_forces.FC_INERTIA_FORCE], expected, atol=1e-9)
     split = [
-        crank.reciprocating_inertia_first_order(3.5, RADIUS, OMEGA, a)
-        + crank.reciprocating_inertia_second_order(3.5, RADIUS, LAMBDA, OMEGA, a)
+        crank_forces.reciprocating_inertia_first_order(3.5, RADIUS, OMEGA, a)
+        + crank_forces.reciprocating_inertia_second_order(3.5, RADIUS, LAMBDA, OMEGA, a)
         for a in alpha
     ]
     np.testing.assert_allclose(split, expected, atol=1e-9)
-    np.testing.assert_allclose(cur[0, crank.FC_GAS_FORCE], 0.0)
+    np.testing.assert_allclose(cur[0, crank_forces.FC_GAS_FORCE], 0.0)
 
 
 def test_force_driver_is_the_same_compiled_and_interpreted():
@@ -297,7 +301,7 @@ def test_force_driver_is_the_same_compiled_and_interpreted():
     out_jit, cur_jit = forces(rows, pressure)
     out_py = np.empty_like(out_jit)
     cur_py = np.empty_like(cur_jit)
-    crank.crank_forces_batch.py_func(rows, pressure, out_py, cur_py)
+    crank_forces.crank_forces_batch.py_func(rows, pressure, out_py, cur_py)
     np.testing.assert_allclose(out_jit, out_py, rtol=1e-13)
     np.testing.assert_allclose(cur_jit, cur_py, rtol=1e-12, atol=1e-9)
 
@@ -310,11 +314,11 @@ def firing_and_axes(order, bank_angle=None, even=False):
     firing = np.empty(order.size)
     axis = np.zeros(order.size)
     if bank_angle is None or even:
-        crank.even_firing_angles(order, firing)
+        crank_layout.even_firing_angles(order, firing)
     else:
-        crank.v_crank_firing_angles(order, bank_angle, firing)
+        crank_layout.v_crank_firing_angles(order, bank_angle, firing)
     if bank_angle is not None:
-        crank.v_axis_angles(order, bank_angle, axis)
+        crank_layout.v_axis_angles(order, bank_angle, axis)
     return firing, axis
 
 
@@ -343,10 +347,10 @@ def test_12v150_mean_torque_equals_cycle_work(bank_deg):
     firing, axis = firing_and_axes(FIRING_ORDER_12V150, math.radians(bank_deg))
     out, harmonics, total = multicylinder(params_row(cylinders=12), pressure, firing, axis)
     expected = 12 * work / (4 * math.pi)
-    assert out[crank.MULTI_MEAN_TORQUE] == pytest.approx(expected, rel=2e-5)
+    assert out[crank_layout.MULTI_MEAN_TORQUE] == pytest.approx(expected, rel=2e-5)
     assert cycle[cb.OUT_CYCLE_WORK] == pytest.approx(work, rel=2e-5)
-    assert out[crank.MULTI_MEAN_POWER] == pytest.approx(expected * OMEGA, rel=2e-5)
-    assert out[crank.MULTI_TORQUE_PEAK_TO_PEAK] == pytest.approx(np.ptp(total))
+    assert out[crank_layout.MULTI_MEAN_POWER] == pytest.approx(expected * OMEGA, rel=2e-5)
+    assert out[crank_layout.MULTI_TORQUE_PEAK_TO_PEAK] == pytest.approx(np.ptp(total))
     # Harmonic orders against numpy's FFT of the summed torque (harmonic q = order q/2).
     spectrum = 2 * np.abs(np.fft.rfft(total)) / m
     np.testing.assert_allclose(harmonics, spectrum[1:25], rtol=1e-9, atol=1e-9 * expected)
@@ -357,8 +361,8 @@ def test_12v150_mean_torque_equals_cycle_work(bank_deg):
         assert np.all(harmonics[~keep] < 1e-9 * expected)
         assert np.all(harmonics[keep] > 1e-3 * expected)
     # Both layouts are two inline-six banks: no free first- or second-order force.
-    assert out[crank.MULTI_FREE_FIRST_ORDER_FORCE] < 1e-9 * 3.5 * RADIUS * OMEGA**2
-    assert out[crank.MULTI_FREE_SECOND_ORDER_FORCE] < 1e-9 * 3.5 * RADIUS * OMEGA**2
+    assert out[crank_layout.MULTI_FREE_FIRST_ORDER_FORCE] < 1e-9 * 3.5 * RADIUS * OMEGA**2
+    assert out[crank_layout.MULTI_FREE_SECOND_ORDER_FORCE] < 1e-9 * 3.5 * RADIUS * OMEGA**2
 
 
 def test_free_forces_of_classic_layouts():
@@ -375,8 +379,8 @@ def test_free_forces_of_classic_layouts():
     for order, bank, first, second in cases:
         firing, axis = firing_and_axes(order, bank)
         z = len(order)
-        got1 = crank.free_reciprocating_force(3.5, RADIUS, LAMBDA, OMEGA, firing, axis, z, 1)
-        got2 = crank.free_reciprocating_force(3.5, RADIUS, LAMBDA, OMEGA, firing, axis, z, 2)
+        got1 = crank_layout.free_reciprocating_force(3.5, RADIUS, LAMBDA, OMEGA, firing, axis, z, 1)
+        got2 = crank_layout.free_reciprocating_force(3.5, RADIUS, LAMBDA, OMEGA, firing, axis, z, 2)
         assert got1 == pytest.approx(first, abs=1e-9 * f)
         assert got2 == pytest.approx(second, abs=1e-9 * f)
 
@@ -388,7 +392,7 @@ def test_free_force_amplitude_is_the_brute_force_maximum(vectors):
     ax, ay, bx, by = vectors
     t = np.linspace(0, 2 * math.pi, 20_001)
     brute = np.hypot(ax * np.cos(t) + bx * np.sin(t), ay * np.cos(t) + by * np.sin(t)).max()
-    got = crank.free_force_amplitude(ax, ay, bx, by)
+    got = crank_layout.free_force_amplitude(ax, ay, bx, by)
     assert got == pytest.approx(brute, rel=1e-6, abs=1e-9)
 
 
@@ -400,7 +404,7 @@ def test_multicylinder_shift_matches_direct_sum_of_shifted_cylinders():
     firing, axis = firing_and_axes([1, 3, 4, 2])
     row = params_row(cylinders=4)
     _, cur = forces(row, pressure)
-    single = cur[0, crank.FC_TORQUE]
+    single = cur[0, crank_forces.FC_TORQUE]
     shifts = np.rint(firing / (crank.CYCLE_ANGLE / m)).astype(int)
     expected = sum(np.roll(single, s) for s in shifts)
     _, _, total = multicylinder(row, pressure, firing, axis)
@@ -419,8 +423,11 @@ def test_kinematics_and_layout_drivers_are_the_same_compiled_and_interpreted():
     firing, axis = firing_and_axes([1, 3, 4, 2])
     args = (rows, pressure, firing[None, :], axis[None, :])
     results = []
-    for driver in (crank.crank_multicylinder_batch, crank.crank_multicylinder_batch.py_func):
-        multi_out = np.empty((2, crank.N_MULTI_OUT))
+    for driver in (
+        crank_layout.crank_multicylinder_batch,
+        crank_layout.crank_multicylinder_batch.py_func,
+    ):
+        multi_out = np.empty((2, crank_layout.N_MULTI_OUT))
         harmonics = np.empty((2, 8))
         curve = np.empty((2, 1, 0))
         driver(*args, multi_out, harmonics, curve)
