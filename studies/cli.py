@@ -57,7 +57,12 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("study", nargs="?", help="catalogue name or path to a TOML file")
     run.add_argument("--all", action="store_true", help="run every catalogue study")
     run.add_argument("--outputs", type=Path, default=Path("outputs"), help="run-folder root")
-    run.add_argument("--chunk-size", type=int, default=2048, help="design points per chunk")
+    run.add_argument(
+        "--chunk-size",
+        type=int,
+        default=None,
+        help="design points per chunk (bounds memory; default: the runner's)",
+    )
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
     run.add_argument(
         "--force",
@@ -127,7 +132,7 @@ def _indent(text: str) -> str:
 def _cmd_run(args: argparse.Namespace) -> int:
     from studies import provenance, tracking
     from studies.plan import plan_study
-    from studies.runner import dask_executor
+    from studies.runner import DEFAULT_CHUNK_SIZE, dask_executor
     from studies.study_run import resume_run, run_plan
 
     if args.resume:
@@ -154,7 +159,13 @@ def _cmd_run(args: argparse.Namespace) -> int:
             )
             print(f"  {Path(earlier['folder']) / 'results.nc'}")
             continue
-        result = run_plan(plan, args.outputs, args.chunk_size, not args.no_progress, executor)
+        result = run_plan(
+            plan,
+            args.outputs,
+            args.chunk_size or DEFAULT_CHUNK_SIZE,
+            not args.no_progress,
+            executor,
+        )
         _report(result)
     return 0
 

@@ -25,6 +25,8 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+from studies.runner import DEFAULT_CHUNK_SIZE
+
 REGISTRY = "registry.sqlite"
 COLUMNS = (
     "run_id",
@@ -65,7 +67,7 @@ class RunRecord:
     finished: str = ""
     timings: dict[str, float] = field(default_factory=dict)
     error: str = ""
-    chunk_size: int = 2048
+    chunk_size: int = DEFAULT_CHUNK_SIZE
 
     def write(self) -> None:
         path = Path(self.folder) / "run.json"

@@ -179,6 +179,14 @@ class Scene(ABC):
             needed.update(self.curve(c).needs)  # type: ignore[union-attr]
         return [s for s in self.stage_order if s in needed]
 
+    def run_stages(self, ctx: dict[str, Any], responses: list[str], curves: list[str]) -> None:
+        """Run only the stages these requests need, in order, on the shared context ``ctx``.
+
+        Always through ``self.stages`` so a test can spy on which stages ran.
+        """
+        for stage in self.stages_for(responses, curves):
+            self.stages[stage](ctx)
+
     # --- to be provided by each scene ---------------------------------------------------
     def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
         """Cross-parameter physical checks over all design points (SI values); problems."""

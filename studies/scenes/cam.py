@@ -201,8 +201,7 @@ class CamScene(Scene):
             "settings": settings,
             "curves": set(curves),
         }
-        for stage in self.stages_for(responses, curves):
-            self.stages[stage](ctx)
+        self.run_stages(ctx, responses, curves)
         scalars = {}
         for r in responses:
             if r in ("jerk_margin", "jerk_ok", "fullness_ok"):

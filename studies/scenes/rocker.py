@@ -229,8 +229,7 @@ class RockerScene(Scene):
         curves: list[str],
     ) -> SceneOutput:
         ctx = self.context(points, settings, responses, curves)
-        for stage in self.stages_for(responses, curves):
-            self.stages[stage](ctx)
+        self.run_stages(ctx, responses, curves)
         return SceneOutput(
             {r: self.scalar(ctx, r) for r in responses},
             {c: self.curve_values(ctx, c) for c in curves},
