@@ -79,6 +79,7 @@ from engine_kernels.valve_model import (
     STATUS_OK,
     STATUS_SUBSTEP_LIMIT,
     STATUS_UNSTABLE,
+    TWO,
     VALVE_CURVE_NAMES,
     VALVE_CURVE_UNITS,
     VALVE_OUTPUT_NAMES,
@@ -250,8 +251,8 @@ def rk4_valve_step(
     drive, seat = specific_forces(p4, v4, push_end, k, b, ps0, kz, bz)
     a4 = specific_acceleration(p4, v4, drive, seat, ks, ps0, gamma, depth)
     return (
-        lift + sixth_tau * (velocity + 2.0 * (v2 + v3) + v4),
-        velocity + sixth_tau * (acc + 2.0 * (a2 + a3) + a4),
+        lift + sixth_tau * (velocity + TWO * (v2 + v3) + v4),
+        velocity + sixth_tau * (acc + TWO * (a2 + a3) + a4),
     )
 
 

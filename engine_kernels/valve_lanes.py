@@ -18,6 +18,12 @@ tests/engine_kernels/test_valve_lanes.py): every helper called in them is inline
 ``max``/``min`` are calls: ``valve_model.larger`` and friends are selects), and no row is
 loaded under a condition. Blocks run in a ``prange``, in an order that spreads the costly
 (sub-stepped) ones over the threads; each block writes only its own cases' output rows.
+
+Precision follows the excitation table: a float64 table gives the numbers of the one-case
+kernel; a float32 table runs the lanes in single precision, 8 per AVX2 vector instead of 4
+(the stability guard, the coefficients and the outputs stay float64; sub-steps interpolate
+the excitation in float64). At the default 0.5° step the single-precision round-off is
+orders of magnitude below the RK4 error (tests/engine_kernels/test_valve_lanes.py).
 """
 
 from __future__ import annotations
@@ -76,7 +82,8 @@ _ACC = 18
 _PREV_LIFT = 19
 _PREV_VELOCITY = 20
 _DIFFERENCE = 21
-N_LANE_ROWS = 22
+_ANGLE = 22
+N_LANE_ROWS = 23
 _STATS = N_LANE_ROWS * LANES
 
 
@@ -167,9 +174,10 @@ def _start_lanes(data, angle, drive_lift, slope):
 def _observe_lanes(data, angle, drive_lift, slope):
     """Grid point of every lane: acceleration into ``_ACC``, observations updated.
 
-    Returns the number of lanes whose seat phase changed (``record_closure_events``).
+    Returns True if the seat phase of some lane changed (``record_closure_events``): a flag,
+    not a count, so no 64-bit integer in the loop halves the float32 vector width.
     """
-    events = 0
+    changed = False
     for l in range(LANES):
         lift = data[_LIFT * LANES + l]
         velocity = data[_VELOCITY * LANES + l]
@@ -192,8 +200,8 @@ def _observe_lanes(data, angle, drive_lift, slope):
             data[_DEPTH * LANES + l],
             data[_BAND * LANES + l],
         )
-        events += 1 if event else 0
-    return events
+        changed |= event
+    return changed
 
 
 @jit
@@ -312,12 +320,13 @@ def _lane_pass(excitation, table_step, table_start, half, substeps, params, case
         node = 2 * half * n
         drive_lift = excitation[0, node]
         slope = excitation[1, node]
-        angle = table_start + n * grid_step
+        data[_ANGLE * LANES] = table_start + n * grid_step
+        angle = data[_ANGLE * LANES]  # in the block's precision
         if record:
             _record_lanes(data, trace, n, compare)
         if n == 0:
             _start_lanes(data, angle, drive_lift, slope)
-        elif _observe_lanes(data, angle, drive_lift, slope) > 0:
+        elif _observe_lanes(data, angle, drive_lift, slope):
             _record_events_lanes(data)
         if n % ENERGY_INTERVAL == 0 or n == n_steps:
             _energy_lanes(data, drive_lift, slope)
@@ -345,17 +354,13 @@ def _lane_pass(excitation, table_step, table_start, half, substeps, params, case
 
 
 @jit
-def _lane_block(excitation, table_step, table_start, params, settings, block, substeps, out):
-    """Integrate and report one block: up to ``LANES`` cases with the same sub-step count.
+def _block_data(excitation, params, cases):
+    """Per-lane rows of a block, in the precision of the excitation table.
 
-    block : 1-D int64  Row indices of the block's cases in ``params`` and ``out``.
-    Lanes past the block's cases repeat its first case; their results are not written.
+    cases : 1-D int64  Parameter row of each of the ``LANES`` lanes.
     """
-    count = block.shape[0]
-    cases = np.empty(LANES, dtype=np.int64)
-    data = np.empty((N_LANE_ROWS + N_STATS) * LANES)
+    data = np.empty((N_LANE_ROWS + N_STATS) * LANES, excitation.dtype)
     for l in range(LANES):
-        cases[l] = block[l if l < count else 0]
         k, b, ks, ps0, kz, bz, gamma, depth, speed, b_speed = specific_coefficients(
             params[cases[l]]
         )
@@ -371,6 +376,44 @@ def _lane_block(excitation, table_step, table_start, params, settings, block, su
         data[_B_SPEED * LANES + l] = b_speed
         data[_BAND * LANES + l] = TRANSITION_BAND * ps0
         data[_MASS * LANES + l] = params[cases[l], P_MASS]
+    return data
+
+
+@jit
+def lift_trace_lanes(excitation, table_step, table_start, params, settings, trace):
+    """Valve lift [m] of one case at every RK4 grid point, integrated in the lane kernel.
+
+    params : 1-D array  One ``P_*`` row (every lane of the block integrates it).
+    trace  : 1-D array  Output, one value per grid point (``(excitation.shape[1] − 1)//2 + 1``);
+                        NaN throughout if the stability guard refuses the case.
+    For accuracy studies of the single-precision lanes, whose trajectory differs from the
+    one-case kernel's by round-off.
+    """
+    out = np.empty(O_ERROR_ESTIMATE + 1)
+    substeps = prepare_case(excitation, table_step, params, settings, out)
+    if substeps == 0:
+        trace[:] = np.nan
+        return
+    rows = params.reshape((1, params.shape[0]))
+    cases = np.zeros(LANES, dtype=np.int64)
+    data = _block_data(excitation, rows, cases)
+    lanes = np.empty((trace.shape[0], LANES))
+    _lane_pass(excitation, table_step, table_start, 1, substeps, rows, cases, data, lanes)
+    trace[:] = lanes[:, 0]
+
+
+@jit
+def _lane_block(excitation, table_step, table_start, params, settings, block, substeps, out):
+    """Integrate and report one block: up to ``LANES`` cases with the same sub-step count.
+
+    block : 1-D int64  Row indices of the block's cases in ``params`` and ``out``.
+    Lanes past the block's cases repeat its first case; their results are not written.
+    """
+    count = block.shape[0]
+    cases = np.empty(LANES, dtype=np.int64)
+    for l in range(LANES):
+        cases[l] = block[l if l < count else 0]
+    data = _block_data(excitation, params, cases)
     estimate = settings[S_ESTIMATE_ERROR] != 0 and excitation.shape[1] >= 5
     trace = np.empty(((excitation.shape[1] - 1) // 2 + 1 if estimate else 0, LANES))
     _lane_pass(excitation, table_step, table_start, 1, substeps, params, cases, data, trace)

@@ -111,6 +111,16 @@ C_SEAT_FORCE = 4
 VALVE_CURVE_NAMES = ("lift", "velocity", "acceleration", "drive_force", "seat_force")
 VALVE_CURVE_UNITS = ("m", "m/s", "m/s^2", "N", "N")
 
+# Constants of the integrator arithmetic, typed float32: exact in both precisions, so a
+# float64 kernel computes the same numbers as with Python floats, while the float32 lane
+# kernel (engine_kernels.valve_lanes) is not promoted to float64 by a literal.
+ZERO = np.float32(0.0)
+HALF = np.float32(0.5)
+ONE = np.float32(1.0)
+TWO = np.float32(2.0)
+INF = np.float32(np.inf)
+NAN = np.float32(np.nan)
+
 S_MAX_SUBSTEPS = 0
 S_SWITCH_AWARE = 1
 S_ESTIMATE_ERROR = 2
@@ -152,24 +162,24 @@ def valve_settings(
 @jit_inline
 def positive_part(x):
     """``max(0, x)`` as a branch-free select (a one-sided contact force)."""
-    return x if x > 0.0 else 0.0  # noqa: FURB136
+    return x if x > ZERO else ZERO  # noqa: FURB136
 
 
 @jit_inline
 def larger(a, b):
     """The larger of two floats as a branch-free select, for running maxima.
 
-    The ``+ 0.0`` (not an identity for −0.0, so the compiler keeps it) stops LLVM from
+    The ``+ ZERO`` (not an identity for −0.0, so the compiler keeps it) stops LLVM from
     turning ``row = larger(row, x)`` into a conditional store, which vectorises into masked
     stores that are slow on AMD processors.
     """
-    return (b if b > a else a) + 0.0  # noqa: FURB136
+    return (b if b > a else a) + ZERO  # noqa: FURB136
 
 
 @jit_inline
 def smaller(a, b):
     """The smaller of two floats as a branch-free select, for running minima (see larger)."""
-    return (b if b < a else a) + 0.0  # noqa: FURB136
+    return (b if b < a else a) + ZERO  # noqa: FURB136
 
 
 @jit
@@ -215,7 +225,7 @@ def specific_acceleration(
     external_damping : float  γ' = γ/M [1/s];     seat_depth : float  δ0 = Ps0/kz [m].
     Branch-free (selects only), so it vectorises inside loops over SIMD lanes.
     """
-    seat = positive_part(seat) if lift < seat_depth else 0.0
+    seat = positive_part(seat) if lift < seat_depth else ZERO
     # Grouped so the spring terms are computed alongside the contact forces: a shorter
     # dependency chain per RK4 stage.
     return (positive_part(drive) + seat) - (
@@ -370,14 +380,14 @@ def valve_energy(
     through the drive. Arguments as in :func:`valve_acceleration` ([m], [m/s], [kg], [N/m],
     [N]).
     """
-    seat = seat_depth - lift if lift < seat_depth else 0.0
-    drive = drive_lift - lift if drive_lift > lift else 0.0
+    seat = seat_depth - lift if lift < seat_depth else ZERO
+    drive = drive_lift - lift if drive_lift > lift else ZERO
     return (
-        0.5 * mass * velocity * velocity
-        + 0.5 * spring_rate * lift * lift
+        HALF * mass * velocity * velocity
+        + HALF * spring_rate * lift * lift
         + preload * lift
-        + 0.5 * seat_stiffness * (seat * seat - seat_depth * seat_depth)
-        + 0.5 * drive_stiffness * drive * drive
+        + HALF * seat_stiffness * (seat * seat - seat_depth * seat_depth)
+        + HALF * drive_stiffness * drive * drive
     )
 
 

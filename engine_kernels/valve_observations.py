@@ -25,8 +25,13 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from engine_kernels._jit import jit, jit_inline
 from engine_kernels.valve_model import (
+    HALF,
+    INF,
+    NAN,
     O_BOUNCE_COUNT,
     O_BOUNCE_HEIGHT,
     O_JUMP_DURATION,
@@ -41,9 +46,12 @@ from engine_kernels.valve_model import (
     O_SEATING_VELOCITY,
     O_STATUS,
     O_TRANSITIONS,
+    ONE,
     STATUS_NONFINITE,
     STATUS_OK,
     STATUS_UNSTABLE,
+    TWO,
+    ZERO,
     larger,
     positive_part,
     smaller,
@@ -51,7 +59,7 @@ from engine_kernels.valve_model import (
 )
 
 ENERGY_SLACK = 0.05
-ENERGY_REST_RISE = 0.25
+ENERGY_REST_RISE = np.float32(0.25)
 ENERGY_FLOOR_FRACTION = 1e-3
 TRANSITION_LIMIT = 200
 ENERGY_INTERVAL = 8
@@ -59,10 +67,10 @@ TRANSITION_BAND = 1e-6
 
 # Seat phase of a run: not yet lifted off the seat, open, closed again after opening, and off
 # the seat again after that closure (bouncing).
-PHASE_SEATED = 0.0
-PHASE_OPEN = 1.0
-PHASE_CLOSED = 2.0
-PHASE_BOUNCING = 3.0
+PHASE_SEATED = np.float32(0.0)
+PHASE_OPEN = np.float32(1.0)
+PHASE_CLOSED = np.float32(2.0)
+PHASE_BOUNCING = np.float32(3.0)
 
 # Rows of the observations of one case.
 _MAX_LIFT = 0
@@ -134,21 +142,21 @@ def start_observations(
     The contact and seat modes start from the sign of their forces (no dead band yet).
     """
     for row in range(N_STATS):
-        stats[at + row * w] = 0.0
-    stats[at + _MAX_LIFT * w] = -math.inf
-    stats[at + _MAX_V * w] = -math.inf
-    stats[at + _MIN_V * w] = math.inf
-    stats[at + _MAX_A * w] = -math.inf
-    stats[at + _MIN_A * w] = math.inf
-    stats[at + _JUMP_START * w] = math.inf
-    stats[at + _ENERGY0 * w] = math.nan
-    stats[at + _EXCESS * w] = -math.inf
-    stats[at + _REST_ENERGY * w] = math.nan
-    stats[at + _REST_RISE * w] = -math.inf
+        stats[at + row * w] = ZERO
+    stats[at + _MAX_LIFT * w] = -INF
+    stats[at + _MAX_V * w] = -INF
+    stats[at + _MIN_V * w] = INF
+    stats[at + _MAX_A * w] = -INF
+    stats[at + _MIN_A * w] = INF
+    stats[at + _JUMP_START * w] = INF
+    stats[at + _ENERGY0 * w] = NAN
+    stats[at + _EXCESS * w] = -INF
+    stats[at + _REST_ENERGY * w] = NAN
+    stats[at + _REST_RISE * w] = -INF
     stats[at + _PHASE * w] = PHASE_OPEN if lift > seat_depth else PHASE_SEATED
-    stats[at + _CONTACT * w] = 1.0 if drive > 0.0 else 0.0
-    seat = seat if lift < seat_depth else -math.inf
-    stats[at + _SEATED * w] = 1.0 if seat > 0.0 else 0.0
+    stats[at + _CONTACT * w] = ONE if drive > ZERO else ZERO
+    seat = seat if lift < seat_depth else -INF
+    stats[at + _SEATED * w] = ONE if seat > ZERO else ZERO
     power = drive_power(drive, drive_velocity)
     stats[at + _POWER_SUM * w] = power
     stats[at + _POWER_FIRST * w] = power
@@ -210,11 +218,11 @@ def observe_separation(stats, at, w, angle, lift, drive_lift, drive, seat_depth)
     bounce speed. The angle only grows, so the first separated angle is the smallest one.
     """
     not_closed = stats[at + _PHASE * w] < PHASE_CLOSED
-    separated = (lift > seat_depth) & (drive <= 0.0) & not_closed
-    start = angle if separated else math.inf
+    separated = (lift > seat_depth) & (drive <= ZERO) & not_closed
+    start = angle if separated else INF
     stats[at + _JUMP_START * w] = smaller(stats[at + _JUMP_START * w], start)
-    stats[at + _JUMP_STEPS * w] += 1.0 if separated else 0.0
-    gap = lift - drive_lift if separated else 0.0
+    stats[at + _JUMP_STEPS * w] += ONE if separated else ZERO
+    gap = lift - drive_lift if separated else ZERO
     stats[at + _JUMP_GAP * w] = larger(stats[at + _JUMP_GAP * w], gap)
 
 
@@ -231,7 +239,7 @@ def observe_closure(stats, at, w, lift, seat_depth):
     on_seat_phase = PHASE_SEATED if phase == PHASE_SEATED else PHASE_CLOSED
     off_seat_phase = PHASE_BOUNCING if closed else PHASE_OPEN
     stats[at + _PHASE * w] = off_seat_phase if off_seat else on_seat_phase
-    height = lift - seat_depth if off_seat & closed else 0.0
+    height = lift - seat_depth if off_seat & closed else ZERO
     stats[at + _BOUNCE_HEIGHT * w] = larger(stats[at + _BOUNCE_HEIGHT * w], height)
     closing = (phase == PHASE_OPEN) & (not off_seat)
     rising = (phase == PHASE_CLOSED) & off_seat
@@ -248,14 +256,14 @@ def record_closure_events(stats, at, w, prev_lift, prev_velocity, lift, velocity
     phase turning to bouncing from on the seat. Harmless on grid points without an event.
     """
     phase = stats[at + _PHASE * w]
-    if phase >= PHASE_CLOSED and stats[at + _CAPTURED * w] == 0.0:
+    if phase >= PHASE_CLOSED and stats[at + _CAPTURED * w] == ZERO:
         stats[at + _SEAT_Y0 * w] = prev_lift
         stats[at + _SEAT_V0 * w] = prev_velocity
         stats[at + _SEAT_Y1 * w] = lift
         stats[at + _SEAT_V1 * w] = velocity
-        stats[at + _CAPTURED * w] = 1.0
+        stats[at + _CAPTURED * w] = ONE
     if phase == PHASE_BOUNCING and not prev_lift > seat_depth:
-        stats[at + _BOUNCES * w] += 1.0
+        stats[at + _BOUNCES * w] += ONE
 
 
 @jit_inline
@@ -267,11 +275,11 @@ def observe_transitions(stats, at, w, lift, drive, seat, seat_depth, band):
     """
     previous = stats[at + _CONTACT * w]
     before = stats[at + _SEATED * w]
-    contact = previous if drive >= -band else 0.0
-    contact = 1.0 if drive > band else contact
-    seat = seat if lift < seat_depth else -math.inf
-    seated = before if seat >= -band else 0.0
-    seated = 1.0 if seat > band else seated
+    contact = previous if drive >= -band else ZERO
+    contact = ONE if drive > band else contact
+    seat = seat if lift < seat_depth else -INF
+    seated = before if seat >= -band else ZERO
+    seated = ONE if seat > band else seated
     stats[at + _TRANSITIONS * w] += abs(contact - previous) + abs(seated - before)
     stats[at + _CONTACT * w] = contact
     stats[at + _SEATED * w] = seated
@@ -315,7 +323,7 @@ def observe_energy(
         lift,
         velocity,
         drive_lift,
-        1.0,
+        ONE,
         stiffness,
         spring_rate,
         preload,
@@ -326,18 +334,18 @@ def observe_energy(
     initial = energy if math.isnan(initial) else initial
     stats[at + _ENERGY0 * w] = initial
     power = drive_power(drive, drive_velocity)
-    trapezoid = 2.0 * stats[at + _POWER_SUM * w] - stats[at + _POWER_FIRST * w] - power
-    work = 0.5 * time_step * trapezoid
+    trapezoid = TWO * stats[at + _POWER_SUM * w] - stats[at + _POWER_FIRST * w] - power
+    work = HALF * time_step * trapezoid
     stats[at + _EXCESS * w] = larger(stats[at + _EXCESS * w], energy - initial - work)
     stats[at + _WORK_MAX * w] = larger(stats[at + _WORK_MAX * w], abs(work))
 
     closed = stats[at + _PHASE * w] >= PHASE_CLOSED
-    resting = closed & (drive_lift == 0.0) & (drive_velocity == 0.0)
+    resting = closed & (drive_lift == ZERO) & (drive_velocity == ZERO)
     before = stats[at + _REST_ENERGY * w]
-    rise = energy - (1.0 + ENERGY_REST_RISE) * before
-    rise = rise if resting & (not math.isnan(before)) else -math.inf
+    rise = energy - (ONE + ENERGY_REST_RISE) * before
+    rise = rise if resting & (not math.isnan(before)) else -INF
     stats[at + _REST_RISE * w] = larger(stats[at + _REST_RISE * w], rise)
-    stats[at + _REST_ENERGY * w] = energy if resting else math.nan
+    stats[at + _REST_ENERGY * w] = energy if resting else NAN
 
 
 @jit

@@ -8,7 +8,8 @@ points (the whole integration window). The reference is evaluated on one grid ho
 nodes of every step of a chunk and of the ``REFERENCE_TABLE_DEG`` grid, so for the usual steps
 (2°/2^k) it is solved once per design point whatever the chunking. The lane kernel integrates exactly the plain RK4 scheme
 of the one-case kernel (in SIMD lanes), so the trajectory of a ``lanes`` run is taken from the
-one-case kernel at the same step; only its cost differs.
+one-case kernel at the same step; only its cost differs. ``lanes_f32`` (single precision)
+differs by round-off, so its trajectory comes from the lane kernel itself.
 
 Cost per case is a wall-clock timing: the batch kernel of the integrator runs copies of the
 design point (at least ``COST_CASES``, two lane blocks so both cores work, and enough for one
@@ -25,7 +26,7 @@ from fractions import Fraction
 
 import numpy as np
 
-from engine_kernels import valve
+from engine_kernels import valve, valve_lanes
 from studies.reference.valve_ivp import table_excitation, valve_reference
 
 REFERENCE_TABLE_DEG = 1.0 / 64.0
@@ -59,9 +60,20 @@ def reference_lift(
     return valve_reference(excitation, row, theta, method=method, rtol=rtol).lift
 
 
-def trajectory_lift(excitation: Excitation, row: np.ndarray, flags: np.ndarray) -> np.ndarray:
-    """Valve lift [m] at every grid point of one fixed-step run (one-case kernel)."""
+def trajectory_lift(
+    excitation: Excitation, row: np.ndarray, flags: np.ndarray, integrator: str
+) -> np.ndarray:
+    """Valve lift [m] at every grid point of one fixed-step run.
+
+    ``lanes_f32`` runs the lane kernel in single precision; every other integrator's
+    trajectory is the one-case kernel's (``lanes`` computes exactly the same numbers).
+    """
     table, table_step, start = excitation
+    if integrator == "lanes_f32":
+        lift = np.empty((table.shape[1] - 1) // 2 + 1)
+        single = table.astype(np.float32)
+        valve_lanes.lift_trace_lanes(single, table_step, start, row, flags, lift)
+        return lift
     out = np.empty(len(valve.VALVE_OUTPUT_NAMES))
     curves = np.empty((len(valve.VALVE_CURVE_NAMES), (table.shape[1] - 1) // 2 + 1))
     valve.valve_response(table, table_step, start, row, flags, out, curves)

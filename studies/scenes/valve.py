@@ -5,9 +5,10 @@ scene extends :class:`~studies.scenes.rocker.RockerScene` and adds two stages:
 
 * ``dynamics`` — fixed-step RK4 of [V2] over the integration window (valve opening − 2° …
   closure + ``closing_window``, snapped outward to whole multiples of 2°), with the integrator
-  of the settings: :func:`engine_kernels.valve_lanes.valve_response_lanes` (``lanes``),
-  :func:`engine_kernels.valve.valve_response_batch` (``rk4``, ``rk4_switch_aware``), or one
-  :func:`engine_kernels.valve.valve_response` call per point when curves are stored;
+  of the settings: :func:`engine_kernels.valve_lanes.valve_response_lanes` (``lanes``, and
+  ``lanes_f32`` on a float32 copy of the table), :func:`engine_kernels.valve.valve_response_batch`
+  (``rk4``, ``rk4_switch_aware``), or one :func:`engine_kernels.valve.valve_response` call
+  per point (double precision) when curves are stored;
 * ``jump_speed`` — :func:`engine_kernels.valve.jump_speed` per design point (scan over
   geometric speeds, then bisection), at ``angle_step``.
 
@@ -53,6 +54,8 @@ WINDOW_PROBE_DEG = 0.25
 PRE_OPEN_DEG = 2.0
 JUMP_SCAN_POINTS = 16
 N_OUT = len(valve.VALVE_OUTPUT_NAMES)
+# Lane integrators and the precision of their arithmetic (the table's dtype selects it).
+LANE_PRECISION = {"lanes": np.float64, "lanes_f32": np.float32}
 N_CURVES = len(valve.VALVE_CURVE_NAMES)
 ESTIMATE_RESPONSES = ("error_estimate", "step_doubling_difference")
 KINEMATIC_RESPONSES = frozenset(r.name for r in ROCKER_RESPONSES)
@@ -131,8 +134,9 @@ def integrate(
         for j in range(rows.shape[0]):
             valve.valve_response(table, table_step, start, rows[j], flags, out[j], trace[j])
         return out, trace
-    if integrator == "lanes":
-        valve_lanes.valve_response_lanes(table, table_step, start, rows, flags, out)
+    if integrator in LANE_PRECISION:
+        lanes = table.astype(LANE_PRECISION[integrator])
+        valve_lanes.valve_response_lanes(lanes, table_step, start, rows, flags, out)
     else:
         valve.valve_response_batch(table, table_step, start, rows, flags, out)
     return out, None

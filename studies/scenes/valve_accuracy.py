@@ -152,7 +152,7 @@ class ValveAccuracyScene(ValveScene):
                     (key, window, spacing, tuple(row), solver),
                     partial(acc.reference_lift, fine, row, theta, *solver),
                 )
-                lift = acc.trajectory_lift(excitation, row, flags)
+                lift = acc.trajectory_lift(excitation, row, flags, settings["integrator"])
                 ctx["reference_error"][i] = acc.max_error(lift, reference, round(step / spacing))
 
     def stage_cost(self, ctx: dict[str, Any]) -> None:

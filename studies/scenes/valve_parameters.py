@@ -40,7 +40,7 @@ from studies.scenes.rocker_parameters import RESPONSES as ROCKER_RESPONSES
 from studies.scenes.rocker_parameters import TAPPET_STEP
 
 THESIS, ASSUMED = "SPEC §4 thesis", "assumption"
-INTEGRATORS = ("lanes", "rk4", "rk4_switch_aware")
+INTEGRATORS = ("lanes", "lanes_f32", "rk4", "rk4_switch_aware")
 MAX_HALVINGS = 6
 STATUS_NOT_RUN = len(valve.VALVE_STATUS_NAMES)
 """Scene status code: the kinematic chain is invalid, so the dynamics did not run."""
@@ -107,7 +107,8 @@ INTEGRATOR = Parameter(
     "integrator",
     "-",
     "lanes",
-    "RK4 variant: lanes (SIMD blocks), rk4 (one case per iteration), rk4_switch_aware",
+    "RK4 variant: lanes (SIMD blocks), lanes_f32 (the same in single precision), rk4 (one "
+    "case per iteration), rk4_switch_aware",
     choices=INTEGRATORS,
 )
 ANGLE_STEP = Parameter(

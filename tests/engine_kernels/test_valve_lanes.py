@@ -4,6 +4,12 @@ The expected values come from the one-case kernel (``valve.valve_response_batch`
 model, arithmetic and observations integrated one case at a time with plain loops and
 branches, an independent second implementation of the block-and-lane bookkeeping. Reference
 valve train as in test_valve.py (SPEC §4 thesis data plus stated assumptions).
+
+Single precision (integrator ``lanes_f32``, a float32 table): expected values from the
+double-precision kernels and the float32 round-off bound. Each grid step rounds the state
+once, so after ``n`` steps the lift may have drifted by at most about ``n · ε32 · max|y|``
+(ε32 = 2⁻²³). The extremes of the stability guard (as in test_valve.py) check that the energy
+and mode checks, in float32 there, neither miss an instability nor invent one.
 """
 
 from __future__ import annotations
@@ -164,3 +170,106 @@ def test_lane_loops_vectorise(loop):
     compiled(data, *([0.0] * arguments))
     llvm = compiled.inspect_llvm(compiled.signatures[0])
     assert " x double>" in llvm
+
+
+EPS32 = 2.0**-23
+
+
+def run_lanes(rows, table, step, start, settings):
+    out = np.empty((rows.shape[0], len(valve.VALVE_OUTPUT_NAMES)))
+    valve_lanes.valve_response_lanes(table, step, start, rows, settings, out)
+    return out
+
+
+def round_off_bound(table, lift):
+    """Largest drift [m] of n float32 roundings of a lift of size max|y|."""
+    steps = (table.shape[1] - 1) // 2
+    return steps * EPS32 * np.max(np.abs(lift))
+
+
+@pytest.mark.parametrize("rpm", [3500.0, 6000.0, 9000.0])
+def test_single_precision_trajectory_is_within_round_off(rpm):
+    # 3500 rpm follows the cam, 6000 and 9000 rpm jump and bounce.
+    table, step, start = cosine_event_table(0.5)
+    row = PARAMS.copy()
+    row[valve.P_SPEED] = rpm * RPM
+    settings = valve.valve_settings()
+    out = np.empty(len(valve.VALVE_OUTPUT_NAMES))
+    curves = np.empty((len(valve.VALVE_CURVE_NAMES), (table.shape[1] - 1) // 2 + 1))
+    valve.valve_response(table, step, start, row, settings, out, curves)
+    double = curves[valve.C_LIFT]
+    single = np.empty_like(double)
+    valve_lanes.lift_trace_lanes(table.astype(np.float32), step, start, row, settings, single)
+    drift = np.max(np.abs(single - double))
+    assert 0.0 < drift <= round_off_bound(table, double)
+
+
+def test_single_precision_outputs_track_double_precision():
+    # Where the run follows the cam, the outputs stay within the round-off bound. Where it
+    # separates and bounces, the flight amplifies any perturbation, round-off included; there
+    # the difference must stay below a tenth of the RK4 truncation error the step carries
+    # anyway (double precision at this step against half of it).
+    rows = mixed_batch(75, 7)
+    table, step, start = cosine_event_table(0.5)
+    settings = valve.valve_settings()
+    double = run_lanes(rows, table, step, start, settings)
+    single = run_lanes(rows, table.astype(np.float32), step, start, settings)
+    finer = run_lanes(rows, *cosine_event_table(0.25), settings)
+    np.testing.assert_array_equal(single[:, valve.O_STATUS], double[:, valve.O_STATUS])
+    np.testing.assert_array_equal(single[:, valve.O_SUBSTEPS], double[:, valve.O_SUBSTEPS])
+    ok = double[:, valve.O_STATUS] == valve.STATUS_OK
+    assert ok.sum() > 50
+    bound = round_off_bound(table, double[ok, valve.O_MAX_LIFT])
+    for column in (valve.O_MAX_LIFT, valve.O_JUMP_GAP):
+        truncation = np.abs(double[ok, column] - finer[ok, column])
+        allowed = np.maximum(bound, 0.1 * truncation)
+        assert (np.abs(single[ok, column] - double[ok, column]) <= allowed).all()
+    # The jump starts on the same grid point, or one point off where the drive force
+    # crosses zero within round-off of a grid point.
+    jumped = ok & np.isfinite(double[:, valve.O_JUMP_START])
+    assert jumped.any()
+    shift = np.abs(single[jumped, valve.O_JUMP_START] - double[jumped, valve.O_JUMP_START])
+    assert (shift <= 2 * step * (1 + 1e-6)).all()
+
+
+@pytest.mark.parametrize(
+    "changes",
+    [
+        {valve.P_SPEED: 10_000 * RPM},
+        {valve.P_SPEED: 50 * RPM},
+        {valve.P_SEAT_STIFFNESS: 1e10},
+        {valve.P_DRIVE_DAMPING: 0.0, valve.P_SEAT_DAMPING: 0.0},
+        {valve.P_SEAT_DAMPING: 1e5},
+    ],
+)
+@pytest.mark.parametrize("guard", [True, False])
+def test_single_precision_status_at_the_extremes(changes, guard):
+    # With the guard the status is ok in both precisions; without it (|h λ| > 2.6 in all but
+    # the undamped and 10 000 rpm cases) the float32 energy and mode checks must flag the
+    # same runs as unstable as the float64 ones.
+    row = PARAMS.copy()
+    for column, value in changes.items():
+        row[column] = value
+    rows = row[np.newaxis, :]
+    table, step, start = cosine_event_table(0.5)
+    settings = valve.valve_settings(stability_guard=guard)
+    double = run_lanes(rows, table, step, start, settings)
+    single = run_lanes(rows, table.astype(np.float32), step, start, settings)
+    assert single[0, valve.O_STATUS] == double[0, valve.O_STATUS]
+    if guard:
+        assert single[0, valve.O_STATUS] == valve.STATUS_OK
+    assert math.isfinite(single[0, valve.O_MAX_LIFT])
+
+
+@pytest.mark.parametrize(
+    ("loop", "arguments"), [("_observe_lanes", 3), ("_step_lanes", 4), ("_energy_lanes", 2)]
+)
+def test_single_precision_loops_use_eight_lanes(loop, arguments):
+    # The point of float32: 8 lanes per AVX2 vector. A float64 literal or a 64-bit integer
+    # in a loop would promote it back to 4 lanes (or to double arithmetic) without notice.
+    function = numba.njit(fastmath=FASTMATH)(getattr(valve_lanes, loop).py_func)
+    data = np.zeros((valve_lanes.N_LANE_ROWS + valve.N_STATS) * valve_lanes.LANES, np.float32)
+    function(data, *([np.float32(0.0)] * arguments))
+    llvm = function.inspect_llvm(function.signatures[0])
+    assert "<8 x float>" in llvm
+    assert " x double>" not in llvm

@@ -32,7 +32,7 @@ def test_valve_step_accuracy_runs_with_one_reference_per_pair(
     plan.scene.reference_cache.entries.clear()
     result = run_plan(plan, tmp_path, progress=False)
     ds = result.dataset
-    assert ds.sizes["run"] == 48
+    assert ds.sizes["run"] == 64
     assert len(solves) == 4  # camshaft speed × seat stiffness pairs
     assert (result.folder / "error_vs_cost.png").stat().st_size > 10_000
     assert "timing" in ds["cost_per_case"].attrs["long_name"]
@@ -41,6 +41,16 @@ def test_valve_step_accuracy_runs_with_one_reference_per_pair(
     lanes = ds.where(ds["integrator"] == "lanes", drop=True)
     rk4 = ds.where(ds["integrator"] == "rk4", drop=True)
     np.testing.assert_array_equal(lanes["reference_error"], rk4["reference_error"])
+    # Single precision has its own trajectory. Where the valve follows the cam (3500 rpm) its
+    # round-off is far below the RK4 error, so the errors agree to 0.5 %; in the violent
+    # separation at 6000 rpm the flight amplifies round-off like any perturbation, so only
+    # to 10 % (measured: 7 %, at 0.125 deg, 0.36 µm against 0.34 µm).
+    single = ds.where(ds["integrator"] == "lanes_f32", drop=True)
+    follows = (single["cam_speed"] < 4000.0).values
+    error, double = single["reference_error"].values, lanes["reference_error"].values
+    np.testing.assert_allclose(error[follows], double[follows], rtol=0.005)
+    np.testing.assert_allclose(error[~follows], double[~follows], rtol=0.10)
+    assert (error != double).any()
     # Convergence towards the reference: the switch-aware runs at 0.125 deg are at least five
     # times closer to it than at 1 deg, for every speed and seat stiffness.
     aware = ds.where(ds["integrator"] == "rk4_switch_aware", drop=True)
