@@ -8,6 +8,7 @@ Each benchmark warms up (compiles) first and reports the best of ``repeat`` time
 from __future__ import annotations
 
 import json
+import math
 import time
 from collections.abc import Callable
 from functools import partial
@@ -16,11 +17,11 @@ from typing import Any
 
 import numpy as np
 
-from engine_kernels import valve, valve_lanes
+from engine_kernels import rocker, valve, valve_lanes
 from studies import provenance, tracking
 from studies.plan import Plan, plan_text
 from studies.runner import evaluate_chunk
-from studies.scenes.rocker import grid_deg
+from studies.scenes.rocker import HALF_TURN_DEG, grid_deg
 from studies.scenes.valve import ValveScene, kernel_settings, valve_rows
 from studies.valve_accuracy import reference_lift
 
@@ -101,12 +102,14 @@ def _valve_plan(integrator: str, cases: int, step: float) -> Plan:
 
 
 def bench_valve(cases: int, step: float, repeat: int) -> dict[str, Any]:
-    """Valve cases/s: the lane kernel vs one case per prange iteration on identical inputs
-    (kernel only, and end to end through the study engine), the switch-aware RK4, and scipy's
+    """Valve cases/s: the lane kernel (double and single precision) vs one case per prange
+    iteration on identical inputs (kernels alone, over the scene's window and over a whole
+    revolution, and end to end through the study engine), the switch-aware RK4, and scipy's
     event-restarted DOP853 (the accuracy reference)."""
     figures: dict[str, Any] = {"kernel": _valve_kernels(cases, step, repeat)}
     for integrator, n in [
         ("lanes", cases),
+        ("lanes_f32", cases),
         ("rk4", cases),
         ("rk4_switch_aware", min(cases, SWITCH_AWARE_CASES)),
     ]:
@@ -117,9 +120,10 @@ def bench_valve(cases: int, step: float, repeat: int) -> dict[str, Any]:
             "seconds": seconds,
             "cases_per_s": plan.runs / seconds,
         }
-    figures["scene_lanes_over_one_case"] = (
-        figures["scene_lanes"]["cases_per_s"] / figures["scene_rk4"]["cases_per_s"]
-    )
+    for name in ("lanes", "lanes_f32"):
+        figures[f"scene_{name}_over_one_case"] = (
+            figures[f"scene_{name}"]["cases_per_s"] / figures["scene_rk4"]["cases_per_s"]
+        )
     scene, ctx, key, idx = _valve_case(
         VALVE_STUDY.format(integrator="rk4", step=step, speeds=list(SCIPY_SPEEDS), preloads=[205.8])
     )
@@ -151,23 +155,38 @@ def _valve_case(text: str) -> tuple[ValveScene, dict[str, Any], tuple, np.ndarra
 
 
 def _valve_kernels(cases: int, step: float, repeat: int) -> dict[str, Any]:
-    """The two compiled kernels alone on the same excitation table and parameter rows."""
+    """The compiled kernels alone on the same parameter rows: over the scene's integration
+    window, and over a whole cam revolution (the equal-work figure for a 360° comparison)."""
     scene, ctx, key, idx = _valve_case(_valve_plan("lanes", cases, step).definition.text)
-    table, table_step, start = scene.excitation(ctx, key, step)
     first, last = scene.window(ctx, key)
+    chain = scene.chain(ctx, key, (-HALF_TURN_DEG, step / 2.0, HALF_TURN_DEG))
+    revolution = np.ascontiguousarray(chain.curves[: rocker.ROW_VALVE_ACCELERATION + 1])
+    tables = {
+        "window": scene.excitation(ctx, key, step),
+        "revolution": (revolution, math.radians(step / 2.0), math.radians(-HALF_TURN_DEG)),
+    }
     rows = valve_rows(ctx["points"], idx)
     flags = kernel_settings(ctx["settings"], "lanes", estimate=False)
     out = np.empty((rows.shape[0], len(valve.VALVE_OUTPUT_NAMES)))
-    figures: dict[str, Any] = {"integrated_span_deg": last - first, "step_deg": step}
-    for name, kernel in [
-        ("lanes", valve_lanes.valve_response_lanes),
-        ("one_case", valve.valve_response_batch),
-    ]:
-        seconds = best_time(partial(kernel, table, table_step, start, rows, flags, out), repeat)
-        figures[name] = {"cases": len(rows), "seconds": seconds, "cases_per_s": len(rows) / seconds}
-    figures["lanes_over_one_case"] = (
-        figures["lanes"]["cases_per_s"] / figures["one_case"]["cases_per_s"]
-    )
+    figures: dict[str, Any] = {"window_span_deg": last - first, "step_deg": step}
+    for span, (table, table_step, start) in tables.items():
+        for name, dtype, kernel in [
+            ("lanes", np.float64, valve_lanes.valve_response_lanes),
+            ("lanes_f32", np.float32, valve_lanes.valve_response_lanes),
+            ("one_case", np.float64, valve.valve_response_batch),
+        ]:
+            run = partial(kernel, table.astype(dtype), table_step, start, rows, flags, out)
+            seconds = best_time(run, repeat)
+            figures[f"{span}_{name}"] = {
+                "cases": len(rows),
+                "seconds": seconds,
+                "cases_per_s": len(rows) / seconds,
+            }
+        for name in ("lanes", "lanes_f32"):
+            figures[f"{span}_{name}_over_one_case"] = (
+                figures[f"{span}_{name}"]["cases_per_s"]
+                / figures[f"{span}_one_case"]["cases_per_s"]
+            )
     return figures
 
 

@@ -269,16 +269,22 @@ def test_bad_settings_are_refused_before_running(
 def test_valve_benchmark_reports_lanes_one_case_and_scipy(tmp_path: Path) -> None:
     path = run_benchmark("valve", cases=40, step=1.0, repeat=1, outputs=tmp_path)
     figures = json.loads(path.read_text(encoding="utf-8"))["figures"]
-    for name in ("scene_lanes", "scene_rk4", "scene_rk4_switch_aware", "scipy_dop853_rtol_1e-10"):
+    scene = ("scene_lanes", "scene_lanes_f32", "scene_rk4", "scene_rk4_switch_aware")
+    for name in (*scene, "scipy_dop853_rtol_1e-10"):
         assert figures[name]["cases"] > 0
         assert figures[name]["cases_per_s"] > 0.0
     assert figures["scene_lanes"]["cases"] == 40
     ratio = figures["scene_lanes"]["cases_per_s"] / figures["scene_rk4"]["cases_per_s"]
     assert figures["scene_lanes_over_one_case"] == pytest.approx(ratio)
     kernel = figures["kernel"]
-    assert kernel["lanes"]["cases"] == kernel["one_case"]["cases"] == 40
-    ratio = kernel["lanes"]["cases_per_s"] / kernel["one_case"]["cases_per_s"]
-    assert kernel["lanes_over_one_case"] == pytest.approx(ratio)
+    assert kernel["window_span_deg"] < 360.0
+    for span in ("window", "revolution"):
+        for name in ("lanes", "lanes_f32"):
+            assert kernel[f"{span}_{name}"]["cases"] == kernel[f"{span}_one_case"]["cases"] == 40
+            ratio = (
+                kernel[f"{span}_{name}"]["cases_per_s"] / kernel[f"{span}_one_case"]["cases_per_s"]
+            )
+            assert kernel[f"{span}_{name}_over_one_case"] == pytest.approx(ratio)
 
 
 def test_results_do_not_depend_on_the_chunk_size() -> None:
