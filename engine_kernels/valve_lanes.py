@@ -88,9 +88,16 @@ _STATS = N_LANE_ROWS * LANES
 
 
 @jit_inline
-def _lane_forces(data, l, lift, velocity, push):
-    """Drive and seat forces per unit mass of lane ``l`` (``specific_forces``) [N/kg]."""
-    return specific_forces(
+def _lane_point(data, l, drive_lift, slope):
+    """State of lane ``l`` and its forces at a point of excitation Y [m], Y' [m/rad].
+
+    Returns lift [m], velocity [m/s], drive and seat forces per unit mass before clipping
+    [N/kg] (``specific_forces``) and the acceleration [m/s²] (``specific_acceleration``).
+    """
+    lift = data[_LIFT * LANES + l]
+    velocity = data[_VELOCITY * LANES + l]
+    push = drive_push(drive_lift, slope, data[_K * LANES + l], data[_B_SPEED * LANES + l])
+    drive, seat = specific_forces(
         lift,
         velocity,
         push,
@@ -100,12 +107,7 @@ def _lane_forces(data, l, lift, velocity, push):
         data[_KZ * LANES + l],
         data[_BZ * LANES + l],
     )
-
-
-@jit_inline
-def _lane_acceleration(data, l, lift, velocity, drive, seat):
-    """Acceleration [m/s²] of lane ``l`` from its specific forces."""
-    return specific_acceleration(
+    acc = specific_acceleration(
         lift,
         velocity,
         drive,
@@ -115,6 +117,7 @@ def _lane_acceleration(data, l, lift, velocity, drive, seat):
         data[_GAMMA * LANES + l],
         data[_DEPTH * LANES + l],
     )
+    return lift, velocity, drive, seat, acc
 
 
 @jit_inline
@@ -148,11 +151,7 @@ def _lane_step(data, l, lift, velocity, acc, ym, sm, y1, s1):
 def _start_lanes(data, angle, drive_lift, slope):
     """First grid point of every lane: acceleration into ``_ACC``, observations started."""
     for l in range(LANES):
-        lift = data[_LIFT * LANES + l]
-        velocity = data[_VELOCITY * LANES + l]
-        push = drive_push(drive_lift, slope, data[_K * LANES + l], data[_B_SPEED * LANES + l])
-        drive, seat = _lane_forces(data, l, lift, velocity, push)
-        acc = _lane_acceleration(data, l, lift, velocity, drive, seat)
+        lift, velocity, drive, seat, acc = _lane_point(data, l, drive_lift, slope)
         data[_ACC * LANES + l] = acc
         start_observations(
             data,
@@ -179,11 +178,7 @@ def _observe_lanes(data, angle, drive_lift, slope):
     """
     changed = False
     for l in range(LANES):
-        lift = data[_LIFT * LANES + l]
-        velocity = data[_VELOCITY * LANES + l]
-        push = drive_push(drive_lift, slope, data[_K * LANES + l], data[_B_SPEED * LANES + l])
-        drive, seat = _lane_forces(data, l, lift, velocity, push)
-        acc = _lane_acceleration(data, l, lift, velocity, drive, seat)
+        lift, velocity, drive, seat, acc = _lane_point(data, l, drive_lift, slope)
         data[_ACC * LANES + l] = acc
         event = observe_valve(
             data,
@@ -224,11 +219,7 @@ def _record_events_lanes(data):
 def _energy_lanes(data, drive_lift, slope):
     """Energy checks of every lane at a grid point (``observe_energy``)."""
     for l in range(LANES):
-        lift = data[_LIFT * LANES + l]
-        velocity = data[_VELOCITY * LANES + l]
-        k = data[_K * LANES + l]
-        push = drive_push(drive_lift, slope, k, data[_B_SPEED * LANES + l])
-        drive, _ = _lane_forces(data, l, lift, velocity, push)
+        lift, velocity, drive, _, _ = _lane_point(data, l, drive_lift, slope)
         observe_energy(
             data,
             _STATS + l,
@@ -239,7 +230,7 @@ def _energy_lanes(data, drive_lift, slope):
             drive_lift,
             data[_SPEED * LANES + l] * slope,
             drive,
-            k,
+            data[_K * LANES + l],
             data[_KS * LANES + l],
             data[_PS0 * LANES + l],
             data[_KZ * LANES + l],
@@ -273,11 +264,7 @@ def _remember_lanes(data):
 def _substep_lanes(data, ya, sa, ym, sm, yb, sb):
     """RK4 sub-step of every lane; excitation at its start, middle and end."""
     for l in range(LANES):
-        lift = data[_LIFT * LANES + l]
-        velocity = data[_VELOCITY * LANES + l]
-        push = drive_push(ya, sa, data[_K * LANES + l], data[_B_SPEED * LANES + l])
-        drive, seat = _lane_forces(data, l, lift, velocity, push)
-        acc = _lane_acceleration(data, l, lift, velocity, drive, seat)
+        lift, velocity, _, _, acc = _lane_point(data, l, ya, sa)
         _lane_step(data, l, lift, velocity, acc, ym, sm, yb, sb)
 
 

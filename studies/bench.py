@@ -8,7 +8,6 @@ Each benchmark warms up (compiles) first and reports the best of ``repeat`` time
 from __future__ import annotations
 
 import json
-import math
 import time
 from collections.abc import Callable
 from functools import partial
@@ -17,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from engine_kernels import rocker, valve, valve_lanes
+from engine_kernels import valve, valve_lanes
 from studies import provenance, tracking
 from studies.plan import Plan, plan_text
 from studies.runner import evaluate_chunk
@@ -159,11 +158,9 @@ def _valve_kernels(cases: int, step: float, repeat: int) -> dict[str, Any]:
     window, and over a whole cam revolution (the equal-work figure for a 360° comparison)."""
     scene, ctx, key, idx = _valve_case(_valve_plan("lanes", cases, step).definition.text)
     first, last = scene.window(ctx, key)
-    chain = scene.chain(ctx, key, (-HALF_TURN_DEG, step / 2.0, HALF_TURN_DEG))
-    revolution = np.ascontiguousarray(chain.curves[: rocker.ROW_VALVE_ACCELERATION + 1])
     tables = {
         "window": scene.excitation(ctx, key, step),
-        "revolution": (revolution, math.radians(step / 2.0), math.radians(-HALF_TURN_DEG)),
+        "revolution": scene.excitation(ctx, key, step, (-HALF_TURN_DEG, HALF_TURN_DEG)),
     }
     rows = valve_rows(ctx["points"], idx)
     flags = kernel_settings(ctx["settings"], "lanes", estimate=False)

@@ -28,6 +28,7 @@ import numpy as np
 
 from engine_kernels import valve, valve_lanes
 from studies.reference.valve_ivp import table_excitation, valve_reference
+from studies.scenes.valve_parameters import LANE_PRECISION
 
 REFERENCE_TABLE_DEG = 1.0 / 64.0
 COST_CASES = 64
@@ -71,7 +72,7 @@ def trajectory_lift(
     table, table_step, start = excitation
     if integrator == "lanes_f32":
         lift = np.empty((table.shape[1] - 1) // 2 + 1)
-        single = table.astype(np.float32)
+        single = table.astype(LANE_PRECISION[integrator])
         valve_lanes.lift_trace_lanes(single, table_step, start, row, flags, lift)
         return lift
     out = np.empty(len(valve.VALVE_OUTPUT_NAMES))

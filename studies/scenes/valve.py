@@ -41,6 +41,7 @@ from studies.scenes.rocker_parameters import RESPONSES as ROCKER_RESPONSES
 from studies.scenes.valve_parameters import (
     CURVES,
     JUMP_NOT_RUN,
+    LANE_PRECISION,
     MAX_HALVINGS,
     PARAMETERS,
     RESPONSES,
@@ -54,8 +55,6 @@ WINDOW_PROBE_DEG = 0.25
 PRE_OPEN_DEG = 2.0
 JUMP_SCAN_POINTS = 16
 N_OUT = len(valve.VALVE_OUTPUT_NAMES)
-# Lane integrators and the precision of their arithmetic (the table's dtype selects it).
-LANE_PRECISION = {"lanes": np.float64, "lanes_f32": np.float32}
 N_CURVES = len(valve.VALVE_CURVE_NAMES)
 ESTIMATE_RESPONSES = ("error_estimate", "step_doubling_difference")
 KINEMATIC_RESPONSES = frozenset(r.name for r in ROCKER_RESPONSES)
@@ -212,10 +211,15 @@ class ValveScene(RockerScene):
         return self.window_cache.get((key, spacing, closing_window), make)
 
     def excitation(
-        self, ctx: dict[str, Any], key: tuple, step: float
+        self,
+        ctx: dict[str, Any],
+        key: tuple,
+        step: float,
+        span: tuple[float, float] | None = None,
     ) -> tuple[np.ndarray, float, float]:
-        """(Y, Y', Y'') table at half the RK4 ``step`` [deg] over the window, its step, start."""
-        start, stop = self.window(ctx, key)
+        """(Y, Y', Y'') table at half the RK4 ``step`` [deg] over the integration window (or
+        over ``span`` = (start, stop) [deg]), its step [rad] and start [rad]."""
+        start, stop = self.window(ctx, key) if span is None else span
         chain = self.chain(ctx, key, (start, step / 2.0, stop))
         table = np.ascontiguousarray(chain.curves[: rocker.ROW_VALVE_ACCELERATION + 1])
         return table, math.radians(step / 2.0), math.radians(start)

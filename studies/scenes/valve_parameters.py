@@ -34,6 +34,8 @@ fixed step cannot place), so the defaults are ``lanes`` at the thesis step of 0.
 
 from __future__ import annotations
 
+import numpy as np
+
 from engine_kernels import valve
 from studies.scenes.base import Curve, Parameter, Response
 from studies.scenes.rocker_parameters import CURVES as ROCKER_CURVES
@@ -43,6 +45,8 @@ from studies.scenes.rocker_parameters import TAPPET_STEP
 
 THESIS, ASSUMED = "SPEC §4 thesis", "assumption"
 INTEGRATORS = ("lanes", "lanes_f32", "rk4", "rk4_switch_aware")
+# Lane integrators and the precision of their arithmetic (the table's dtype selects it).
+LANE_PRECISION = {"lanes": np.float64, "lanes_f32": np.float32}
 MAX_HALVINGS = 6
 STATUS_NOT_RUN = len(valve.VALVE_STATUS_NAMES)
 """Scene status code: the kinematic chain is invalid, so the dynamics did not run."""

@@ -63,10 +63,8 @@ def mixed_batch(n, seed):
 def run_both(rows, settings, step_deg=0.5):
     excitation, step, start = cosine_event_table(step_deg)
     single = np.empty((rows.shape[0], len(valve.VALVE_OUTPUT_NAMES)))
-    lanes = np.empty_like(single)
     valve.valve_response_batch(excitation, step, start, rows, settings, single)
-    valve_lanes.valve_response_lanes(excitation, step, start, rows, settings, lanes)
-    return single, lanes
+    return single, run_lanes(rows, excitation, step, start, settings)
 
 
 def test_lanes_match_one_case_kernel():
