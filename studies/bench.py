@@ -7,9 +7,11 @@ Each benchmark warms up (compiles) first and reports the best of ``repeat`` time
 
 from __future__ import annotations
 
+import ctypes
 import json
+import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -19,6 +21,7 @@ import numpy as np
 from engine_kernels import valve, valve_lanes
 from studies import provenance, tracking
 from studies.plan import Plan, plan_text
+from studies.reference import c_valve
 from studies.runner import evaluate_chunk
 from studies.scenes.rocker import HALF_TURN_DEG, grid_deg
 from studies.scenes.valve import ValveScene, kernel_settings, valve_rows
@@ -39,13 +42,21 @@ levels = [10.0, 12.0, 14.0, 16.0]
 
 
 def best_time(fn: Callable[[], object], repeat: int) -> float:
-    fn()
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
+    return best_times([fn], repeat)[0]
+
+
+def best_times(fns: Sequence[Callable[[], object]], repeat: int) -> list[float]:
+    """Best of ``repeat`` timings of each function, taken in turns (after one warm-up call
+    each), so that load from other users of the machine falls on all of them alike."""
+    for fn in fns:
         fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
+    best = [math.inf] * len(fns)
+    for _ in range(repeat):
+        for i, fn in enumerate(fns):
+            t0 = time.perf_counter()
+            fn()
+            best[i] = min(best[i], time.perf_counter() - t0)
+    return best
 
 
 def bench_cam(cases: int, step: float, repeat: int) -> dict[str, Any]:
@@ -102,9 +113,10 @@ def _valve_plan(integrator: str, cases: int, step: float) -> Plan:
 
 def bench_valve(cases: int, step: float, repeat: int) -> dict[str, Any]:
     """Valve cases/s: the lane kernel (double and single precision) vs one case per prange
-    iteration on identical inputs (kernels alone, over the scene's window and over a whole
-    revolution, and end to end through the study engine), the switch-aware RK4, and scipy's
-    event-restarted DOP853 (the accuracy reference)."""
+    iteration and vs the C reference of the lane kernel on identical inputs (kernels alone,
+    over the scene's window and over a whole revolution, and end to end through the study
+    engine), the switch-aware RK4, and scipy's event-restarted DOP853 (the accuracy
+    reference)."""
     figures: dict[str, Any] = {"kernel": _valve_kernels(cases, step, repeat)}
     for integrator, n in [
         ("lanes", cases),
@@ -155,7 +167,12 @@ def _valve_case(text: str) -> tuple[ValveScene, dict[str, Any], tuple, np.ndarra
 
 def _valve_kernels(cases: int, step: float, repeat: int) -> dict[str, Any]:
     """The compiled kernels alone on the same parameter rows: over the scene's integration
-    window, and over a whole cam revolution (the equal-work figure for a 360° comparison)."""
+    window, and over a whole cam revolution (the equal-work figure for a 360° comparison).
+
+    Beside the Numba kernels, the C reference of the lane kernel (``studies/reference/
+    valve_lanes.c``, lanes and one case at a time, both precisions) built with this machine's
+    compiler: the issue's "C -O3 kernel of this form", measured here rather than quoted.
+    """
     scene, ctx, key, idx = _valve_case(_valve_plan("lanes", cases, step).definition.text)
     first, last = scene.window(ctx, key)
     tables = {
@@ -166,25 +183,74 @@ def _valve_kernels(cases: int, step: float, repeat: int) -> dict[str, Any]:
     flags = kernel_settings(ctx["settings"], "lanes", estimate=False)
     out = np.empty((rows.shape[0], len(valve.VALVE_OUTPUT_NAMES)))
     figures: dict[str, Any] = {"window_span_deg": last - first, "step_deg": step}
+    libraries, skipped = _c_reference(tables["revolution"], rows, flags, out)
+    if skipped:
+        figures["c_reference"] = f"skipped: {skipped}"
     for span, (table, table_step, start) in tables.items():
-        for name, dtype, kernel in [
-            ("lanes", np.float64, valve_lanes.valve_response_lanes),
-            ("lanes_f32", np.float32, valve_lanes.valve_response_lanes),
-            ("one_case", np.float64, valve.valve_response_batch),
-        ]:
-            run = partial(kernel, table.astype(dtype), table_step, start, rows, flags, out)
-            seconds = best_time(run, repeat)
+        runs: dict[str, Callable[[], None]] = {}
+        for suffix, dtype in PRECISIONS.items():
+            typed: np.ndarray = table.astype(dtype)
+            numba_args = (typed, table_step, start, rows, flags, out)
+            runs[f"lanes{suffix}"] = partial(valve_lanes.valve_response_lanes, *numba_args)
+            if dtype == np.float64:
+                runs["one_case"] = partial(valve.valve_response_batch, *numba_args)
+            if dtype in libraries:
+                for name in ("lanes", "one_case"):
+                    runs[f"c_{name}{suffix}"] = partial(
+                        c_valve.valve_response_c,
+                        libraries[dtype],
+                        f"valve_{name}",
+                        typed,
+                        table_step,
+                        start,
+                        rows,
+                        out,
+                    )
+        for name, seconds in zip(runs, best_times(list(runs.values()), repeat), strict=True):
             figures[f"{span}_{name}"] = {
                 "cases": len(rows),
                 "seconds": seconds,
                 "cases_per_s": len(rows) / seconds,
             }
-        for name in ("lanes", "lanes_f32"):
-            figures[f"{span}_{name}_over_one_case"] = (
-                figures[f"{span}_{name}"]["cases_per_s"]
-                / figures[f"{span}_one_case"]["cases_per_s"]
-            )
+        for numerator, denominator in RATIOS:
+            if f"{span}_{denominator}" in figures:
+                figures[f"{span}_{numerator}_over_{denominator}"] = (
+                    figures[f"{span}_{numerator}"]["cases_per_s"]
+                    / figures[f"{span}_{denominator}"]["cases_per_s"]
+                )
     return figures
+
+
+def _c_reference(
+    revolution: tuple[np.ndarray, float, float],
+    rows: np.ndarray,
+    flags: np.ndarray,
+    out: np.ndarray,
+) -> tuple[dict[type, ctypes.CDLL], str]:
+    """The C reference built for each precision, or why the comparison is skipped.
+
+    The C kernel has no stability guard: it does the same work only where the guard gives
+    every case one RK4 sub-step, which is checked here.
+    """
+    table, table_step, start = revolution
+    valve_lanes.valve_response_lanes(table, table_step, start, rows, flags, out)
+    if np.any(out[:, valve.O_SUBSTEPS] != 1):
+        return {}, "some cases need RK4 sub-steps, which the C reference does not take"
+    try:
+        return {dtype: c_valve.build(np.dtype(dtype)) for dtype in PRECISIONS.values()}, ""
+    except c_valve.CompilerMissing as error:
+        return {}, str(error)
+
+
+PRECISIONS: dict[str, type] = {"": np.float64, "_f32": np.float32}
+RATIOS = (
+    ("lanes", "one_case"),
+    ("lanes_f32", "one_case"),
+    ("lanes", "c_lanes"),
+    ("lanes_f32", "c_lanes_f32"),
+    ("c_lanes", "c_one_case"),
+    ("c_lanes_f32", "c_one_case_f32"),
+)
 
 
 BENCHMARKS: dict[str, Callable[[int, float, int], dict[str, Any]]] = {

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -266,8 +268,8 @@ def test_bad_settings_are_refused_before_running(
     assert expected in str(info.value)
 
 
-def test_valve_benchmark_reports_lanes_one_case_and_scipy(tmp_path: Path) -> None:
-    path = run_benchmark("valve", cases=40, step=1.0, repeat=1, outputs=tmp_path)
+def test_valve_benchmark_reports_lanes_one_case_c_and_scipy(tmp_path: Path) -> None:
+    path = run_benchmark("valve", cases=40, step=0.5, repeat=1, outputs=tmp_path)
     figures = json.loads(path.read_text(encoding="utf-8"))["figures"]
     scene = ("scene_lanes", "scene_lanes_f32", "scene_rk4", "scene_rk4_switch_aware")
     for name in (*scene, "scipy_dop853_rtol_1e-10"):
@@ -285,6 +287,15 @@ def test_valve_benchmark_reports_lanes_one_case_and_scipy(tmp_path: Path) -> Non
                 kernel[f"{span}_{name}"]["cases_per_s"] / kernel[f"{span}_one_case"]["cases_per_s"]
             )
             assert kernel[f"{span}_{name}_over_one_case"] == pytest.approx(ratio)
+        if shutil.which(os.environ.get("CC", "cc")) is None:
+            assert kernel["c_reference"].startswith("skipped")
+            continue
+        for name, c_name in (("lanes", "c_lanes"), ("lanes_f32", "c_lanes_f32")):
+            assert kernel[f"{span}_{c_name}"]["cases"] == 40
+            ratio = (
+                kernel[f"{span}_{name}"]["cases_per_s"] / kernel[f"{span}_{c_name}"]["cases_per_s"]
+            )
+            assert kernel[f"{span}_{name}_over_{c_name}"] == pytest.approx(ratio)
 
 
 def test_results_do_not_depend_on_the_chunk_size() -> None:
