@@ -178,7 +178,8 @@ def anova(
     ``error_columns`` attribute); the error SS is everything the factors leave, so it also
     holds any other free degrees of freedom (e.g. a full factorial analysed for main effects).
     When the error has no degrees of freedom the factor with the smallest SS is pooled into
-    it; ``pool=[...]`` pools the named factors instead (``pool=[]``: never pool). Pooled rows
+    it; ``pool=[...]`` pools the named factors instead (``pool=[]``: never pool; default: the
+    ``pool`` attribute, from the study's ``[design] pool``, if there is one). Pooled rows
     keep their SS, dof and contribution, with F and P NaN; the error row includes them.
     ``df.attrs``: "response", "units" (of the response; SS in units²), "error_columns",
     "pooled" (list) and "note" (a sentence on pooling or dropped runs, else "").
@@ -192,6 +193,8 @@ def anova(
     y_da, finite = _response(ds, response)
     y = y_da.values.astype(float)[finite]
     codes = {f: ds[f"{f}_level"].values[finite] for f in names}
+    if pool is None and "pool" in ds.attrs:
+        pool = json.loads(ds.attrs["pool"])
     pooled = list(pool) if pool is not None else []
     unknown = [p for p in pooled if p not in names]
     if unknown:

@@ -91,6 +91,19 @@ def _parser() -> argparse.ArgumentParser:
     analyze = sub.add_parser("analyze", help="tables and plots for a results.nc")
     analyze.add_argument("results", type=Path)
     analyze.add_argument("--response", action="append", help="only these responses")
+    pooling = analyze.add_mutually_exclusive_group()
+    pooling.add_argument(
+        "--pool",
+        action="append",
+        metavar="FACTOR",
+        help="pool this factor into the ANOVA error (repeat for more; overrides the study's "
+        "[design] pool)",
+    )
+    pooling.add_argument(
+        "--no-pool",
+        action="store_true",
+        help="pool nothing, even when the error has no degrees of freedom",
+    )
     analyze.set_defaults(func=_cmd_analyze)
 
     runs = sub.add_parser("runs", help="list recorded runs")
@@ -217,6 +230,8 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
         raise FileNotFoundError(f"no such results file: {args.results}")
     with xr.open_dataset(args.results) as ds:
         ds.load()
+    if args.no_pool or args.pool:
+        ds.attrs["pool"] = json.dumps([] if args.no_pool else args.pool)
     files = write_analysis(ds, args.results.parent, args.response)
     print(files[0].read_text(encoding="utf-8"))
     for f in files:

@@ -17,6 +17,8 @@ File layout (see ``studies/catalog/*.toml`` and the README)::
     type = "L9"                      # full_factorial | sweep | auto | an orthogonal array name
     error_columns = ["D"]            # names of the array's unassigned columns (optional)
     interactions = [["A", "B"]]      # factor pairs whose interaction columns are kept (optional)
+    pool = ["B"]                     # factors pooled into the ANOVA error (optional; default:
+                                     # the smallest factor only when the error has no dof)
 
     [settings]
     angle_step = 0.1                 # accuracy settings of the scene, in its units
@@ -57,7 +59,7 @@ TOP_LEVEL_KEYS = {
     "factors",
     "sense",
 }
-DESIGN_KEYS = {"type", "error_columns", "interactions"}
+DESIGN_KEYS = {"type", "error_columns", "interactions", "pool"}
 FACTOR_KEYS = {"levels", "units", "column", "base"}
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9_-]+$")
 
@@ -102,6 +104,7 @@ class StudyDefinition:
     text: str = ""
     source: str = "<string>"
     interactions: tuple[tuple[str, str], ...] = ()
+    pool: tuple[str, ...] | None = None
 
 
 def find_study(name_or_path: str | Path) -> Path:
@@ -182,6 +185,7 @@ class _Parser:
                 self.problem(f"{f.name} is both fixed in [parameters] and varied in [factors]")
         settings = self._settings(scene, settings_raw)
         interactions = self._interactions([f.name for f in factors], design)
+        pool = self._pool([f.name for f in factors], design)
         if not factors and not self.problems:
             self.problem("no [factors]: a study needs at least one varied parameter")
         definition = StudyDefinition(
@@ -199,6 +203,7 @@ class _Parser:
             text=self.text,
             source=self.source,
             interactions=tuple(interactions),
+            pool=pool,
         )
         return definition, self.problems
 
@@ -279,6 +284,23 @@ class _Parser:
                     f"{_suggest(name, factors)}"
                 )
         return [(a, b) for a, b in pairs if a in factors and b in factors]
+
+    def _pool(self, factors: list[str], design: str) -> tuple[str, ...] | None:
+        table = self.data.get("design")
+        if not isinstance(table, dict) or "pool" not in table:
+            return None
+        names = table["pool"]
+        if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+            self.problem(f'[design] pool = {names!r} must be a list of factor names, e.g. ["D"]')
+            return None
+        if design == "sweep":
+            self.problem("[design] pool applies to the ANOVA, which a sweep does not have")
+        for name in names:
+            if name not in factors:
+                self.problem(
+                    f"[design] pool names {name!r}, which is not a factor{_suggest(name, factors)}"
+                )
+        return tuple(names)
 
     def _check_responses(
         self, scene: Scene, responses: list[str], curves: list[str], sense: dict[str, Any]

@@ -100,6 +100,7 @@ def build_dataset(plan: Plan, ev: Evaluation, attrs: dict[str, Any]) -> xr.Datas
         "factors": json.dumps([f.name for f in d.factors]),
         "error_columns": json.dumps(list(design.error_columns)),
         "interaction_columns": json.dumps({k: list(v) for k, v in design.interactions.items()}),
+        **({} if d.pool is None else {"pool": json.dumps(list(d.pool))}),
         "array_columns": json.dumps(design.columns),
         "responses": json.dumps(list(d.responses)),
         "settings": json.dumps(d.settings),

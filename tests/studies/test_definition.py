@@ -101,6 +101,18 @@ MISTAKES = [
     ),
     ("missing scene", lambda t: t.replace('scene = "cam"\n', ""), ["missing required key 'scene'"]),
     (
+        "pooling an unknown factor",
+        lambda t: t.replace(
+            'error_columns = ["D"]', 'error_columns = ["D"]\npool = ["seg2_widht"]'
+        ),
+        ["[design] pool names 'seg2_widht', which is not a factor", "seg2_width"],
+    ),
+    (
+        "pool not a list",
+        lambda t: t.replace('error_columns = ["D"]', 'error_columns = ["D"]\npool = "seg2_width"'),
+        ["[design] pool = 'seg2_width' must be a list of factor names"],
+    ),
+    (
         "column twice",
         lambda t: t.replace('units = "deg"', 'units = "deg"\ncolumn = 2').replace(
             "[3.5, 4.5, 5.5]", "[3.5, 4.5, 5.5]\ncolumn = 2"

@@ -153,3 +153,33 @@ def test_analyze_cli_writes_tables_and_plots(isac, capsys: pytest.CaptureFixture
     out = capsys.readouterr().out
     assert "max_contact_stress" in out
     assert (result.folder / "main_effects_max_jerk.png").stat().st_size > 1000
+
+
+def test_pooling_from_the_study_and_from_the_cli(tmp_path: Path, capsys) -> None:
+    # 2 × 3 full factorial: error dof 6 − 1 − 1 − 2 = 2; pooling cam_speed (dof 2) gives 4,
+    # pooling base_radius (dof 1) gives 3 (counting from the design, not from the code).
+    from studies.analysis import anova
+    from studies.cli import main
+
+    text = small(responses=("max_contact_stress",)).replace(
+        'type = "full_factorial"', 'type = "full_factorial"\npool = ["cam_speed"]'
+    )
+    result = run_plan(plan_text(text), outputs=tmp_path, progress=False)
+    path = result.folder / "results.nc"
+    with xr.open_dataset(path) as ds:
+        assert json.loads(ds.attrs["pool"]) == ["cam_speed"]
+        table = anova(ds.load(), "max_contact_stress")
+    assert table.attrs["pooled"] == ["cam_speed"]
+    assert table.loc["error", "dof"] == 4
+    assert "cam_speed (pooled)" in (result.folder / "analysis.txt").read_text(encoding="utf-8")
+    assert "Pooled into error: cam_speed." in (result.folder / "report.md").read_text("utf-8")
+
+    assert main(["analyze", str(path), "--pool", "base_radius"]) == 0
+    analysis = (result.folder / "analysis.txt").read_text(encoding="utf-8")
+    assert "base_radius (pooled)" in analysis
+    assert "cam_speed (pooled)" not in analysis
+    assert main(["analyze", str(path), "--no-pool"]) == 0
+    assert "(pooled)" not in (result.folder / "analysis.txt").read_text(encoding="utf-8")
+    capsys.readouterr()
+    assert main(["analyze", str(path), "--pool", "cam_sped"]) == 2
+    assert "cannot pool ['cam_sped']" in capsys.readouterr().err
