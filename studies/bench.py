@@ -259,6 +259,22 @@ BENCHMARKS: dict[str, Callable[[int, float, int], dict[str, Any]]] = {
 }
 
 
+def summarize(figures: dict[str, Any], indent: str = "  ") -> list[str]:
+    """Readable lines of a benchmark's figures: cases/s per timing, × per ratio, groups
+    indented (the JSON file keeps every number)."""
+    lines = []
+    for key, value in figures.items():
+        if isinstance(value, dict) and "cases_per_s" in value:
+            lines.append(f"{indent}{key:<42} {value['cases_per_s']:>13,.1f} cases/s")
+        elif isinstance(value, dict):
+            lines += [f"{indent}{key}:", *summarize(value, indent + "  ")]
+        elif isinstance(value, float) and "_over_" in key:
+            lines.append(f"{indent}{key:<42} {value:>13.2f} ×")
+        else:
+            lines.append(f"{indent}{key:<42} {value!s:>13}")
+    return lines
+
+
 def run_benchmark(name: str, cases: int, step: float, repeat: int, outputs: Path) -> Path:
     """Run one benchmark, print its figures, write them as JSON; return the JSON path."""
     if name not in BENCHMARKS:

@@ -126,20 +126,16 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
-    from studies.bench import BENCHMARKS, run_benchmark
+    from studies.bench import BENCHMARKS, run_benchmark, summarize
 
     names = list(BENCHMARKS) if args.name == "all" else [args.name]
     for name in names:
         path = run_benchmark(name, args.cases, args.step, args.repeat, args.outputs)
         figures = json.loads(path.read_text(encoding="utf-8"))["figures"]
         print(f"benchmark {name} ({args.cases} cases, step {args.step} deg):")
-        print(_indent(json.dumps(figures, indent=2)))
-        print(f"  written to {path}")
+        print("\n".join(summarize(figures)))
+        print(f"  all figures in {path}")
     return 0
-
-
-def _indent(text: str) -> str:
-    return "\n".join("  " + line for line in text.splitlines())
 
 
 def _cmd_run(args: argparse.Namespace) -> int:

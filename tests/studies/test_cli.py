@@ -34,3 +34,19 @@ def test_check_reports_design_and_stages(capsys: pytest.CaptureFixture[str]) -> 
 def test_unknown_study_is_exit_code_2(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["check", "no_such_study"]) == 2
     assert "no study named 'no_such_study'" in capsys.readouterr().err
+
+
+def test_bench_summary_lines() -> None:
+    from studies.bench import summarize
+
+    figures = {
+        "kernel": {"window_lanes": {"cases": 10, "seconds": 0.5, "cases_per_s": 20.0}},
+        "scene_lanes_over_one_case": 3.14159,
+        "c_reference": "skipped: no compiler",
+    }
+    lines = summarize(figures)
+    assert lines[0] == "  kernel:"
+    assert lines[1].split() == ["window_lanes", "20.0", "cases/s"]
+    assert lines[2].split() == ["scene_lanes_over_one_case", "3.14", "×"]
+    assert lines[3].split()[0] == "c_reference"
+    assert lines[3].endswith("skipped: no compiler")
