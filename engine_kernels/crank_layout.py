@@ -1,7 +1,8 @@
 """Multi-cylinder layouts of the slider-crank engine: the ``multicylinder`` driver (SPEC §5).
 
 This module holds firing angles (even, and V engines with shared crankpins), cylinder axis
-angles of V layouts, the free first- and second-order reciprocating forces of a layout, the
+angles of V layouts, the free first- and second-order reciprocating forces and moments of a
+layout, the
 periodic interpolation and harmonic amplitude used on the cycle grid, the output columns of the
 multi-cylinder driver and :func:`crank_multicylinder_batch` (summed torque, its harmonic orders
 and the free forces). Parameter columns and conventions are those of :mod:`engine_kernels.crank`;
@@ -34,7 +35,9 @@ MULTI_TORQUE_NONUNIFORMITY = 4
 MULTI_MEAN_POWER = 5
 MULTI_FREE_FIRST_ORDER_FORCE = 6
 MULTI_FREE_SECOND_ORDER_FORCE = 7
-N_MULTI_OUT = 8
+MULTI_FREE_FIRST_ORDER_MOMENT = 8
+MULTI_FREE_SECOND_ORDER_MOMENT = 9
+N_MULTI_OUT = 10
 MULTI_OUTPUTS = (
     "mean_torque",
     "max_torque",
@@ -44,8 +47,10 @@ MULTI_OUTPUTS = (
     "mean_power",
     "free_first_order_force",
     "free_second_order_force",
+    "free_first_order_moment",
+    "free_second_order_moment",
 )
-MULTI_OUTPUT_UNITS = ("N m", "N m", "N m", "N m", "-", "W", "N", "N")
+MULTI_OUTPUT_UNITS = ("N m", "N m", "N m", "N m", "-", "W", "N", "N", "N m", "N m")
 
 # --- multi-cylinder layouts -----------------------------------------------------------------
 
@@ -118,14 +123,46 @@ def free_force_amplitude(a_x, a_y, b_x, b_y):
 
 
 @jit
+def layout_resultant(firing, axis, weights, cylinders, order):
+    """Amplitude of Σ w_i cos(order·(α − ψ_i)) e_i over a crank revolution (unit force).
+
+    The reciprocating force of order 1 or 2 of cylinder i is ∝ cos(order·(α − ψ_i)) along its
+    axis e_i = (sin θ_i, cos θ_i), ψ_i its TDC crank angle (its firing angle; the 720°
+    ambiguity drops out of the first and second orders). With weights 1 the sum is the free
+    force; with weights z_i − z̄ (axial position from the middle) its magnitude is that of the
+    free moment, whose vector is the force sum turned by 90° about the crank axis. The vector
+    sum is A cos(order·α) + B sin(order·α) (:func:`free_force_amplitude`).
+
+    firing   : float[:]  Firing angles ψ_i [rad].
+    axis     : float[:]  Cylinder axis angles θ_i [rad].
+    weights  : float[:]  w_i [-] or [m].
+    cylinders: int       Number of cylinders used (leading entries of the arrays).
+    order    : int       1 or 2.
+    """
+    a_x = 0.0
+    a_y = 0.0
+    b_x = 0.0
+    b_y = 0.0
+    for c in range(cylinders):
+        cp = weights[c] * math.cos(order * firing[c])
+        sp = weights[c] * math.sin(order * firing[c])
+        ex = math.sin(axis[c])
+        ey = math.cos(axis[c])
+        a_x += cp * ex
+        a_y += cp * ey
+        b_x += sp * ex
+        b_y += sp * ey
+    return free_force_amplitude(a_x, a_y, b_x, b_y)
+
+
+@jit
 def free_reciprocating_force(
     reciprocating_mass, crank_radius, rod_ratio, angular_speed, firing, axis, cylinders, order
 ):
     """Free first- or second-order reciprocating force of a layout (amplitude of the resultant).
 
     Cylinder i contributes −mj r ω² λ^(order−1) cos(order·(α − ψ_i)) along its axis
-    e_i = (sin θ_i, cos θ_i), ψ_i its TDC crank angle (its firing angle; the 720° ambiguity drops
-    out of the first and second orders). The vector sum is A cos(order·α) + B sin(order·α).
+    (:func:`layout_resultant`).
 
     reciprocating_mass: float     mj [kg].
     crank_radius      : float     r [m].
@@ -137,21 +174,38 @@ def free_reciprocating_force(
     order             : int       1 or 2.
     Returns the largest magnitude of the resultant [N]. Reference: SPEC §5 [F2].
     """
-    a_x = 0.0
-    a_y = 0.0
-    b_x = 0.0
-    b_y = 0.0
-    for c in range(cylinders):
-        cp = math.cos(order * firing[c])
-        sp = math.sin(order * firing[c])
-        ex = math.sin(axis[c])
-        ey = math.cos(axis[c])
-        a_x += cp * ex
-        a_y += cp * ey
-        b_x += sp * ex
-        b_y += sp * ey
     scale = reciprocating_mass * crank_radius * angular_speed**2 * rod_ratio ** (order - 1)
-    return scale * free_force_amplitude(a_x, a_y, b_x, b_y)
+    return scale * layout_resultant(firing, axis, np.ones(cylinders), cylinders, order)
+
+
+@jit
+def free_reciprocating_moment(
+    reciprocating_mass,
+    crank_radius,
+    rod_ratio,
+    angular_speed,
+    firing,
+    axis,
+    positions,
+    cylinders,
+    order,
+):
+    """Free first- or second-order reciprocating moment of a layout about its middle.
+
+    The moments of the cylinders' reciprocating forces (:func:`free_reciprocating_force`)
+    about the point midway along the crankshaft; where the free force of that order is zero
+    the moment is the same about any point.
+
+    positions: float[:]  Axial position z_i of each cylinder's axis along the crankshaft [m];
+                         NaN where it is not modelled (then the result is NaN).
+    Other arguments as in :func:`free_reciprocating_force`. Returns the largest magnitude
+    [N m]. Reference: SPEC §5 [F2]; e.g. Taylor, *The Internal-Combustion Engine in Theory
+    and Practice*, vol. 2, ch. 8 (couples of multi-cylinder engines).
+    """
+    middle = positions[:cylinders].sum() / cylinders
+    arms = positions[:cylinders] - middle
+    scale = reciprocating_mass * crank_radius * angular_speed**2 * rod_ratio ** (order - 1)
+    return scale * layout_resultant(firing, axis, arms, cylinders, order)
 
 
 @jit
@@ -195,9 +249,9 @@ def harmonic_amplitude(values, harmonic):
 
 @batch
 def crank_multicylinder_batch(
-    params, pressure, firing_angles, axis_angles, out, harmonics_out, curves_out
+    params, pressure, firing_angles, axis_angles, positions, out, harmonics_out, curves_out
 ):
-    """Summed crankshaft torque, its harmonic orders and free forces of a layout  [F1]–[F2].
+    """Summed crankshaft torque, its harmonic orders, free forces and moments  [F1]–[F2].
 
     Every cylinder has the same pressure curve; cylinder c's torque is the single-cylinder
     torque shifted by its firing angle (periodic linear interpolation, exact when the firing
@@ -210,6 +264,8 @@ def crank_multicylinder_batch(
                                        n_f = n or 1.
     axis_angles  : float[n_f, z_max]   Cylinder axis angle from vertical [rad]: 0 inline,
                                        ±γ/2 for a V (:func:`v_axis_angles`).
+    positions    : float[n_f, z_max]   Axial position of each cylinder along the crankshaft [m]
+                                       (NaN: not modelled, free moments NaN).
     out          : float[n, N_MULTI_OUT]  Scalars, columns MULTI_* (names MULTI_OUTPUTS).
     harmonics_out: float[n, q_max]     Amplitude of engine orders 0.5, 1, 1.5, …, q_max/2 [N m]
                                        (q_max may be 0).
@@ -226,6 +282,7 @@ def crank_multicylinder_batch(
         prow = pressure[0] if shared_p else pressure[i]
         firing = firing_angles[0] if shared_f else firing_angles[i]
         axis = axis_angles[0] if shared_f else axis_angles[i]
+        position = positions[0] if shared_f else positions[i]
         z = int(row[CYLINDERS])
         single = np.empty(m)
         crank_torque_curve(row, prow, single)
@@ -243,16 +300,14 @@ def crank_multicylinder_batch(
         out[i, MULTI_TORQUE_PEAK_TO_PEAK] = t_max - t_min
         out[i, MULTI_TORQUE_NONUNIFORMITY] = (t_max - t_min) / mean if mean != 0.0 else np.nan
         out[i, MULTI_MEAN_POWER] = mean * row[ANGULAR_SPEED]
+        mass, radius = row[RECIPROCATING_MASS], row[CRANK_RADIUS]
+        lam, omega = row[ROD_RATIO], row[ANGULAR_SPEED]
         for order in (1, 2):
             out[i, MULTI_FREE_FIRST_ORDER_FORCE + order - 1] = free_reciprocating_force(
-                row[RECIPROCATING_MASS],
-                row[CRANK_RADIUS],
-                row[ROD_RATIO],
-                row[ANGULAR_SPEED],
-                firing,
-                axis,
-                z,
-                order,
+                mass, radius, lam, omega, firing, axis, z, order
+            )
+            out[i, MULTI_FREE_FIRST_ORDER_MOMENT + order - 1] = free_reciprocating_moment(
+                mass, radius, lam, omega, firing, axis, position, z, order
             )
         for q in range(harmonics_out.shape[1]):
             harmonics_out[i, q] = harmonic_amplitude(total, q + 1)

@@ -10,7 +10,8 @@ Stages (each one compiled batch driver; a study runs only those its responses an
 * ``forces`` — :func:`engine_kernels.crank_forces.crank_forces_batch`: gas, inertia, rod, side,
   tangential and radial forces and the torque of one cylinder;
 * ``multicylinder`` — :func:`engine_kernels.crank_layout.crank_multicylinder_batch`: summed
-  torque of the layout, its harmonic orders and the free first- and second-order forces.
+  torque of the layout, its harmonic orders and the free first- and second-order forces and
+  (inline layouts) moments.
 
 The kinematics model (``exact`` or two-term ``approximate``) is a study setting; it sets the
 piston motion used for the inertia forces, the torque and the kinematic curves.
@@ -124,12 +125,15 @@ def cycle_params(points: dict[str, np.ndarray]) -> np.ndarray:
     return params
 
 
-def layout_angles(points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-    """Firing and cylinder-axis angles [rad] per design point, (n, z_max) each."""
+def layout_geometry(points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Firing and cylinder-axis angles [rad] and axial positions [m] per design point, each
+    (n, z_max). Inline cylinder c sits at (c − 1)·cylinder_pitch; V layouts (two banks, whose
+    axial order the firing order does not fix) get NaN positions, so their moments are NaN."""
     z = points["cylinders"].astype(int)
     n, z_max = len(z), int(z.max())
     firing = np.zeros((n, z_max))
     axis = np.zeros((n, z_max))
+    positions = np.full((n, z_max), np.nan)
     orders = points["firing_order"].astype(np.int64)
     for i in range(n):
         order = np.ascontiguousarray(orders[i])
@@ -143,7 +147,9 @@ def layout_angles(points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray
             cl.even_firing_angles(order, firing[i])
         if points["layout"][i] == "v":
             cl.v_axis_angles(order, gamma, axis[i])
-    return firing, axis
+        else:
+            positions[i] = np.arange(z_max) * points["cylinder_pitch"][i]
+    return firing, axis, positions
 
 
 def _empty_curves(n: int, count: int, store: bool, m: int) -> np.ndarray:
@@ -156,7 +162,7 @@ class CrankScene(Scene):
     name = "crank"
     description = (
         "slider-crank kinematics (exact and two-term), gas and inertia forces, torque, "
-        "multi-cylinder torque harmonics and free forces (SPEC §5)"
+        "multi-cylinder torque harmonics, free forces and moments (SPEC §5)"
     )
     parameters = PARAMETERS
     settings = SETTINGS
@@ -306,13 +312,16 @@ class CrankScene(Scene):
         pressure: np.ndarray,
         firing: np.ndarray,
         axis: np.ndarray,
+        positions: np.ndarray,
         store: bool,
     ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
         n, m = pressure.shape
         out = np.empty((n, cl.N_MULTI_OUT))
         harmonics = np.empty((n, MAX_ORDER_HALVES))
         curves = _empty_curves(n, 1, store, m)
-        cl.crank_multicylinder_batch(params, pressure, firing, axis, out, harmonics, curves)
+        cl.crank_multicylinder_batch(
+            params, pressure, firing, axis, positions, out, harmonics, curves
+        )
         scalars = dict(zip(cl.MULTI_OUTPUTS, out.T, strict=True))
         for q in range(MAX_ORDER_HALVES):
             scalars[order_name(q + 1)] = harmonics[:, q]
@@ -351,9 +360,9 @@ class CrankScene(Scene):
             scalars |= s
             curves_si |= c
         if "multicylinder" in stages:
-            firing, axis = layout_angles(points)
+            firing, axis, positions = layout_geometry(points)
             s, c = self.stages["multicylinder"](
-                params, pressure, firing, axis, store("multicylinder")
+                params, pressure, firing, axis, positions, store("multicylinder")
             )
             scalars |= s
             curves_si |= c

@@ -77,6 +77,16 @@ PARAMETERS: tuple[Parameter, ...] = (
         "cylinders", "1", 12.0, "number of cylinders z (a whole number)", 1.0, 64.0, source=SRC
     ),
     Parameter(
+        "cylinder_pitch",
+        "mm",
+        180.0,
+        "axial distance between neighbouring cylinders of an inline layout (free moments)",
+        0.0,
+        5000.0,
+        True,
+        source="assumption: 1.2 × bore, typical of 1.15–1.3 × bore",
+    ),
+    Parameter(
         "bank_angle",
         "deg",
         90.0,
@@ -346,6 +356,20 @@ RESPONSES: tuple[Response, ...] = (
         "free_second_order_force",
         "kN",
         "free second-order reciprocating force of the layout",
+        MULTI,
+    ),
+    Response(
+        "free_first_order_moment",
+        "N*m",
+        "free first-order reciprocating moment about the middle of the crankshaft (inline "
+        "layouts; NaN for V layouts, whose bank order along the shaft is not modelled)",
+        MULTI,
+    ),
+    Response(
+        "free_second_order_moment",
+        "N*m",
+        "free second-order reciprocating moment about the middle of the crankshaft (inline "
+        "layouts; NaN for V layouts)",
         MULTI,
     ),
     *_order_responses(),

@@ -19,6 +19,7 @@ BORE = 0.150
 RADIUS = 0.090
 LAMBDA = 0.28
 OMEGA = 2600.0 * RPM
+PITCH = 0.180  # cylinder pitch a [m] (1.2 × the 150 mm bore; an assumption)
 FIRING_ORDER_12V150 = np.array([1, 12, 9, 4, 5, 8, 11, 2, 3, 10, 7, 6])
 
 
@@ -87,8 +88,9 @@ def multicylinder(row, pressure, firing, axis, n_orders=24):
     out = np.empty((1, crank_layout.N_MULTI_OUT))
     harmonics = np.empty((1, n_orders))
     cur = np.empty((1, 1, pressure.shape[1]))
+    positions = PITCH * np.arange(firing.size)[None, :]
     crank_layout.crank_multicylinder_batch(
-        row[None, :], pressure, firing[None, :], axis[None, :], out, harmonics, cur
+        row[None, :], pressure, firing[None, :], axis[None, :], positions, out, harmonics, cur
     )
     return out[0], harmonics[0], cur[0, 0]
 
@@ -385,6 +387,62 @@ def test_free_forces_of_classic_layouts():
         assert got2 == pytest.approx(second, abs=1e-9 * f)
 
 
+def test_free_moments_of_classic_inline_layouts():
+    # Closed forms with F = mj r ω² and cylinder pitch a, moments about the middle of the
+    # crankshaft: inline-3 (120° throws) → √3·aF and √3·aλF; inline-4 (flat crank) and
+    # inline-6 → 0, 0 (mirror-symmetric crankshafts); inline-5 (72° throws, 1-2-4-5-3) →
+    # 0.449·aF and 4.98·aλF (Taylor, The Internal-Combustion Engine in Theory and Practice,
+    # vol. 2, ch. 8, table of couples, quoted to 3 digits).
+    f = 3.5 * RADIUS * OMEGA**2
+    cases = [
+        ([1, 3, 2], math.sqrt(3), math.sqrt(3), 1e-9),
+        ([1, 3, 4, 2], 0.0, 0.0, 1e-9),
+        ([1, 5, 3, 6, 2, 4], 0.0, 0.0, 1e-9),
+        ([1, 2, 4, 5, 3], 0.449, 4.98, 5e-3),
+    ]
+    for order, first, second, rel in cases:
+        firing, axis = firing_and_axes(order)
+        z = len(order)
+        positions = PITCH * np.arange(z)
+        moments = [
+            crank_layout.free_reciprocating_moment(
+                3.5, RADIUS, LAMBDA, OMEGA, firing, axis, positions, z, k
+            )
+            for k in (1, 2)
+        ]
+        assert moments[0] == pytest.approx(first * PITCH * f, rel=rel, abs=1e-9 * PITCH * f)
+        assert moments[1] == pytest.approx(
+            second * PITCH * LAMBDA * f, rel=rel, abs=1e-9 * PITCH * f
+        )
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    st.lists(st.floats(0.0, 4 * math.pi), min_size=2, max_size=8),
+    st.floats(0.0, math.pi),
+    st.integers(1, 2),
+)
+def test_free_moment_is_the_brute_force_maximum(firing, bank, order):
+    # Expected: sum the moments of the cylinders' forces about the middle of the shaft at
+    # every angle of a dense grid and take the largest magnitude.
+    z = len(firing)
+    firing = np.array(firing)
+    axis = bank * (np.arange(z) % 2 - 0.5)
+    positions = PITCH * np.arange(z) + 0.01 * np.arange(z) ** 2
+    arms = positions - positions.mean()
+    alpha = np.linspace(0, 2 * math.pi, 20_001)[:, None]
+    scale = 3.5 * RADIUS * OMEGA**2 * LAMBDA ** (order - 1)
+    force = -scale * np.cos(order * (alpha - firing))
+    # moment of force F e (e in the x-y plane) at axial position w: w ẑ × F e = w F (−e_y, e_x)
+    mx = (-arms * force * np.cos(axis)).sum(axis=1)
+    my = (arms * force * np.sin(axis)).sum(axis=1)
+    brute = np.hypot(mx, my).max()
+    got = crank_layout.free_reciprocating_moment(
+        3.5, RADIUS, LAMBDA, OMEGA, firing, axis, positions, z, order
+    )
+    assert got == pytest.approx(brute, rel=1e-6, abs=1e-9 * scale * PITCH)
+
+
 @settings(max_examples=30, deadline=None)
 @given(st.lists(st.floats(-10.0, 10.0), min_size=4, max_size=4))
 def test_free_force_amplitude_is_the_brute_force_maximum(vectors):
@@ -421,7 +479,7 @@ def test_kinematics_and_layout_drivers_are_the_same_compiled_and_interpreted():
     np.testing.assert_allclose(cur_py, cur, rtol=1e-12, atol=1e-9)
     pressure = np.random.default_rng(2).uniform(1e5, 5e6, size=(2, 72))
     firing, axis = firing_and_axes([1, 3, 4, 2])
-    args = (rows, pressure, firing[None, :], axis[None, :])
+    args = (rows, pressure, firing[None, :], axis[None, :], PITCH * np.arange(4.0)[None, :])
     results = []
     for driver in (
         crank_layout.crank_multicylinder_batch,

@@ -258,6 +258,25 @@ def test_inline_four_free_forces_closed_form() -> None:
     assert np.all(np.abs(ev.scalars["free_first_order_force"]) < 1e-9 * expected)
 
 
+def test_inline_three_free_moments_closed_form_and_v_layouts_have_none() -> None:
+    # Inline three, firing 1-3-2 (120° throws), pitch a: both the first- and second-order
+    # moments about the middle are √3·a·mj r ω² λ^(order−1) (Taylor, vol. 2, ch. 8).
+    moments = '["free_first_order_moment", "free_second_order_moment"]'
+    ev = run(
+        study(
+            parameters='cylinders = 3\nlayout = "inline"\nfiring_order = [1, 3, 2]\n'
+            "cylinder_pitch = 150.0",
+            responses=moments,
+        )
+    )
+    omega = np.array([1000.0, 2000.0]) * RPM
+    first = math.sqrt(3) * 0.150 * 3.5 * 0.090 * omega**2  # N m
+    np.testing.assert_allclose(ev.scalars["free_first_order_moment"], first, rtol=1e-12)
+    np.testing.assert_allclose(ev.scalars["free_second_order_moment"], 0.28 * first, rtol=1e-12)
+    v12 = run(study(responses=moments))  # the 12V150 defaults: a V layout
+    assert np.isnan(v12.scalars["free_first_order_moment"]).all()
+
+
 def write_table(path: Path, angle_deg: np.ndarray, pressure_mpa: np.ndarray) -> Path:
     rows = "\n".join(f"{a:.6f},{p:.9f}" for a, p in zip(angle_deg, pressure_mpa, strict=True))
     path.write_text(
