@@ -12,6 +12,7 @@ from studies.definition import StudyError
 from studies.plan import plan_study, plan_text
 from studies.runner import evaluate
 from studies.study_run import run_plan
+from study_text import scene_study
 
 RPM = math.pi / 30.0
 
@@ -23,17 +24,14 @@ def study(
     factors: str = "[factors.engine_speed]\nlevels = [1000.0, 2000.0]",
     settings: str = "",
 ) -> str:
-    return f"""
-name = "crank_test"
-scene = "crank"
-responses = {responses}
-curves = {curves}
-[settings]
-{settings}
-[parameters]
-{parameters}
-{factors}
-"""
+    return scene_study(
+        "crank",
+        parameters=parameters,
+        responses=responses,
+        curves=curves,
+        factors=factors,
+        settings=settings,
+    )
 
 
 def run(text: str):

@@ -13,6 +13,7 @@ from studies.definition import StudyError
 from studies.plan import plan_study, plan_text
 from studies.runner import evaluate
 from studies.study_run import run_plan
+from study_text import scene_study
 
 CHECKS = {  # check → (value, limit, value must be ≤ limit)
     "motor": ("motor_power", "motor_rated_power", True),
@@ -30,14 +31,7 @@ def study(
     responses: str = '["motor_power"]',
     factors: str = "[factors.trolley_mass]\nlevels = [5.0, 10.0]",
 ) -> str:
-    return f"""
-name = "luffing_test"
-scene = "luffing"
-responses = {responses}
-[parameters]
-{parameters}
-{factors}
-"""
+    return scene_study("luffing", parameters=parameters, responses=responses, factors=factors)
 
 
 def test_luffing_sizing_runs_with_every_check_as_value_limit_pass(tmp_path: Path) -> None:

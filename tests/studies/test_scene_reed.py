@@ -15,6 +15,7 @@ from studies.results import build_dataset
 from studies.runner import evaluate
 from studies.scene_plots import save_scene_figures
 from studies.study_run import run_plan
+from study_text import scene_study
 
 # Material table documented in studies/scenes/reed.py: E [Pa], ρ [kg/m³].
 MATERIALS = {
@@ -37,15 +38,9 @@ def study(
     curves: str = "[]",
     factors: str = "[factors.length]\nlevels = [30.0, 35.0]",
 ) -> str:
-    return f"""
-name = "reed_test"
-scene = "reed"
-responses = {responses}
-curves = {curves}
-[parameters]
-{parameters}
-{factors}
-"""
+    return scene_study(
+        "reed", parameters=parameters, responses=responses, curves=curves, factors=factors
+    )
 
 
 def test_reed_resonance_runs_and_reports_the_reference_reed(tmp_path: Path) -> None:

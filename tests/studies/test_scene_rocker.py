@@ -14,6 +14,7 @@ from studies.runner import evaluate
 from studies.scenes import rocker as rocker_scene
 from studies.scenes.rocker import RockerScene
 from studies.scenes.rocker_parameters import CONVEX_POLYDYNE
+from study_text import scene_study
 
 
 def study(
@@ -24,17 +25,14 @@ def study(
     settings: str = "",
     scene: str = "rocker",
 ) -> str:
-    return f"""
-name = "rocker_test"
-scene = "{scene}"
-responses = {responses}
-curves = {curves}
-[settings]
-{settings}
-[parameters]
-{parameters}
-{factors}
-"""
+    return scene_study(
+        scene,
+        responses=responses,
+        curves=curves,
+        parameters=parameters,
+        factors=factors,
+        settings=settings,
+    )
 
 
 def spy_stages(scene, calls: list[str]) -> dict:

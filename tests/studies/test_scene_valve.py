@@ -19,6 +19,7 @@ from studies.plan import plan_study, plan_text
 from studies.runner import evaluate
 from studies.scenes.valve import valve_rows
 from studies.study_run import run_plan
+from study_text import scene_study
 
 RPM = math.pi / 30.0
 MASS = 0.04252  # kg, scene default [V1]
@@ -31,17 +32,14 @@ def study(
     factors: str = "[factors.cam_speed]\nlevels = [3500.0, 6000.0]",
     settings: str = "",
 ) -> str:
-    return f"""
-name = "valve_test"
-scene = "valve"
-responses = {responses}
-curves = {curves}
-[settings]
-{settings}
-[parameters]
-{parameters}
-{factors}
-"""
+    return scene_study(
+        "valve",
+        responses=responses,
+        curves=curves,
+        parameters=parameters,
+        factors=factors,
+        settings=settings,
+    )
 
 
 def run(text: str):
