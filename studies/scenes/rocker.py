@@ -111,13 +111,16 @@ def step_deg(step_rad: float) -> float:
 def chain_keys(points: dict[str, np.ndarray]) -> dict[tuple, np.ndarray]:
     """The design points of each distinct chain, keyed by the tuple of its chain parameters.
 
-    Vectorised (hash factorisation, column by column): a 100 000-point study has few chains,
-    and a Python loop over its points would cost more than integrating them.
+    Vectorised (hash factorisation, column by column, skipping the columns that hold one
+    value): a 100 000-point study has few chains, and a Python loop over its points would cost
+    more than integrating them.
     """
     coefficients = np.asarray(points["polydyne_coefficients"], dtype=float)
     columns = [*coefficients.T, *(np.asarray(points[name]) for name in KEY_NAMES)]
     group = np.zeros(len(coefficients), dtype=np.int64)
     for column in columns:
+        if len(column) and bool((column == column[0]).all()):
+            continue
         codes, uniques = pd.factorize(column)
         group = pd.factorize(group * len(uniques) + codes)[0]
     order = np.argsort(group, kind="stable")

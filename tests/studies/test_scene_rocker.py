@@ -199,3 +199,26 @@ def test_bad_inputs_name_parameter_value_and_allowed(
     with pytest.raises(StudyError) as info:
         plan_text(study(parameters=parameters, settings=settings, factors=factors))
     assert expected in str(info.value)
+
+
+def test_chain_keys_match_a_loop_over_the_points() -> None:
+    # Brute force: group the design points with a dict keyed by each point's chain tuple.
+    rng = np.random.default_rng(5)
+    n = 500
+    points = {name: np.full(n, 1.5) for name in rocker_scene.KEY_NAMES}
+    varied = list(rocker_scene.KEY_NAMES)[:3]
+    for name in varied:
+        points[name] = rng.choice([1.0, 2.0, 3.0], n)
+    coefficients = np.tile([0.0, 1.0, 2.0], (n, 1))
+    coefficients[:, 1] = rng.choice([1.0, 4.0], n)
+    points["polydyne_coefficients"] = coefficients
+    expected: dict[tuple, list[int]] = {}
+    for i in range(n):
+        key = (
+            *(points[name][i] for name in rocker_scene.KEY_NAMES),
+            tuple(coefficients[i].tolist()),
+        )
+        expected.setdefault(key, []).append(i)
+    got = rocker_scene.chain_keys(points)
+    assert {k: v.tolist() for k, v in got.items()} == expected
+    assert len(got) == 3 * 3 * 3 * 2
