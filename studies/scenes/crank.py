@@ -127,8 +127,9 @@ def cycle_params(points: dict[str, np.ndarray]) -> np.ndarray:
 
 def layout_geometry(points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Firing and cylinder-axis angles [rad] and axial positions [m] per design point, each
-    (n, z_max). Inline cylinder c sits at (c − 1)·cylinder_pitch; V layouts (two banks, whose
-    axial order the firing order does not fix) get NaN positions, so their moments are NaN."""
+    (n, z_max). Positions are ``cylinder_positions`` where given; otherwise inline cylinder c
+    sits at (c − 1)·cylinder_pitch, and a V layout (two banks, whose order along the shaft the
+    firing order does not fix) gets NaN positions, so its moments are NaN."""
     z = points["cylinders"].astype(int)
     n, z_max = len(z), int(z.max())
     firing = np.zeros((n, z_max))
@@ -147,7 +148,10 @@ def layout_geometry(points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarr
             cl.even_firing_angles(order, firing[i])
         if points["layout"][i] == "v":
             cl.v_axis_angles(order, gamma, axis[i])
-        else:
+        given = points["cylinder_positions"][i]
+        if given.size:
+            positions[i, : z[i]] = given[: z[i]]
+        elif points["layout"][i] == "inline":
             positions[i] = np.arange(z_max) * points["cylinder_pitch"][i]
     return firing, axis, positions
 
@@ -210,6 +214,13 @@ class CrankScene(Scene):
                     i,
                     f"firing = 'shared_crankpins' needs layout = 'v' and an even "
                     f"number of cylinders (layout = {layout!r}, cylinders = {z:g})",
+                )
+            positions = points["cylinder_positions"][i]
+            if positions.size and positions.size != z:
+                found.add(
+                    i,
+                    f"cylinder_positions has {positions.size} values for cylinders = {z:g} "
+                    "(one per cylinder, or none)",
                 )
             given = points["firing_angles"][i]
             if kind == "given" and given.size != z:

@@ -87,6 +87,14 @@ PARAMETERS: tuple[Parameter, ...] = (
         source="assumption: 1.2 × bore, typical of 1.15–1.3 × bore",
     ),
     Parameter(
+        "cylinder_positions",
+        "mm",
+        [],
+        "axial position of cylinder 1, 2, …, z along the crankshaft (free moments of any "
+        "layout; empty: inline cylinders every cylinder_pitch, V layouts none)",
+        vector=True,
+    ),
+    Parameter(
         "bank_angle",
         "deg",
         90.0,
@@ -361,15 +369,15 @@ RESPONSES: tuple[Response, ...] = (
     Response(
         "free_first_order_moment",
         "N*m",
-        "free first-order reciprocating moment about the middle of the crankshaft (inline "
-        "layouts; NaN for V layouts, whose bank order along the shaft is not modelled)",
+        "free first-order reciprocating moment about the middle of the crankshaft (NaN for a "
+        "V layout without cylinder_positions)",
         MULTI,
     ),
     Response(
         "free_second_order_moment",
         "N*m",
-        "free second-order reciprocating moment about the middle of the crankshaft (inline "
-        "layouts; NaN for V layouts)",
+        "free second-order reciprocating moment about the middle of the crankshaft (NaN for a "
+        "V layout without cylinder_positions)",
         MULTI,
     ),
     *_order_responses(),

@@ -275,6 +275,36 @@ def test_inline_three_free_moments_closed_form_and_v_layouts_have_none() -> None
     assert np.isnan(v12.scalars["free_first_order_moment"]).all()
 
 
+def test_v_twin_moment_from_given_cylinder_positions() -> None:
+    # 90° V-twin on one crankpin, rods side by side d apart: the first-order force rotates
+    # with constant magnitude F = mj r ω² (see test_crank.py), and the two cylinders' forces,
+    # d apart along the shaft, leave a couple. Expected: brute force over a revolution of
+    # Σ (z_i − z̄) ẑ × F_i e_i, the cylinders' forces along their axes.
+    d = 0.040
+    ev = run(
+        study(
+            parameters='cylinders = 2\nlayout = "v"\nfiring_order = [1, 2]\n'
+            'firing = "shared_crankpins"\nbank_angle = 90.0\ncylinder_positions = [0.0, 40.0]',
+            responses='["free_first_order_moment", "free_first_order_force"]',
+        )
+    )
+    omega = np.array([1000.0, 2000.0]) * RPM
+    alpha = np.linspace(0, 2 * np.pi, 20_001)
+    firing = np.array([0.0, np.pi / 2])  # the second cylinder fires one bank angle later
+    axes = np.array([-np.pi / 4, np.pi / 4])
+    arms = np.array([-d / 2, d / 2])
+    force = np.cos(alpha[:, None] - firing)  # per unit mj r ω²
+    mx = (-arms * force * np.cos(axes)).sum(axis=1)
+    my = (arms * force * np.sin(axes)).sum(axis=1)
+    expected = np.hypot(mx, my).max() * 3.5 * 0.090 * omega**2
+    np.testing.assert_allclose(ev.scalars["free_first_order_moment"], expected, rtol=1e-6)
+    np.testing.assert_allclose(ev.scalars["free_first_order_force"], 3.5 * 0.090 * omega**2 / 1e3)
+    with pytest.raises(StudyError, match="cylinder_positions has 1 values for cylinders = 2"):
+        plan_text(
+            study(parameters="cylinders = 2\nfiring_order = [1, 2]\ncylinder_positions = [0.0]")
+        )
+
+
 def write_table(path: Path, angle_deg: np.ndarray, pressure_mpa: np.ndarray) -> Path:
     rows = "\n".join(f"{a:.6f},{p:.9f}" for a, p in zip(angle_deg, pressure_mpa, strict=True))
     path.write_text(
