@@ -20,6 +20,7 @@ import numpy as np
 
 from engine_kernels import valve, valve_lanes
 from studies import provenance, tracking
+from studies.bench_plots import save_bench_figure
 from studies.plan import Plan, plan_text
 from studies.reference import c_valve
 from studies.runner import evaluate_chunk
@@ -276,7 +277,8 @@ def summarize(figures: dict[str, Any], indent: str = "  ") -> list[str]:
 
 
 def run_benchmark(name: str, cases: int, step: float, repeat: int, outputs: Path) -> Path:
-    """Run one benchmark, print its figures, write them as JSON; return the JSON path."""
+    """Run one benchmark; write its figures as JSON and a bar chart of the timings (PNG,
+    same name); return the JSON path."""
     if name not in BENCHMARKS:
         raise KeyError(f"unknown benchmark {name!r}; known: {', '.join(BENCHMARKS)}, all")
     figures = BENCHMARKS[name](cases, step, repeat)
@@ -297,4 +299,6 @@ def run_benchmark(name: str, cases: int, step: float, repeat: int, outputs: Path
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / f"{name}-{tracking.new_run_id(name)}.json"
     path.write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")
+    title = f"benchmark {name}: {cases} cases, step {step:g} deg, commit {commit[:10]}"
+    save_bench_figure(title, figures, path.with_suffix(".png"))
     return path

@@ -134,7 +134,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         figures = json.loads(path.read_text(encoding="utf-8"))["figures"]
         print(f"benchmark {name} ({args.cases} cases, step {args.step} deg):")
         print("\n".join(summarize(figures)))
-        print(f"  all figures in {path}")
+        print(f"  all figures in {path} (bar chart: {path.with_suffix('.png').name})")
     return 0
 
 

@@ -50,3 +50,31 @@ def test_bench_summary_lines() -> None:
     assert lines[2].split() == ["scene_lanes_over_one_case", "3.14", "×"]
     assert lines[3].split()[0] == "c_reference"
     assert lines[3].endswith("skipped: no compiler")
+
+
+def test_bench_figure_has_one_bar_per_timing(tmp_path) -> None:
+    from studies.bench_plots import save_bench_figure, source, timings
+
+    figures = {
+        "kernel": {
+            "window_lanes": {"cases_per_s": 9.0e5},
+            "window_c_lanes": {"cases_per_s": 7.0e5},
+            "window_lanes_over_c_lanes": 1.3,
+        },
+        "scipy_dop853_rtol_1e-10": {"cases_per_s": 3.5},
+    }
+    rows = timings(figures)
+    assert rows == [
+        ("kernel: window_lanes", 9.0e5),
+        ("kernel: window_c_lanes", 7.0e5),
+        ("scipy_dop853_rtol_1e-10", 3.5),
+    ]
+    assert [source(name) for name, _ in rows] == [
+        "Numba kernels and study engine",
+        "C reference (studies/reference)",
+        "scipy reference",
+    ]
+    path = save_bench_figure("test", figures, tmp_path / "bench.png")
+    assert path is not None
+    assert path.stat().st_size > 1000
+    assert save_bench_figure("empty", {"c_reference": "skipped"}, tmp_path / "none.png") is None
