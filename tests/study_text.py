@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+from studies.plan import plan_text
+from studies.runner import evaluate
+from studies.scenes import SceneOutput
+
 
 def scene_study(
     scene: str,
@@ -24,3 +28,8 @@ curves = {curves}
 {parameters}
 {factors}
 """
+
+
+def run(text: str) -> SceneOutput:
+    """Plan and evaluate a study text in memory (no run folder), without progress output."""
+    return evaluate(plan_text(text), progress=False)

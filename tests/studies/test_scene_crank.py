@@ -12,7 +12,7 @@ from studies.definition import StudyError
 from studies.plan import plan_study, plan_text
 from studies.runner import evaluate
 from studies.study_run import run_plan
-from study_text import scene_study
+from study_text import run, scene_study
 
 RPM = math.pi / 30.0
 
@@ -32,10 +32,6 @@ def study(
         factors=factors,
         settings=settings,
     )
-
-
-def run(text: str):
-    return evaluate(plan_text(text), progress=False)
 
 
 def textbook_displacement(r, lam, alpha):
@@ -64,12 +60,12 @@ def test_crank_lambda_sweep_runs_and_matches_brute_force_errors(tmp_path: Path) 
     alpha = np.radians(np.arange(0.0, 720.0, 0.5))
     h = 1e-3
     r = 0.090  # stroke 180 mm
-    for run in range(ds.sizes["run"]):
-        lam = float(ds["rod_ratio"][run])
-        omega = float(ds["engine_speed"][run]) * RPM
+    for point in range(ds.sizes["run"]):
+        lam = float(ds["rod_ratio"][point])
+        omega = float(ds["engine_speed"][point]) * RPM
         x = textbook_displacement(r, lam, alpha)
         x2 = r * ((1 - np.cos(alpha)) + lam / 4 * (1 - np.cos(2 * alpha)))
-        assert float(ds["approx_error_displacement"][run]) == pytest.approx(
+        assert float(ds["approx_error_displacement"][point]) == pytest.approx(
             np.abs(x - x2).max() * 1e3, rel=1e-9
         )
 
@@ -79,10 +75,10 @@ def test_crank_lambda_sweep_runs_and_matches_brute_force_errors(tmp_path: Path) 
         curvature = (-at(2) + 16 * at(1) - 30 * x + 16 * at(-1) - at(-2)) / (12 * h**2)
         a2 = r * (np.cos(alpha) + lam * np.cos(2 * alpha))
         expected = np.abs(curvature - a2).max()
-        assert float(ds["approx_error_acceleration"][run]) == pytest.approx(
+        assert float(ds["approx_error_acceleration"][point]) == pytest.approx(
             expected * omega**2, rel=1e-5
         )
-        assert float(ds["approx_error_acceleration_relative"][run]) == pytest.approx(
+        assert float(ds["approx_error_acceleration_relative"][point]) == pytest.approx(
             expected / r, rel=1e-5
         )
 

@@ -19,7 +19,7 @@ from studies.plan import plan_study, plan_text
 from studies.runner import evaluate
 from studies.scenes.valve import valve_rows
 from studies.study_run import run_plan
-from study_text import scene_study
+from study_text import run, scene_study
 
 RPM = math.pi / 30.0
 MASS = 0.04252  # kg, scene default [V1]
@@ -40,10 +40,6 @@ def study(
         factors=factors,
         settings=settings,
     )
-
-
-def run(text: str):
-    return evaluate(plan_text(text), progress=False)
 
 
 def theoretical_lift(parameters: str, step: float = 0.1) -> tuple[np.ndarray, np.ndarray]:
