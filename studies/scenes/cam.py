@@ -168,7 +168,7 @@ class CamScene(Scene):
         if deg(half) > HALF_TURN_DEG:
             out.append(f"the event half-width {deg(half):g} deg (rise + ramp) exceeds 180 deg")
         if law == "polydyne":
-            out += _polydyne_problems(p["polydyne_coefficients"][i])
+            out += polydyne_problems(p["polydyne_coefficients"][i])
         if law == "table":
             path = str(p["lift_table"][i])
             if path not in tables:
@@ -295,7 +295,8 @@ def _ramp_problems(height: float, width: float, velocity: float) -> list[str]:
     return []
 
 
-def _polydyne_problems(c: np.ndarray) -> list[str]:
+def polydyne_problems(c: np.ndarray) -> list[str]:
+    """Why polydyne coefficients c_k of f(x) = Σ c_k x^k are not a rise law (empty if they are)."""
     if c.size > lift_laws.NCOEF:
         return [f"polydyne_coefficients has {c.size} terms; at most {lift_laws.NCOEF} allowed"]
     k = np.arange(c.size)

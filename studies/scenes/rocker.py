@@ -30,7 +30,7 @@ import pandas as pd
 from engine_kernels import cam_batch as cb
 from engine_kernels import cam_profile, lift_laws, rocker
 from studies.scenes.base import CurveAxis, Scene, SceneOutput
-from studies.scenes.cam import LAW_CODES, SHAPE_CODES
+from studies.scenes.cam import LAW_CODES, SHAPE_CODES, polydyne_problems
 from studies.scenes.checks import PointProblems
 from studies.scenes.rocker_parameters import (
     CAM_ANGLE,
@@ -47,7 +47,6 @@ GRID_UNIT_DEG = 2.0
 MAX_EVENT_HALF_DEG = 150.0
 """Largest event half-width (rise + ramp) that leaves room for the closing window."""
 CACHE_SIZE = 64
-POLYDYNE_TOLERANCE = 1e-9
 SIDES = {"ahead": rocker.PAD_AHEAD, "behind": rocker.PAD_BEHIND}
 KEY_NAMES = tuple(p.name for p in PARAMETERS if p.kind != "vector")
 """Parameters that fix the chain (with the polydyne coefficients): the cache key."""
@@ -394,7 +393,7 @@ def chain_problems(points: dict[str, np.ndarray], i: int) -> list[str]:
         if p["ramp_height"] > 0.0:
             half += p["ramp_width"]
     if law == "polydyne":
-        out += _polydyne_problems(np.asarray(points["polydyne_coefficients"][i], dtype=float))
+        out += polydyne_problems(np.asarray(points["polydyne_coefficients"][i], dtype=float))
     if math.degrees(half) > MAX_EVENT_HALF_DEG:
         out.append(
             f"the event half-width rise_angle + ramp_width = {math.degrees(half):g} deg exceeds "
@@ -471,24 +470,3 @@ def _six_segment_problems(points: dict[str, np.ndarray], i: int) -> list[str]:
                 f"{math.degrees(2.0 * height / velocity):.4g} deg"
             )
     return out
-
-
-def _polydyne_problems(c: np.ndarray) -> list[str]:
-    if c.size > lift_laws.NCOEF:
-        return [f"polydyne_coefficients has {c.size} terms; at most {lift_laws.NCOEF} allowed"]
-    k = np.arange(c.size)
-    conditions = {
-        "f(0) = 0": c[0],
-        "f(1) = 1": c.sum() - 1.0,
-        "f'(0) = 0": c[1] if c.size > 1 else 0.0,
-        "f'(1) = 0": (k * c).sum(),
-    }
-    bad = [name for name, residual in conditions.items() if abs(residual) > POLYDYNE_TOLERANCE]
-    if not bad:
-        return []
-    return [
-        (
-            f"polydyne_coefficients {c.tolist()} violate {', '.join(bad)} (f(x) = Σ c_k x^k must "
-            "rise from 0 to 1 with zero end velocity)"
-        )
-    ]
