@@ -1,6 +1,11 @@
-"""Text of a small study for the scene tests (one template; each test module sets its defaults)."""
+"""Helpers of the scene tests: the text of a small study (one template; each test module sets
+its defaults), evaluating it, and recording which stages of a scene run."""
 
 from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
 
 from studies.plan import plan_text
 from studies.runner import evaluate
@@ -33,3 +38,24 @@ curves = {curves}
 def run(text: str) -> SceneOutput:
     """Plan and evaluate a study text in memory (no run folder), without progress output."""
     return evaluate(plan_text(text), progress=False)
+
+
+@contextmanager
+def recorded_stages(scene: Any) -> Iterator[list[str]]:
+    """Within the block, the names of the scene's stages in the order they are called."""
+    calls: list[str] = []
+    original = dict(scene.stages)
+
+    def spy(name: str, fn: Any) -> Any:
+        def wrapped(*args: Any, **kwargs: Any) -> Any:
+            calls.append(name)
+            return fn(*args, **kwargs)
+
+        return wrapped
+
+    try:
+        for name, fn in original.items():
+            scene.stages[name] = spy(name, fn)
+        yield calls
+    finally:
+        scene.stages.update(original)

@@ -13,6 +13,7 @@ import xarray as xr
 from studies.plan import plan_text
 from studies.results import unstack_factorial
 from studies.study_run import run_plan, run_study
+from study_text import recorded_stages
 
 SMALL = """
 name = "small"
@@ -91,25 +92,10 @@ def test_isac_run_record(isac) -> None:
 def test_kinematic_response_runs_only_the_kinematics_stage() -> None:
     plan = plan_text(small(responses=["max_jerk", "fullness"]))
     assert plan.stages == ("kinematics",)
-    calls: list[str] = []
+    from studies.runner import evaluate
 
-    def spy(name, fn):
-        def wrapped(*args, **kwargs):
-            calls.append(name)
-            return fn(*args, **kwargs)
-
-        return wrapped
-
-    scene = plan.scene
-    original = dict(scene.stages)
-    try:
-        for name, fn in original.items():
-            scene.stages[name] = spy(name, fn)
-        from studies.runner import evaluate
-
+    with recorded_stages(plan.scene) as calls:
         evaluate(plan, progress=False)
-    finally:
-        scene.stages.update(original)
     assert calls
     assert set(calls) == {"kinematics"}
 

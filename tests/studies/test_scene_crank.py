@@ -12,7 +12,7 @@ from studies.definition import StudyError
 from studies.plan import plan_study, plan_text
 from studies.runner import evaluate
 from studies.study_run import run_plan
-from study_text import run, scene_study
+from study_text import recorded_stages, run, scene_study
 
 RPM = math.pi / 30.0
 
@@ -184,23 +184,8 @@ def test_kinematic_responses_run_only_the_kinematics_stage() -> None:
         )
     )
     assert plan.stages == ("kinematics",)
-    calls: list[str] = []
-    scene = plan.scene
-    original = dict(scene.stages)
-
-    def spy(name, fn):
-        def wrapped(*args, **kwargs):
-            calls.append(name)
-            return fn(*args, **kwargs)
-
-        return wrapped
-
-    try:
-        for name, fn in original.items():
-            scene.stages[name] = spy(name, fn)
+    with recorded_stages(plan.scene) as calls:
         ev = evaluate(plan, progress=False)
-    finally:
-        scene.stages.update(original)
     assert calls
     assert set(calls) == {"kinematics"}
     # v_max of the exact model is at least rω (the two-term value at 90°), closed form.

@@ -14,7 +14,7 @@ from studies.runner import evaluate
 from studies.scenes import rocker as rocker_scene
 from studies.scenes.rocker import RockerScene
 from studies.scenes.rocker_parameters import CONVEX_POLYDYNE
-from study_text import scene_study
+from study_text import recorded_stages, scene_study
 
 
 def study(
@@ -33,21 +33,6 @@ def study(
         factors=factors,
         settings=settings,
     )
-
-
-def spy_stages(scene, calls: list[str]) -> dict:
-    original = dict(scene.stages)
-
-    def spy(name, fn):
-        def wrapped(*args, **kwargs):
-            calls.append(name)
-            return fn(*args, **kwargs)
-
-        return wrapped
-
-    for name, fn in original.items():
-        scene.stages[name] = spy(name, fn)
-    return original
 
 
 def test_chain_reaches_the_target_lift_and_the_published_tappet_lift() -> None:
@@ -118,12 +103,8 @@ def test_concave_cam_is_a_flag_not_an_error() -> None:
 def test_kinematic_responses_run_only_the_needed_stages() -> None:
     plan = plan_text(study('["max_tappet_lift", "min_radius_of_curvature"]'))
     assert plan.stages == ("tappet",)
-    calls: list[str] = []
-    original = spy_stages(plan.scene, calls)
-    try:
+    with recorded_stages(plan.scene) as calls:
         evaluate(plan, progress=False)
-    finally:
-        plan.scene.stages.update(original)
     assert set(calls) == {"tappet"}
 
 

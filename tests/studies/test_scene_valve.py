@@ -19,7 +19,7 @@ from studies.plan import plan_study, plan_text
 from studies.runner import evaluate
 from studies.scenes.valve import valve_rows
 from studies.study_run import run_plan
-from study_text import run, scene_study
+from study_text import recorded_stages, run, scene_study
 
 RPM = math.pi / 30.0
 MASS = 0.04252  # kg, scene default [V1]
@@ -196,23 +196,8 @@ def test_lanes_one_case_and_curve_runs_agree() -> None:
 )
 def test_responses_run_only_the_stages_they_need(responses: str, stages: set[str]) -> None:
     plan = plan_text(study(responses))
-    calls: list[str] = []
-    scene = plan.scene
-    original = dict(scene.stages)
-
-    def spy(name, fn):
-        def wrapped(*args, **kwargs):
-            calls.append(name)
-            return fn(*args, **kwargs)
-
-        return wrapped
-
-    try:
-        for name, fn in original.items():
-            scene.stages[name] = spy(name, fn)
+    with recorded_stages(plan.scene) as calls:
         evaluate(plan, progress=False)
-    finally:
-        scene.stages.update(original)
     assert set(calls) == stages
 
 
