@@ -7,8 +7,9 @@ by the RK4 sub-step count the stability guard gives each of them, so a block ste
 lanes together with one count while each case keeps exactly its own: a case's results do not
 depend on which other cases share its block. Every grid step reads the shared excitation once
 and then runs loops over the lanes: one observes the grid point, one takes the RK4 step (two
-loops run faster than one fused loop, which runs out of registers). Only when some lane's
-seat phase changed (first closure, a bounce) does a scalar loop record it.
+loops run faster than one fused loop, which runs out of registers). Sub-stepped blocks also
+follow the seat phase at every sub-step point, where a landing on a stiff seat cannot hide.
+Only when some lane's seat phase changed (first closure, a bounce) does a scalar loop record it.
 
 Per-lane data (coefficients per unit mass, state, observations) are rows of one flat array,
 row ``r`` of lane ``l`` at ``r·LANES + l``: with compile-time row offsets the compiler can
@@ -50,6 +51,7 @@ from engine_kernels.valve_observations import (
     N_STATS,
     TRANSITION_BAND,
     finish_observations,
+    observe_closure,
     observe_energy,
     observe_valve,
     record_closure_events,
@@ -96,6 +98,13 @@ def _lane_point(data, l, drive_lift, slope):
     """
     lift = data[_LIFT * LANES + l]
     velocity = data[_VELOCITY * LANES + l]
+    drive, seat, acc = _lane_forces(data, l, lift, velocity, drive_lift, slope)
+    return lift, velocity, drive, seat, acc
+
+
+@jit_inline
+def _lane_forces(data, l, lift, velocity, drive_lift, slope):
+    """Forces and acceleration of lane ``l`` in state (lift [m], velocity [m/s]) (_lane_point)."""
     push = drive_push(drive_lift, slope, data[_K * LANES + l], data[_B_SPEED * LANES + l])
     drive, seat = specific_forces(
         lift,
@@ -117,7 +126,7 @@ def _lane_point(data, l, drive_lift, slope):
         data[_GAMMA * LANES + l],
         data[_DEPTH * LANES + l],
     )
-    return lift, velocity, drive, seat, acc
+    return drive, seat, acc
 
 
 @jit_inline
@@ -200,18 +209,18 @@ def _observe_lanes(data, angle, drive_lift, slope):
 
 
 @jit
-def _record_events_lanes(data):
-    """Record closure and bounce events of every lane (scalar; only after an event)."""
+def _record_events_lanes(data, prev_drive_lift, prev_slope):
+    """Record closure and bounce events of every lane (scalar; only after an event).
+
+    prev_drive_lift, prev_slope : Y [m] and Y' [m/rad] at the previous (sub-)step point,
+    where the state in ``_PREV_*`` was.
+    """
     for l in range(LANES):
+        lift = data[_PREV_LIFT * LANES + l]
+        velocity = data[_PREV_VELOCITY * LANES + l]
+        _, _, acc = _lane_forces(data, l, lift, velocity, prev_drive_lift, prev_slope)
         record_closure_events(
-            data,
-            _STATS + l,
-            LANES,
-            data[_PREV_LIFT * LANES + l],
-            data[_PREV_VELOCITY * LANES + l],
-            data[_LIFT * LANES + l],
-            data[_VELOCITY * LANES + l],
-            data[_DEPTH * LANES + l],
+            data, _STATS + l, LANES, lift, velocity, acc, data[_DEPTH * LANES + l]
         )
 
 
@@ -253,19 +262,32 @@ def _step_lanes(data, ym, sm, y1, s1):
 
 
 @jit
-def _remember_lanes(data):
-    """Keep the state of every lane at a grid point in ``_PREV_*`` before sub-stepping."""
+def _substep_lanes(data, ya, sa, ym, sm, yb, sb):
+    """RK4 sub-step of every lane; excitation at its start, middle and end.
+
+    Keeps the state it starts from in ``_PREV_*`` (for ``record_closure_events``).
+    """
     for l in range(LANES):
-        data[_PREV_LIFT * LANES + l] = data[_LIFT * LANES + l]
-        data[_PREV_VELOCITY * LANES + l] = data[_VELOCITY * LANES + l]
+        lift, velocity, _, _, acc = _lane_point(data, l, ya, sa)
+        data[_PREV_LIFT * LANES + l] = lift
+        data[_PREV_VELOCITY * LANES + l] = velocity
+        _lane_step(data, l, lift, velocity, acc, ym, sm, yb, sb)
 
 
 @jit
-def _substep_lanes(data, ya, sa, ym, sm, yb, sb):
-    """RK4 sub-step of every lane; excitation at its start, middle and end."""
+def _observe_seat_lanes(data):
+    """Seat phase of every lane at an RK4 sub-step point inside a grid step.
+
+    A landing on a stiff seat can begin and end between grid points, never between sub-step
+    points (see ``engine_kernels.valve._observe_substep``). Returns True if the seat phase of
+    some lane changed (``observe_closure``).
+    """
+    changed = False
     for l in range(LANES):
-        lift, velocity, _, _, acc = _lane_point(data, l, ya, sa)
-        _lane_step(data, l, lift, velocity, acc, ym, sm, yb, sb)
+        changed |= observe_closure(
+            data, _STATS + l, LANES, data[_LIFT * LANES + l], data[_DEPTH * LANES + l]
+        )
+    return changed
 
 
 @jit
@@ -303,6 +325,7 @@ def _lane_pass(excitation, table_step, table_start, half, substeps, params, case
         data[_LIFT * LANES + l] = params[cases[l], P_INITIAL_LIFT]
         data[_VELOCITY * LANES + l] = params[cases[l], P_INITIAL_VELOCITY]
         data[_DIFFERENCE * LANES + l] = 0.0
+    prev_drive_lift, prev_slope = excitation[0, 0], excitation[1, 0]  # read once n > 0
     for n in range(n_steps + 1):
         node = 2 * half * n
         drive_lift = excitation[0, node]
@@ -314,11 +337,12 @@ def _lane_pass(excitation, table_step, table_start, half, substeps, params, case
         if n == 0:
             _start_lanes(data, angle, drive_lift, slope)
         elif _observe_lanes(data, angle, drive_lift, slope):
-            _record_events_lanes(data)
+            _record_events_lanes(data, prev_drive_lift, prev_slope)
         if n % ENERGY_INTERVAL == 0 or n == n_steps:
             _energy_lanes(data, drive_lift, slope)
         if n == n_steps:
             break
+        prev_drive_lift, prev_slope = drive_lift, slope
         if substeps == 1:
             _step_lanes(
                 data,
@@ -328,9 +352,12 @@ def _lane_pass(excitation, table_step, table_start, half, substeps, params, case
                 excitation[1, node + 2 * half],
             )
             continue
-        _remember_lanes(data)
         for j in range(substeps):
+            if j > 0 and _observe_seat_lanes(data):
+                _record_events_lanes(data, prev_drive_lift, prev_slope)
             ya, sa = excitation_lift_slope(excitation, table_step, node + 2.0 * half * j / substeps)
+            if j > 0:
+                prev_drive_lift, prev_slope = ya, sa
             ym, sm = excitation_lift_slope(
                 excitation, table_step, node + 2.0 * half * (j + 0.5) / substeps
             )

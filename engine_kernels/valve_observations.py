@@ -6,7 +6,9 @@ SIMD lane kernel, where they are inlined into a loop over lanes that then vector
 events are found by comparing the current state with the previous one, never by branching:
 the seat phase (seated, open, closed, bouncing) changes once at first closure and twice per
 bounce, and only then does :func:`record_closure_events` (scalar, branchy) record the state
-around the closure and count the bounce.
+before the closure and count the bounce. The seat phase is also followed at every RK4
+sub-step point inside a grid step (:func:`observe_closure` alone), because a landing on a
+stiff seat can begin and end between grid points, though not between sub-step points.
 
 Forces, power and energy are per unit mass (the integrators work with the coefficients of
 [V2] divided by M, see :func:`engine_kernels.valve_model.specific_forces`); the outputs are
@@ -16,9 +18,13 @@ compiler see that lanes and rows never overlap. The one-case kernel uses ``width
 
 Status from the physics (SPEC §4, stability): the valve-train energy may never exceed its
 start value plus the work the cam did through the drive, and may only fall once the valve has
-closed on the base circle (checked every ``ENERGY_INTERVAL`` grid points); mode transitions
-must stay few (``STATUS_UNSTABLE``); a non-finite end state gives ``STATUS_NONFINITE``. An
-unstable step clipped by the one-sided seat shows up as chatter and pumped energy, not NaN.
+closed on the base circle (checked every ``ENERGY_INTERVAL`` grid points), else
+``STATUS_UNSTABLE``; a non-finite end state gives ``STATUS_NONFINITE``. An unstable step
+clipped by the one-sided seat shows up as chatter and pumped energy, not NaN. The count of
+mode transitions is reported but does not set the status: a stiff seat really bounces tens of
+times, and a finer grid sees more of those transitions, so a limit on their number flagged
+converged runs as unstable (every unstable run of tests/engine_kernels/test_valve.py breaks
+an energy check anyway).
 """
 
 from __future__ import annotations
@@ -61,7 +67,6 @@ from engine_kernels.valve_model import (
 ENERGY_SLACK = 0.05
 ENERGY_REST_RISE = np.float32(0.25)
 ENERGY_FLOOR_FRACTION = 1e-3
-TRANSITION_LIMIT = 200
 ENERGY_INTERVAL = 8
 TRANSITION_BAND = 1e-6
 
@@ -91,16 +96,15 @@ _POWER_SUM = 14
 _POWER_FIRST = 15
 _SEAT_Y0 = 16
 _SEAT_V0 = 17
-_SEAT_Y1 = 18
-_SEAT_V1 = 19
-_CAPTURED = 20
-_BOUNCES = 21
-_ENERGY0 = 22
-_EXCESS = 23
-_WORK_MAX = 24
-_REST_ENERGY = 25
-_REST_RISE = 26
-N_STATS = 27
+_SEAT_A0 = 18
+_CAPTURED = 19
+_BOUNCES = 20
+_ENERGY0 = 21
+_EXCESS = 22
+_WORK_MAX = 23
+_REST_ENERGY = 24
+_REST_RISE = 25
+N_STATS = 26
 
 
 @jit_inline
@@ -247,20 +251,20 @@ def observe_closure(stats, at, w, lift, seat_depth):
 
 
 @jit
-def record_closure_events(stats, at, w, prev_lift, prev_velocity, lift, velocity, seat_depth):
+def record_closure_events(stats, at, w, prev_lift, prev_velocity, prev_acceleration, seat_depth):
     """Record first closure and count bounces after :func:`observe_closure` flagged an event.
 
-    prev_lift, prev_velocity : float  State at the previous grid point [m], [m/s].
-    lift, velocity           : float  State at this grid point [m], [m/s].
-    The grid points around the first closure give the seating velocity; a bounce is the
-    phase turning to bouncing from on the seat. Harmless on grid points without an event.
+    prev_lift, prev_velocity : float  State at the previous (sub-)step point [m], [m/s].
+    prev_acceleration        : float  ÿ there [m/s²].
+    The point before the first closure gives the seating velocity (see
+    :func:`finish_observations`); a bounce is the phase turning to bouncing from on the seat.
+    Harmless on points without an event.
     """
     phase = stats[at + _PHASE * w]
     if phase >= PHASE_CLOSED and stats[at + _CAPTURED * w] == ZERO:
         stats[at + _SEAT_Y0 * w] = prev_lift
         stats[at + _SEAT_V0 * w] = prev_velocity
-        stats[at + _SEAT_Y1 * w] = lift
-        stats[at + _SEAT_V1 * w] = velocity
+        stats[at + _SEAT_A0 * w] = prev_acceleration
         stats[at + _CAPTURED * w] = ONE
     if phase == PHASE_BOUNCING and not prev_lift > seat_depth:
         stats[at + _BOUNCES * w] += ONE
@@ -359,8 +363,8 @@ def finish_observations(stats, at, w, step_angle, lift, velocity, mass, preload,
     The status is ``STATUS_NONFINITE`` for a non-finite final state, ``STATUS_UNSTABLE`` if
     the energy ever exceeded its start value plus the cam's work by more than
     ``ENERGY_SLACK`` times the largest work, or the resting energy after closure rose by more
-    than ``ENERGY_REST_RISE`` between checks (both plus ``ENERGY_FLOOR_FRACTION·Ps0·δ0``), or
-    mode transitions exceed ``TRANSITION_LIMIT``, else ``STATUS_OK``. Other arguments as in
+    than ``ENERGY_REST_RISE`` between checks (both plus ``ENERGY_FLOOR_FRACTION·Ps0·δ0``),
+    else ``STATUS_OK``. Other arguments as in
     :func:`start_observations`.
     """
     out[O_MAX_LIFT] = stats[at + _MAX_LIFT * w]
@@ -374,20 +378,23 @@ def finish_observations(stats, at, w, step_angle, lift, velocity, mass, preload,
     out[O_JUMP_GAP] = stats[at + _JUMP_GAP * w]
     out[O_BOUNCE_COUNT] = stats[at + _BOUNCES * w]
     out[O_BOUNCE_HEIGHT] = stats[at + _BOUNCE_HEIGHT * w]
-    # Velocity where the lift crosses δ0, linear between the grid points around closure.
+    # Speed where the lift reaches δ0, at constant acceleration from the last point above the
+    # seat: no seat force acts before the crossing, while after it a stiff seat reverses the
+    # valve within a step, so interpolating towards the next point would understate the
+    # speed (tests/engine_kernels/test_valve.py measures it against the scipy reference).
     out[O_SEATING_VELOCITY] = math.nan
     if stats[at + _CAPTURED * w] == 1.0:
         y0 = stats[at + _SEAT_Y0 * w]
         v0 = stats[at + _SEAT_V0 * w]
-        fraction = (y0 - seat_depth) / (y0 - stats[at + _SEAT_Y1 * w])
-        out[O_SEATING_VELOCITY] = abs(v0 + (stats[at + _SEAT_V1 * w] - v0) * fraction)
+        squared = v0 * v0 + 2.0 * stats[at + _SEAT_A0 * w] * (seat_depth - y0)
+        out[O_SEATING_VELOCITY] = math.sqrt(max(squared, 0.0))
     out[O_MAX_CONTACT_FORCE] = mass * stats[at + _MAX_FORCE * w]
     out[O_TRANSITIONS] = stats[at + _TRANSITIONS * w]
     floor = ENERGY_FLOOR_FRACTION * preload * seat_depth
     pumped = stats[at + _EXCESS * w] > ENERGY_SLACK * stats[at + _WORK_MAX * w] + floor
     pumped = pumped or stats[at + _REST_RISE * w] > floor
     status = STATUS_OK
-    if pumped or stats[at + _TRANSITIONS * w] > TRANSITION_LIMIT:
+    if pumped:
         status = STATUS_UNSTABLE
     if not (math.isfinite(lift) and math.isfinite(velocity)):
         status = STATUS_NONFINITE

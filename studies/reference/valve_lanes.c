@@ -22,7 +22,6 @@
 #define ENERGY_SLACK 0.05
 #define ENERGY_REST_RISE 0.25
 #define ENERGY_FLOOR_FRACTION 1e-3
-#define TRANSITION_LIMIT 200
 #define TRANSITION_BAND 1e-6
 
 enum { P_SPEED, P_MASS, P_DRIVE_STIFFNESS, P_DRIVE_DAMPING, P_SPRING_RATE, P_PRELOAD,
@@ -43,7 +42,7 @@ typedef struct {
     REAL max_force[LANES], jump_start[LANES], jump_steps[LANES], jump_gap[LANES];
     REAL phase[LANES], bounce_height[LANES], contact[LANES], seated[LANES];
     REAL transitions[LANES], power_sum[LANES], power_first[LANES];
-    REAL seat_y0[LANES], seat_v0[LANES], seat_y1[LANES], seat_v1[LANES], captured[LANES];
+    REAL seat_y0[LANES], seat_v0[LANES], seat_a0[LANES], captured[LANES];
     REAL bounces[LANES], energy0[LANES], excess[LANES], work_max[LANES];
     REAL rest_energy[LANES], rest_rise[LANES];
 } Block;
@@ -110,13 +109,15 @@ static inline int observe(Block *s, int l, REAL angle, REAL y, REAL v, REAL a,
     return ((phase == OPEN) & !off_seat) | ((phase == CLOSED) & off_seat);
 }
 
-static inline void record_events(Block *s, int l) {
+/* prev_drive_lift, prev_slope: excitation at the previous grid point (state prev_y, prev_v). */
+static inline void record_events(Block *s, int l, REAL prev_drive_lift, REAL prev_slope) {
     REAL phase = s->phase[l];
     if (phase >= CLOSED && s->captured[l] == 0) {
+        REAL drive, seat;
+        REAL push = s->k[l] * prev_drive_lift + s->b_speed[l] * prev_slope;
         s->seat_y0[l] = s->prev_y[l];
         s->seat_v0[l] = s->prev_v[l];
-        s->seat_y1[l] = s->y[l];
-        s->seat_v1[l] = s->v[l];
+        s->seat_a0[l] = acceleration(s, l, s->prev_y[l], s->prev_v[l], push, &drive, &seat);
         s->captured[l] = 1;
     }
     if (phase == BOUNCING && !(s->prev_y[l] > s->depth[l])) s->bounces[l] += 1;
@@ -152,15 +153,15 @@ static inline void finish(const Block *s, int l, double step_angle, double *out)
     out[O_BOUNCE_HEIGHT] = s->bounce_height[l];
     if (s->captured[l] == 1) {
         double y0 = s->seat_y0[l], v0 = s->seat_v0[l];
-        double fraction = (y0 - s->depth[l]) / (y0 - s->seat_y1[l]);
-        out[O_SEATING_VELOCITY] = fabs(v0 + (s->seat_v1[l] - v0) * fraction);
+        double squared = v0 * v0 + 2.0 * s->seat_a0[l] * (s->depth[l] - y0);
+        out[O_SEATING_VELOCITY] = sqrt(squared > 0 ? squared : 0);
     }
     out[O_MAX_CONTACT_FORCE] = s->mass[l] * s->max_force[l];
     out[O_SUBSTEPS] = 1;
     out[O_TRANSITIONS] = s->transitions[l];
     double floor = ENERGY_FLOOR_FRACTION * s->ps0[l] * s->depth[l];
     int pumped = s->excess[l] > ENERGY_SLACK * s->work_max[l] + floor || s->rest_rise[l] > floor;
-    out[O_STATUS] = pumped || s->transitions[l] > TRANSITION_LIMIT ? 2 : 0;
+    out[O_STATUS] = pumped ? 2 : 0;
     if (!(isfinite(s->y[l]) && isfinite(s->v[l]))) out[O_STATUS] = 3;
 }
 
@@ -218,7 +219,8 @@ static inline __attribute__((always_inline)) void run_block(
                              drive, seat, n == 0);
         }
         if (event)
-            for (int l = 0; l < width; l++) record_events(&s, l);
+            for (int l = 0; l < width; l++)
+                record_events(&s, l, lift_row[2 * n - 2], slope_row[2 * n - 2]);
         if (n % ENERGY_INTERVAL == 0 || n == n_steps) {
 #pragma omp simd
             for (int l = 0; l < width; l++) {

@@ -156,7 +156,9 @@ def test_spread_order_balances_contiguous_shares():
                 assert abs(half.mean() - (n - 1) / 2) <= 0.07 * n
 
 
-@pytest.mark.parametrize("loop", ["_observe_lanes", "_step_lanes", "_substep_lanes"])
+@pytest.mark.parametrize(
+    "loop", ["_observe_lanes", "_step_lanes", "_substep_lanes", "_observe_seat_lanes"]
+)
 def test_lane_loops_vectorise(loop):
     # The point of the lane kernel (STYLE, "Hot integrators"): each loop over lanes must
     # compile to vector arithmetic. A call or a load under a branch in the loop body stops
@@ -164,7 +166,7 @@ def test_lane_loops_vectorise(loop):
     function = getattr(valve_lanes, loop).py_func
     compiled = numba.njit(fastmath=FASTMATH)(function)
     data = np.zeros((valve_lanes.N_LANE_ROWS + valve.N_STATS) * valve_lanes.LANES)
-    arguments = {"_observe_lanes": 3, "_step_lanes": 4, "_substep_lanes": 6}[loop]
+    arguments = {"_observe_lanes": 3, "_step_lanes": 4, "_substep_lanes": 6}.get(loop, 0)
     compiled(data, *([0.0] * arguments))
     llvm = compiled.inspect_llvm(compiled.signatures[0])
     assert " x double>" in llvm
@@ -260,7 +262,8 @@ def test_single_precision_status_at_the_extremes(changes, guard):
 
 
 @pytest.mark.parametrize(
-    ("loop", "arguments"), [("_observe_lanes", 3), ("_step_lanes", 4), ("_energy_lanes", 2)]
+    ("loop", "arguments"),
+    [("_observe_lanes", 3), ("_step_lanes", 4), ("_energy_lanes", 2), ("_observe_seat_lanes", 0)],
 )
 def test_single_precision_loops_use_eight_lanes(loop, arguments):
     # The point of float32: 8 lanes per AVX2 vector. A float64 literal or a 64-bit integer
