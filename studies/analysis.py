@@ -51,6 +51,11 @@ def _error_names(ds: xr.Dataset, error: Sequence[str] | None) -> list[str]:
     return names
 
 
+def has_values(ds: xr.Dataset, response: str) -> bool:
+    """True if ``response`` is finite in some run (one NaN everywhere has nothing to analyse)."""
+    return bool(np.isfinite(ds[response].values.astype(float)).any())
+
+
 def _response(ds: xr.Dataset, response: str) -> tuple[xr.DataArray, np.ndarray]:
     """The response and the mask of runs where it is finite."""
     if response not in ds.data_vars:

@@ -20,7 +20,7 @@ import pandas as pd
 import xarray as xr
 
 from studies import plots, taguchi
-from studies.analysis import range_analysis, sweep_runs
+from studies.analysis import has_values, range_analysis, sweep_runs
 from studies.designs import orthogonal_array
 
 REPORT_NAME = "report.md"
@@ -114,6 +114,7 @@ def _other_figures(lines: list[str], figures: set[str]) -> list[str]:
 # --- sections -----------------------------------------------------------------------------------
 def _report(ds: xr.Dataset, responses: list[str], figures: set[str]) -> tuple[str, str]:
     lines = _header(ds, responses)
+    responses = [r for r in responses if has_values(ds, r)]
     if ds.attrs.get("design") == "sweep":
         lines += _sweep(ds, responses, figures)
         lines += _other_figures(lines, figures)
@@ -174,6 +175,7 @@ def _header(ds: xr.Dataset, responses: list[str]) -> list[str]:
         shown.append(
             f"{r} ({_label(str(y.attrs.get('long_name', r)), _units(ds, r))}"
             + (f", {sense} is better" if sense else "")
+            + ("" if has_values(ds, r) else ", NaN in every run: not analysed")
             + ")"
         )
     rows.append(("responses", "; ".join(shown)))

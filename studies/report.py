@@ -17,7 +17,11 @@ from studies import analysis, markdown_report, plots, scene_plots, scene_summari
 
 
 def write_analysis(ds: xr.Dataset, folder: Path, responses: list[str] | None = None) -> list[Path]:
-    """Write ``analysis.txt`` and PNG figures into ``folder``; return the paths (text first)."""
+    """Write ``analysis.txt`` and PNG figures into ``folder``; return the paths (text first).
+
+    A response that is NaN in every run (e.g. ``jump_start`` when no design point separates)
+    gets a line saying so instead of tables and figures.
+    """
     names = responses or json.loads(ds.attrs.get("responses", "[]")) or list(ds.data_vars)
     scalar = [r for r in names if r in ds and ds[r].dims == ("run",)]
     missing = [r for r in names if r not in ds]
@@ -27,21 +31,29 @@ def write_analysis(ds: xr.Dataset, folder: Path, responses: list[str] | None = N
             f"(available: {', '.join(map(str, ds.data_vars))})"
         )
     header = _header(ds)
+    analysed = [r for r in scalar if analysis.has_values(ds, r)]
     if ds.attrs.get("design") == "sweep":
-        body = [analysis.format_sweep(ds, scalar)]
-        figures = plots.save_sweep_plots(ds, scalar, folder)
+        body = [analysis.format_sweep(ds, analysed)]
+        figures = plots.save_sweep_plots(ds, analysed, folder)
     else:
         terms = taguchi.model_terms(ds) or None
-        body = [analysis.format_tables(ds, r, terms) for r in scalar]
-        figures = plots.save_main_effects(ds, scalar, folder)
-        figures += plots.save_sn_plots(ds, taguchi.sn_responses(ds, scalar), folder)
-        figures += plots.save_interaction_plots(ds, scalar, folder)
+        body = [analysis.format_tables(ds, r, terms) for r in analysed]
+        figures = plots.save_main_effects(ds, analysed, folder)
+        figures += plots.save_sn_plots(ds, taguchi.sn_responses(ds, analysed), folder)
+        figures += plots.save_interaction_plots(ds, analysed, folder)
+    body += [_no_value_note(ds[r]) for r in scalar if r not in analysed]
     body += scene_summaries.scene_summaries(ds)
     figures += scene_plots.save_scene_figures(ds, folder)
     text_path = folder / "analysis.txt"
     text_path.write_text("\n\n".join([header, *body]) + "\n", encoding="utf-8")
     reports = markdown_report.write_report(ds, folder, scalar, figures)
     return [text_path, *reports, *figures]
+
+
+def _no_value_note(y: xr.DataArray) -> str:
+    """A response that is NaN in every run is a result (no jump anywhere), not an error."""
+    meaning = y.attrs.get("long_name", y.name)
+    return f"{y.name} ({meaning}): NaN in every design point, so there is nothing to analyse."
 
 
 def _header(ds: xr.Dataset) -> str:

@@ -316,3 +316,31 @@ def test_full_factorial_report_shows_the_observed_run_and_no_sn(tmp_path: Path) 
     assert "### Signal-to-noise ratio" not in text
     assert "Does not vary over the runs (7 N in every run with a value)" in text
     assert "## Trade-off summary" not in text  # only one response varies
+
+
+@pytest.mark.parametrize("design", ["L9", "sweep"])
+def test_response_nan_in_every_run_is_reported_not_fatal(design: str, tmp_path: Path) -> None:
+    # No design point separating leaves jump_start NaN everywhere: a result to state, while
+    # the other responses are analysed as usual.
+    if design == "sweep":
+        levels = designs.sweep({"a": 3}, {"a": 1}).levels["a"]
+        coords = {
+            "a": ("run", np.array([1.0, 2.0, 3.0])[levels], {"units": "mm"}),
+            "a_level": ("run", levels),
+            "swept_factor": ("run", ["a"] * levels.size),
+        }
+        ds = xr.Dataset({"y": ("run", levels * 2.0, {"units": "MPa"})}, coords=coords)
+        ds.attrs = {"design": "sweep", "factors": json.dumps(["a"])}
+    else:
+        ds = study_dataset(CATALOG / "isac_l9.toml")
+    long_name = "cam angle where separation first starts (NaN: none)"
+    ds["jump_start"] = ("run", np.full(ds.sizes["run"], np.nan), {"long_name": long_name})
+    analysed = [str(r) for r in ds.data_vars if r != "jump_start"]
+    ds.attrs["responses"] = json.dumps([*analysed, "jump_start"])
+    files = write_analysis(ds, tmp_path)
+    text = (tmp_path / "analysis.txt").read_text(encoding="utf-8")
+    assert f"jump_start ({long_name}): NaN in every design point" in text
+    assert all(r in text for r in analysed)
+    assert not any("jump_start" in f.name for f in files)
+    report = (tmp_path / "report.md").read_text(encoding="utf-8")
+    assert "NaN in every run: not analysed" in report
