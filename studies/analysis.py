@@ -215,7 +215,9 @@ def anova(
     ss_total, dof_total = float(((y - y.mean()) ** 2).sum()), y.size - 1
     notes = []
     if finite.sum() < finite.size:
-        notes.append(f"{finite.size - finite.sum()} run(s) with no value left out.")
+        notes.append(
+            f"{finite.size - finite.sum()} run(s) with no finite value (NaN or ±inf) left out."
+        )
     free_dof = dof_total - sum(d for _, d in terms.values())
     if pool is None and free_dof == 0:
         smallest = min(names, key=lambda f: terms[f][0])

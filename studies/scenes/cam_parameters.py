@@ -355,8 +355,19 @@ RESPONSES: tuple[Response, ...] = (
         LOAD,
         "larger",
     ),
-    Response("max_contact_stress", "MPa", "maximum Hertz line-contact stress", LOAD),
-    Response("stress_margin", "MPa", "stress limit − max contact stress", LOAD, "larger"),
+    Response(
+        "max_contact_stress",
+        "MPa",
+        "maximum Hertz line-contact stress (inf where the cam is not convex, ρ ≤ 0)",
+        LOAD,
+    ),
+    Response(
+        "stress_margin",
+        "MPa",
+        "stress limit − max contact stress (−inf where the cam is not convex)",
+        LOAD,
+        "larger",
+    ),
     Response("stress_ok", "1", "contact stress within the limit", LOAD, "larger", flag=True),
     Response(
         "spring_margin", "1", "min spring force / inertia force where h'' < 0", LOAD, "larger"
