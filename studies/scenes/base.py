@@ -66,7 +66,8 @@ class Parameter:
         lo = "-inf" if self.minimum is None else f"{self.minimum:g}"
         hi = "inf" if self.maximum is None else f"{self.maximum:g}"
         bracket = "(" if self.exclusive_minimum or self.minimum is None else "["
-        return f"a number in {bracket}{lo}, {hi}] {self.units}"
+        close = ")" if self.maximum is None else "]"
+        return f"a number in {bracket}{lo}, {hi}{close} {self.units}"
 
     def check(self, value: Any, units: str | None = None) -> str | None:
         """Return a problem description for ``value`` (given in ``units``), or None if fine."""
