@@ -202,7 +202,13 @@ DYNAMIC_RESPONSES: tuple[Response, ...] = (
     Response("jump_start", "deg", "cam angle where separation first starts (NaN: none)", DYN),
     Response("jump_duration", "deg", "cam angle over which the valve is separated", DYN),
     Response("jump_max_gap", "mm", "largest gap y − Y while separated", DYN),
-    Response("bounce_count", "1", "seat contacts lost again after the first closure", DYN),
+    Response(
+        "bounce_count",
+        "1",
+        "seat contacts lost again after the first closure (on a very stiff seat a contact "
+        "lasts about one RK4 sub-step: check the count converges with a finer angle_step)",
+        DYN,
+    ),
     Response("bounce_height", "mm", "largest bounce height off the seat", DYN),
     Response("seating_velocity", "m/s", "valve speed at the first closure", DYN),
     Response("max_contact_force", "N", "largest drive (rocker–valve) force", DYN),
