@@ -30,6 +30,7 @@ class Plan:
     points: dict[str, np.ndarray]
     settings: dict[str, Any]
     stages: tuple[str, ...]
+    responses: tuple[str, ...]  # stored: the study's, then the scene's status responses
 
     @property
     def runs(self) -> int:
@@ -73,8 +74,12 @@ def _plan(definition: StudyDefinition | None, problems: list[str]) -> Plan:
     point_problems = scene.check_points(points, settings)
     if point_problems:
         raise StudyError(source, point_problems)
-    stages = scene.stages_for(list(definition.responses), list(definition.curves))
-    return Plan(definition, scene, design, factor_values, points, settings, tuple(stages))
+    asked, curves = list(definition.responses), list(definition.curves)
+    stages = scene.stages_for(asked, curves)
+    stored = scene.stored_responses(asked, curves)
+    return Plan(
+        definition, scene, design, factor_values, points, settings, tuple(stages), tuple(stored)
+    )
 
 
 def _design(d: StudyDefinition) -> designs.Design:

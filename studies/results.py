@@ -59,9 +59,11 @@ def build_dataset(plan: Plan, ev: Evaluation, attrs: dict[str, Any]) -> xr.Datas
     for label, values in design.labels.items():
         coords[label] = ("run", values.astype(str), {"long_name": label.replace("_", " ")})
     data_vars: dict[str, Any] = {}
-    for name in d.responses:
+    for name in plan.responses:
         r = scene.response(name)
         assert r is not None
+        if name not in ev.scalars:
+            continue  # a status response missing from chunks an older version checkpointed
         values = ev.scalars[name]
         attrs_r: dict[str, Any] = {
             "units": r.units,

@@ -44,7 +44,7 @@ def chunks(runs: int, size: int) -> Iterator[slice]:
 def evaluate_chunk(plan: Plan, part: slice) -> SceneOutput:
     points = {k: v[part] for k, v in plan.points.items()}
     d = plan.definition
-    return plan.scene.evaluate(points, plan.settings, list(d.responses), list(d.curves))
+    return plan.scene.evaluate(points, plan.settings, list(plan.responses), list(d.curves))
 
 
 def evaluate(

@@ -254,6 +254,14 @@ def _level_values(ds: xr.Dataset, factor: str) -> np.ndarray:
     return np.array([float(_raw_value(ds, factor, lv)) for lv in _levels(ds, factor)])
 
 
+def _level_ticks(ds: xr.Dataset, factor: str) -> tuple[np.ndarray, list[str]]:
+    """Cell positions 0, 1, … of a factor's levels and their values as tick labels (numbers or
+    names such as a lift law), so a map has equal cells however the levels are spaced."""
+    values = [_raw_value(ds, factor, lv) for lv in _levels(ds, factor)]
+    labels = [f"{v:g}" if isinstance(v, (int, float, np.number)) else str(v) for v in values]
+    return np.arange(len(values), dtype=float), labels
+
+
 def frequency_map_figure(ds: xr.Dataset) -> Figure | None:
     """First natural frequency over length × thickness, excitation band marked."""
     if not {"length", "thickness"} <= set(_factors(ds)) or "first_frequency" not in ds:
@@ -483,8 +491,10 @@ def jump_speed_map_figure(ds: xr.Dataset) -> Figure | None:
     x, y = factors[0], factors[1]
     layout = _Layout(ds, [x, y])
     fig, axes = layout.figure((4.6, 3.6))
-    xs, ys = _level_values(ds, x), _level_values(ds, y)
+    (xs, x_labels), (ys, y_labels) = _level_ticks(ds, x), _level_ticks(ds, y)
     values = ds["jump_speed"].values
+    finite = values[np.isfinite(values)]
+    low, high = (finite.min(), finite.max()) if finite.size else (0.0, 1.0)
     mesh = None
     for i, j, where in layout.panels():
         ax = axes[i, j]
@@ -495,13 +505,21 @@ def jump_speed_map_figure(ds: xr.Dataset) -> Figure | None:
             grid,
             shading="nearest",
             cmap="viridis",
-            vmin=np.nanmin(values),
-            vmax=np.nanmax(values),
+            vmin=low,
+            vmax=high,
         )
+        ax.set_xticks(xs, x_labels, fontsize="x-small")
+        ax.set_yticks(ys, y_labels, fontsize="x-small")
         for (r, c), value in np.ndenumerate(grid):
-            text = f"{value:.0f}" if np.isfinite(value) else "none"
+            finite_cell = np.isfinite(value)
             ax.text(
-                xs[c], ys[r], text, ha="center", va="center", fontsize="xx-small", color="white"
+                xs[c],
+                ys[r],
+                f"{value:.0f}" if finite_cell else "none",
+                ha="center",
+                va="center",
+                fontsize="xx-small",
+                color="white" if finite_cell else "black",
             )
         ax.set_title(layout.title(where), fontsize="small")
     for ax in axes[-1]:
@@ -511,7 +529,8 @@ def jump_speed_map_figure(ds: xr.Dataset) -> Figure | None:
     if mesh is not None:
         fig.colorbar(mesh, ax=axes, label=_short(ds, "jump_speed"), shrink=0.8)
     fig.suptitle(
-        "Jump speed: lowest camshaft speed with separation\n(none: not in the searched range)"
+        "Jump speed: lowest camshaft speed with separation\n"
+        "(none: none in the searched range, or not run)"
         f"{layout.held_note()}",
         fontsize="medium",
     )

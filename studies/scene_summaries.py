@@ -6,7 +6,9 @@ text blocks (none for scenes or studies without the variables they need):
 * ``reed`` — every design point's first natural frequency and its margin to the excitation
   band, to 4 significant figures, and whether it lies outside the band;
 * ``luffing`` — every check as value, limit and the number of design points that pass, and
-  the failing checks of each design point.
+  the failing checks of each design point;
+* ``rocker``, ``valve`` — the design points whose kinematic chain is invalid or whose
+  dynamics did not finish ok, by reason (these explain NaN responses).
 """
 
 from __future__ import annotations
@@ -18,6 +20,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 import xarray as xr
+
+from engine_kernels import rocker, valve
+from studies.scenes.valve_parameters import STATUS_NOT_RUN
 
 # check → (value, limit) response names of the luffing scene
 LUFFING_CHECKS = {
@@ -115,9 +120,43 @@ def luffing_summary(ds: xr.Dataset) -> list[str]:
     ]
 
 
+def _runs_line(label: str, runs: np.ndarray) -> str:
+    shown = ", ".join(str(r) for r in runs[:20]) + (", …" if runs.size > 20 else "")
+    return f"  {label}: {runs.size} (runs {shown})"
+
+
+def valve_status_summary(ds: xr.Dataset) -> list[str]:
+    """Design points with an invalid chain or dynamics that did not finish ok, by reason."""
+    blocks = []
+    if "chain_status" in ds:
+        flags = ds["chain_status"].values.astype(float)
+        bad = np.flatnonzero(flags != rocker.ROCKER_OK)
+        if bad.size:
+            lines = [f"Kinematic chain invalid (chain_status) at {bad.size} of {flags.size} points"]
+            for flag, meaning in rocker.ROCKER_STATUS_FLAGS:
+                runs = bad[(flags[bad].astype(int) & flag) != 0]
+                if runs.size:
+                    lines.append(_runs_line(meaning, runs))
+            blocks.append("\n".join(lines))
+    if "status" in ds:
+        status = ds["status"].values.astype(float)
+        bad = np.flatnonzero(status != valve.STATUS_OK)
+        if bad.size:
+            names = [*valve.VALVE_STATUS_NAMES, "not run (kinematic chain invalid)"]
+            lines = [f"Dynamics not finished ok (status) at {bad.size} of {status.size} points"]
+            for code in range(1, STATUS_NOT_RUN + 1):
+                runs = bad[status[bad] == code]
+                if runs.size:
+                    lines.append(_runs_line(f"{code} {names[code]}", runs))
+            blocks.append("\n".join(lines))
+    return blocks
+
+
 SUMMARIES: dict[str, Callable[[xr.Dataset], list[str]]] = {
     "reed": reed_summary,
     "luffing": luffing_summary,
+    "rocker": valve_status_summary,
+    "valve": valve_status_summary,
 }
 
 

@@ -154,6 +154,9 @@ class Scene(ABC):
     curves: tuple[Curve, ...] = ()
     curve_axis: CurveAxis | None = None
     stage_order: tuple[str, ...] = ()
+    # Responses stored whenever the stages they need run, asked for or not: they say why
+    # another response is NaN at a design point (no jump at all, or the dynamics never ran).
+    status_responses: tuple[str, ...] = ()
 
     def __init__(self) -> None:
         self.stages: dict[str, Any] = {s: getattr(self, f"stage_{s}") for s in self.stage_order}
@@ -179,6 +182,18 @@ class Scene(ABC):
         for c in curves:
             needed.update(self.curve(c).needs)  # type: ignore[union-attr]
         return [s for s in self.stage_order if s in needed]
+
+    def stored_responses(self, responses: list[str], curves: list[str]) -> list[str]:
+        """The study's responses, then each status response whose stages run anyway."""
+        stages = set(self.stages_for(responses, curves))
+        extra = [
+            name
+            for name in self.status_responses
+            if name not in responses
+            and (r := self.response(name)) is not None
+            and set(r.needs) <= stages
+        ]
+        return [*responses, *extra]
 
     def run_stages(self, ctx: dict[str, Any], responses: list[str], curves: list[str]) -> None:
         """Run only the stages these requests need, in order, on the shared context ``ctx``.

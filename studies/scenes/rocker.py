@@ -180,6 +180,7 @@ class RockerScene(Scene):
     curves = CURVES
     curve_axis: CurveAxis | None = CAM_ANGLE
     stage_order: tuple[str, ...] = ("tappet", "rocker")
+    status_responses: tuple[str, ...] = ("chain_status",)
 
     def __init__(self) -> None:
         super().__init__()

@@ -182,6 +182,7 @@ class ValveScene(RockerScene):
     responses = RESPONSES
     curves = CURVES
     stage_order: tuple[str, ...] = ("tappet", "rocker", "dynamics", "jump_speed")
+    status_responses: tuple[str, ...] = ("chain_status", "status")
 
     def __init__(self) -> None:
         super().__init__()

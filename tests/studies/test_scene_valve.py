@@ -12,12 +12,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from engine_kernels import rocker
 from studies import valve_accuracy as acc
 from studies.bench import run_benchmark
 from studies.definition import StudyError
 from studies.plan import plan_study, plan_text
 from studies.runner import evaluate
 from studies.scenes.valve import valve_rows
+from studies.scenes.valve_parameters import STATUS_NOT_RUN
 from studies.study_run import run_plan
 from study_text import recorded_stages, run, scene_study
 
@@ -216,6 +218,29 @@ def test_invalid_chain_and_separation_are_results() -> None:
     assert np.isnan(ev.scalars["follows_cam"][0])
     assert ev.scalars["follows_cam"][1] == 0.0
     assert ev.scalars["jump_speed_status"][0] == 4.0
+
+
+def test_status_is_stored_to_tell_no_jump_from_not_run(tmp_path: Path) -> None:
+    # jump_start is NaN where nothing separates and where the dynamics never ran (a concave
+    # 3-4-5 cam at ±65°, SPEC §3): the status responses are stored unasked to tell them apart,
+    # and analysis.txt lists the points that did not run and why.
+    text = study(
+        '["jump_start"]',
+        parameters='law = "poly345"\ncam_speed = 3000.0',
+        factors="[factors.rise_angle]\nlevels = [65.0, 85.0]",
+    )
+    result = run_plan(plan_text(text), tmp_path, progress=False)
+    ds = result.dataset
+    assert np.isnan(ds["jump_start"].values).all()
+    np.testing.assert_array_equal(ds["status"].values, [STATUS_NOT_RUN, 0.0])
+    np.testing.assert_array_equal(ds["chain_status"].values, [rocker.ROCKER_CONCAVE_CAM, 0.0])
+    assert json.loads(ds.attrs["responses"]) == ["jump_start"]  # analysed: only what was asked
+    text = (result.folder / "analysis.txt").read_text(encoding="utf-8")
+    assert "Dynamics not finished ok (status) at 1 of 2 points" in text
+    assert "5 not run (kinematic chain invalid): 1 (runs 0)" in text
+    assert "cam not convex: r0 + h + h'' <= 0 somewhere, the chain is invalid: 1 (runs 0)" in text
+    kinematic = plan_text(study('["max_valve_lift"]'))
+    assert kinematic.responses == ("max_valve_lift", "chain_status")  # no dynamics for status
 
 
 @pytest.mark.parametrize(
