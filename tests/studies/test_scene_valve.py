@@ -18,6 +18,7 @@ from studies.bench import run_benchmark
 from studies.definition import StudyError
 from studies.plan import plan_study, plan_text
 from studies.runner import evaluate
+from studies.scene_plots import jump_speed_map_figure
 from studies.scenes.valve import valve_rows
 from studies.scenes.valve_parameters import STATUS_NOT_RUN
 from studies.study_run import run_plan
@@ -92,6 +93,25 @@ def test_jump_speed_map_runs_and_falls_with_mass(tmp_path: Path) -> None:
     for preload in np.unique(ds["spring_preload"].values):
         row = ds.where(ds["spring_preload"] == preload, drop=True).sortby("equivalent_mass")
         assert (np.diff(row["jump_speed"].values) < 0.0).all()
+
+
+def test_jump_speed_map_takes_a_lift_law_factor(tmp_path: Path) -> None:
+    # A categorical factor (the lift law) gets equal cells labelled with its names; the 3-4-5
+    # law is concave at ±70° (SPEC §3), so its cells did not run and read "none".
+    text = study(
+        '["jump_speed"]',
+        factors='[factors.law]\nlevels = ["six_segment", "poly345"]\n'
+        "[factors.lash]\nlevels = [0.05, 0.5]",
+    )
+    result = run_plan(plan_text(text), tmp_path, progress=False)
+    assert (result.folder / "jump_speed_map.png").exists()
+    figure = jump_speed_map_figure(result.dataset)
+    axes = figure.axes[0]
+    assert [t.get_text() for t in axes.get_xticklabels()] == ["six_segment", "poly345"]
+    assert [t.get_text() for t in axes.get_yticklabels()] == ["0.05", "0.5"]
+    cells = sorted(t.get_text() for t in axes.texts)
+    assert cells[-2:] == ["none", "none"]
+    assert all(c.isdigit() for c in cells[:2])
 
 
 # --- closed-form limits -----------------------------------------------------------------------
