@@ -107,6 +107,7 @@ from engine_kernels.valve_observations import (
     N_STATS,
     TRANSITION_BAND,
     finish_observations,
+    nose_position,
     observe_closure,
     observe_energy,
     observe_valve,
@@ -256,16 +257,17 @@ def rk4_valve_step(
 
 
 @jit_inline
-def _observe_substep(stats, prev_lift, prev_velocity, prev_acc, lift, seat_depth):
+def _observe_substep(stats, prev_lift, prev_velocity, prev_acc, lift, seat_depth, past_nose):
     """Seat phase at an RK4 sub-step point inside a grid step (``observe_closure``).
 
     A contact with a stiff seat can begin and end between two grid points, but it lasts
     about half a period of the seat mode, π/ω, longer than a sub-step (the stability guard
     keeps h·ω ≤ 2): following the phase at every sub-step point sees every landing, so a
     rebound counts as a bounce, not as a jump. ``prev_*`` is the state at the previous
-    sub-step point (lift [m], velocity [m/s], acceleration [m/s²]).
+    sub-step point (lift [m], velocity [m/s], acceleration [m/s²]); ``past_nose``: this one
+    is at or past the cam's nose.
     """
-    if observe_closure(stats, 0, 1, lift, seat_depth):
+    if observe_closure(stats, 0, 1, lift, seat_depth, past_nose):
         record_closure_events(stats, 0, 1, prev_lift, prev_velocity, prev_acc, seat_depth)
 
 
@@ -302,6 +304,7 @@ def _integrate(
     lift = params[P_INITIAL_LIFT]
     velocity = params[P_INITIAL_VELOCITY]
     prev_lift, prev_velocity, prev_acc = lift, velocity, 0.0  # set before they are read
+    nose = nose_position(excitation)
     store = curves.shape[1] > 0
     record = trace.shape[0] > 0
     difference = 0.0
@@ -343,6 +346,7 @@ def _integrate(
             seat,
             depth,
             band,
+            node >= nose,
         ):
             record_closure_events(stats, 0, 1, prev_lift, prev_velocity, prev_acc, depth)
         if n % ENERGY_INTERVAL == 0 or n == n_steps:
@@ -382,8 +386,9 @@ def _integrate(
             for j in range(substeps):
                 start = node + 2.0 * half * j / substeps
                 if j > 0:
-                    _observe_substep(stats, prev_lift, prev_velocity, prev_acc, lift, depth)
                     y0, s0 = excitation_lift_slope(excitation, table_step, start)
+                    past = start >= nose
+                    _observe_substep(stats, prev_lift, prev_velocity, prev_acc, lift, depth, past)
                     push = drive_push(y0, s0, k, b_speed)
                     drive, seat = specific_forces(lift, velocity, push, k, b, ps0, kz, bz)
                     prev_lift, prev_velocity = lift, velocity
@@ -448,7 +453,8 @@ def _integrate(
                 drive, seat = specific_forces(lift, velocity, push, k, b, ps0, kz, bz)
                 a0 = specific_acceleration(lift, velocity, drive, seat, ks, ps0, gamma, depth)
                 if j > 0:
-                    _observe_substep(stats, prev_lift, prev_velocity, prev_acc, lift, depth)
+                    past = node + 2.0 * half * j / substeps >= nose
+                    _observe_substep(stats, prev_lift, prev_velocity, prev_acc, lift, depth, past)
                     prev_lift, prev_velocity, prev_acc = lift, velocity, a0
                 lift, velocity = rk4_valve_step(
                     lift,

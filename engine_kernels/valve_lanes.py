@@ -51,6 +51,7 @@ from engine_kernels.valve_observations import (
     N_STATS,
     TRANSITION_BAND,
     finish_observations,
+    nose_position,
     observe_closure,
     observe_energy,
     observe_valve,
@@ -179,7 +180,7 @@ def _start_lanes(data, angle, drive_lift, slope):
 
 
 @jit
-def _observe_lanes(data, angle, drive_lift, slope):
+def _observe_lanes(data, angle, drive_lift, slope, past_nose):
     """Grid point of every lane: acceleration into ``_ACC``, observations updated.
 
     Returns True if the seat phase of some lane changed (``record_closure_events``): a flag,
@@ -203,6 +204,7 @@ def _observe_lanes(data, angle, drive_lift, slope):
             seat,
             data[_DEPTH * LANES + l],
             data[_BAND * LANES + l],
+            past_nose,
         )
         changed |= event
     return changed
@@ -275,17 +277,23 @@ def _substep_lanes(data, ya, sa, ym, sm, yb, sb):
 
 
 @jit
-def _observe_seat_lanes(data):
+def _observe_seat_lanes(data, past_nose):
     """Seat phase of every lane at an RK4 sub-step point inside a grid step.
 
     A landing on a stiff seat can begin and end between grid points, never between sub-step
-    points (see ``engine_kernels.valve._observe_substep``). Returns True if the seat phase of
-    some lane changed (``observe_closure``).
+    points (see ``engine_kernels.valve._observe_substep``). ``past_nose``: the point is at or
+    past the cam's nose.
+    Returns True if the seat phase of some lane changed (``observe_closure``).
     """
     changed = False
     for l in range(LANES):
         changed |= observe_closure(
-            data, _STATS + l, LANES, data[_LIFT * LANES + l], data[_DEPTH * LANES + l]
+            data,
+            _STATS + l,
+            LANES,
+            data[_LIFT * LANES + l],
+            data[_DEPTH * LANES + l],
+            past_nose,
         )
     return changed
 
@@ -326,6 +334,7 @@ def _lane_pass(excitation, table_step, table_start, half, substeps, params, case
         data[_VELOCITY * LANES + l] = params[cases[l], P_INITIAL_VELOCITY]
         data[_DIFFERENCE * LANES + l] = 0.0
     prev_drive_lift, prev_slope = excitation[0, 0], excitation[1, 0]  # read once n > 0
+    nose = nose_position(excitation)
     for n in range(n_steps + 1):
         node = 2 * half * n
         drive_lift = excitation[0, node]
@@ -336,7 +345,7 @@ def _lane_pass(excitation, table_step, table_start, half, substeps, params, case
             _record_lanes(data, trace, n, compare)
         if n == 0:
             _start_lanes(data, angle, drive_lift, slope)
-        elif _observe_lanes(data, angle, drive_lift, slope):
+        elif _observe_lanes(data, angle, drive_lift, slope, node >= nose):
             _record_events_lanes(data, prev_drive_lift, prev_slope)
         if n % ENERGY_INTERVAL == 0 or n == n_steps:
             _energy_lanes(data, drive_lift, slope)
@@ -353,10 +362,11 @@ def _lane_pass(excitation, table_step, table_start, half, substeps, params, case
             )
             continue
         for j in range(substeps):
-            if j > 0 and _observe_seat_lanes(data):
-                _record_events_lanes(data, prev_drive_lift, prev_slope)
-            ya, sa = excitation_lift_slope(excitation, table_step, node + 2.0 * half * j / substeps)
+            position = node + 2.0 * half * j / substeps
+            ya, sa = excitation_lift_slope(excitation, table_step, position)
             if j > 0:
+                if _observe_seat_lanes(data, position >= nose):
+                    _record_events_lanes(data, prev_drive_lift, prev_slope)
                 prev_drive_lift, prev_slope = ya, sa
             ym, sm = excitation_lift_slope(
                 excitation, table_step, node + 2.0 * half * (j + 0.5) / substeps

@@ -183,6 +183,7 @@ def observe_valve(
     seat,
     seat_depth,
     band,
+    past_nose,
 ):
     """Update the running observations of one case at a grid point after the first.
 
@@ -191,12 +192,13 @@ def observe_valve(
     bounce height, mode transitions, and the cam's work for the energy balance. Returns True
     if the seat phase changed in a way :func:`record_closure_events` must record.
 
-    band : float  Dead band of the mode changes per unit mass [N/kg]; other arguments as in
-                  :func:`start_observations`.
+    band      : float  Dead band of the mode changes per unit mass [N/kg].
+    past_nose : bool   The cam is at or past its nose (see :func:`observe_closure`).
+    Other arguments as in :func:`start_observations`.
     """
     observe_extremes(stats, at, w, lift, velocity, acceleration, drive)
     observe_separation(stats, at, w, angle, lift, drive_lift, drive, seat_depth)
-    event = observe_closure(stats, at, w, lift, seat_depth)
+    event = observe_closure(stats, at, w, lift, seat_depth, past_nose)
     observe_transitions(stats, at, w, lift, drive, seat, seat_depth, band)
     stats[at + _POWER_SUM * w] += drive_power(drive, drive_velocity)
     return event
@@ -231,23 +233,33 @@ def observe_separation(stats, at, w, angle, lift, drive_lift, drive, seat_depth)
 
 
 @jit_inline
-def observe_closure(stats, at, w, lift, seat_depth):
+def observe_closure(stats, at, w, lift, seat_depth, past_nose):
     """Seat phase and bounce height (observe_valve); True at first closure or a bounce.
 
-    Closure is the first return onto the seat (y ≤ δ0) after opening; a bounce starts when
-    the valve leaves the seat again after it.
+    past_nose : bool  The cam angle is at or past the nose, the first maximum of Y
+                      (:func:`nose_position`).
+    Closure is the first return onto the seat (y ≤ δ0) after opening with the cam past its
+    nose; a bounce starts when the valve leaves the seat again after it. A return onto the
+    seat before the nose (the valve kicked off the seat by the lash impact, falling back
+    while the cam still rises) puts the phase back to seated: the event has not ended.
     """
     phase = stats[at + _PHASE * w]
     off_seat = lift > seat_depth
     closed = phase >= PHASE_CLOSED
-    on_seat_phase = PHASE_SEATED if phase == PHASE_SEATED else PHASE_CLOSED
+    closing = (phase == PHASE_OPEN) & (not off_seat) & past_nose
+    on_seat_phase = PHASE_CLOSED if closed | closing else PHASE_SEATED
     off_seat_phase = PHASE_BOUNCING if closed else PHASE_OPEN
     stats[at + _PHASE * w] = off_seat_phase if off_seat else on_seat_phase
     height = lift - seat_depth if off_seat & closed else ZERO
     stats[at + _BOUNCE_HEIGHT * w] = larger(stats[at + _BOUNCE_HEIGHT * w], height)
-    closing = (phase == PHASE_OPEN) & (not off_seat)
     rising = (phase == PHASE_CLOSED) & off_seat
     return closing | rising
+
+
+@jit
+def nose_position(excitation):
+    """Table index of the nose: the first maximum of the theoretical lift Y (row 0)."""
+    return np.argmax(excitation[0])
 
 
 @jit

@@ -71,7 +71,7 @@ static inline REAL energy(const Block *s, int l, REAL y, REAL v, REAL drive_lift
  * phase changed (first closure, a bounce), so record_events must run. */
 static inline int observe(Block *s, int l, REAL angle, REAL y, REAL v, REAL a,
                           REAL drive_lift, REAL drive_velocity, REAL drive, REAL seat,
-                          int first) {
+                          int first, int past_nose) {
     REAL depth = s->depth[l], band = s->band[l];
     if (first) {
         s->phase[l] = y > depth ? OPEN : SEATED;
@@ -93,7 +93,8 @@ static inline int observe(Block *s, int l, REAL angle, REAL y, REAL v, REAL a,
     s->jump_gap[l] = larger(s->jump_gap[l], separated ? y - drive_lift : 0);
     if (first) return 0;
     int closed = phase >= CLOSED;
-    REAL on_seat_phase = phase == SEATED ? SEATED : CLOSED;
+    int closing = (phase == OPEN) & !off_seat & past_nose;
+    REAL on_seat_phase = closed | closing ? CLOSED : SEATED;
     s->phase[l] = off_seat ? (closed ? BOUNCING : OPEN) : on_seat_phase;
     s->bounce_height[l] = larger(s->bounce_height[l], off_seat & closed ? y - depth : 0);
     REAL previous = s->contact[l], before = s->seated[l];
@@ -106,7 +107,7 @@ static inline int observe(Block *s, int l, REAL angle, REAL y, REAL v, REAL a,
     s->contact[l] = contact;
     s->seated[l] = seated;
     s->power_sum[l] += pos(drive) * drive_velocity;
-    return ((phase == OPEN) & !off_seat) | ((phase == CLOSED) & off_seat);
+    return closing | ((phase == CLOSED) & off_seat);
 }
 
 /* prev_drive_lift, prev_slope: excitation at the previous grid point (state prev_y, prev_v). */
@@ -205,6 +206,9 @@ static inline __attribute__((always_inline)) void run_block(
     double grid_step = 2.0 * table_step;
     start_block(&s, width, params, cases, grid_step);
     const REAL *lift_row = exc, *slope_row = exc + nodes;
+    long nose = 0; /* first maximum of the theoretical lift */
+    for (long i = 1; i < nodes; i++)
+        if (lift_row[i] > lift_row[nose]) nose = i;
     for (long n = 0; n <= n_steps; n++) {
         REAL drive_lift = lift_row[2 * n], slope = slope_row[2 * n];
         REAL angle = (REAL)(table_start + n * grid_step);
@@ -216,7 +220,7 @@ static inline __attribute__((always_inline)) void run_block(
             REAL a = acceleration(&s, l, s.y[l], s.v[l], push, &drive, &seat);
             s.acc[l] = a;
             event |= observe(&s, l, angle, s.y[l], s.v[l], a, drive_lift, s.speed[l] * slope,
-                             drive, seat, n == 0);
+                             drive, seat, n == 0, 2 * n >= nose);
         }
         if (event)
             for (int l = 0; l < width; l++)

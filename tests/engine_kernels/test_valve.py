@@ -348,6 +348,32 @@ def test_bounces_match_reference():
     assert out[valve.O_BOUNCE_HEIGHT] == pytest.approx(height, rel=1e-3)
 
 
+def test_landings_before_the_nose_are_not_the_closure():
+    # The valve leaves its seat at 0.3 m/s while the cam is still on its base circle: it flies,
+    # lands and bounces on the seat before the event opens it. Those landings come before the
+    # nose; the closure whose seating velocity and bounces are reported is the landing after
+    # it, located by the reference (event-restarted DOP853) as in test_bounces_match_reference.
+    # Taking the first landing as the closure counted the whole event as a bounce.
+    row = params(seat_damping=20.0, initial_velocity=0.3)
+    excitation, step, start = table(cosine_event, 0.25)
+    theta = start + 2 * step * np.arange((excitation.shape[1] - 1) // 2 + 1)
+    reference = valve_reference(cosine_event, row, theta)
+    landings = [t for t, kind in reference.switches if "seat_gap" in kind]
+    assert sum(t < -HALF for t in landings) >= 4
+    closing = [t for t in landings if t > 0.0]
+    at_closure = valve_reference(cosine_event, row, np.array([theta[0], closing[0]]))
+    lanes = np.empty((1, len(valve.VALVE_OUTPUT_NAMES)))
+    valve_lanes.valve_response_lanes(
+        excitation, step, start, row[None, :], valve.valve_settings(), lanes
+    )
+    one_case, _ = run(excitation, step, start, row)
+    for out in (one_case, lanes[0]):
+        assert out[valve.O_BOUNCE_COUNT] == (len(closing) - 1) // 2 >= 3
+        assert out[valve.O_SEATING_VELOCITY] == pytest.approx(
+            abs(at_closure.velocity[-1]), rel=1e-3
+        )
+
+
 @pytest.mark.parametrize(
     ("lift", "velocity", "drive_lift", "drive_velocity"),
     [

@@ -166,8 +166,13 @@ def test_lane_loops_vectorise(loop):
     function = getattr(valve_lanes, loop).py_func
     compiled = numba.njit(fastmath=FASTMATH)(function)
     data = np.zeros((valve_lanes.N_LANE_ROWS + valve.N_STATS) * valve_lanes.LANES)
-    arguments = {"_observe_lanes": 3, "_step_lanes": 4, "_substep_lanes": 6}.get(loop, 0)
-    compiled(data, *([0.0] * arguments))
+    arguments = {
+        "_observe_lanes": (0.0, 0.0, 0.0, True),
+        "_step_lanes": (0.0,) * 4,
+        "_substep_lanes": (0.0,) * 6,
+        "_observe_seat_lanes": (True,),
+    }[loop]
+    compiled(data, *arguments)
     llvm = compiled.inspect_llvm(compiled.signatures[0])
     assert " x double>" in llvm
 
@@ -263,14 +268,19 @@ def test_single_precision_status_at_the_extremes(changes, guard):
 
 @pytest.mark.parametrize(
     ("loop", "arguments"),
-    [("_observe_lanes", 3), ("_step_lanes", 4), ("_energy_lanes", 2), ("_observe_seat_lanes", 0)],
+    [
+        ("_observe_lanes", (0.0, 0.0, 0.0, True)),
+        ("_step_lanes", (0.0,) * 4),
+        ("_energy_lanes", (0.0,) * 2),
+        ("_observe_seat_lanes", (True,)),
+    ],
 )
 def test_single_precision_loops_use_eight_lanes(loop, arguments):
     # The point of float32: 8 lanes per AVX2 vector. A float64 literal or a 64-bit integer
     # in a loop would promote it back to 4 lanes (or to double arithmetic) without notice.
     function = numba.njit(fastmath=FASTMATH)(getattr(valve_lanes, loop).py_func)
     data = np.zeros((valve_lanes.N_LANE_ROWS + valve.N_STATS) * valve_lanes.LANES, np.float32)
-    function(data, *([np.float32(0.0)] * arguments))
+    function(data, *(np.float32(a) if isinstance(a, float) else a for a in arguments))
     llvm = function.inspect_llvm(function.signatures[0])
     assert "<8 x float>" in llvm
     assert " x double>" not in llvm
