@@ -440,9 +440,8 @@ def _integrate(
             )
         else:
             for j in range(substeps):
-                y0, s0 = excitation_lift_slope(
-                    excitation, table_step, node + 2.0 * half * j / substeps
-                )
+                position = node + 2.0 * half * j / substeps
+                y0, s0 = excitation_lift_slope(excitation, table_step, position)
                 ym, sm = excitation_lift_slope(
                     excitation, table_step, node + 2.0 * half * (j + 0.5) / substeps
                 )
@@ -453,7 +452,7 @@ def _integrate(
                 drive, seat = specific_forces(lift, velocity, push, k, b, ps0, kz, bz)
                 a0 = specific_acceleration(lift, velocity, drive, seat, ks, ps0, gamma, depth)
                 if j > 0:
-                    past = node + 2.0 * half * j / substeps >= nose
+                    past = position >= nose
                     _observe_substep(stats, prev_lift, prev_velocity, prev_acc, lift, depth, past)
                     prev_lift, prev_velocity, prev_acc = lift, velocity, a0
                 lift, velocity = rk4_valve_step(
