@@ -239,7 +239,7 @@ def _c_reference(
         return {}, "some cases need RK4 sub-steps, which the C reference does not take"
     try:
         return {dtype: c_valve.build(np.dtype(dtype)) for dtype in PRECISIONS.values()}, ""
-    except c_valve.CompilerMissing as error:
+    except (c_valve.CompilerMissing, c_valve.CompileFailed) as error:
         return {}, str(error)
 
 

@@ -34,7 +34,11 @@ REAL = {np.dtype(np.float64): "double", np.dtype(np.float32): "float"}
 
 
 class CompilerMissing(RuntimeError):
-    """No working C compiler (``$CC`` or ``cc``) on this machine."""
+    """No C compiler (``$CC`` or ``cc``) on this machine."""
+
+
+class CompileFailed(RuntimeError):
+    """The compiler is there but rejected the C reference (or its flags, e.g. -fopenmp)."""
 
 
 def build(dtype: np.dtype) -> ctypes.CDLL:
@@ -54,7 +58,7 @@ def build(dtype: np.dtype) -> ctypes.CDLL:
             check=False,
         )
         if result.returncode != 0:
-            raise CompilerMissing(f"{compiler} failed on {SOURCE.name}: {result.stderr.strip()}")
+            raise CompileFailed(f"{compiler} failed on {SOURCE.name}: {result.stderr.strip()}")
         partial.replace(library)
     lib = ctypes.CDLL(str(library))
     for name in ("valve_lanes", "valve_one_case"):

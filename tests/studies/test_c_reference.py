@@ -73,6 +73,16 @@ def test_c_reference_matches_numba_lanes(library):
         )
 
 
+def test_a_source_the_compiler_rejects_fails_instead_of_skipping(monkeypatch, tmp_path):
+    # Only a missing compiler skips the comparison above; a compiler that rejects the source
+    # (or its flags) is an error, so a broken C reference cannot pass as a skip.
+    broken = tmp_path / "valve_lanes.c"
+    broken.write_text("this is not C\n", encoding="utf-8")
+    monkeypatch.setattr(c_valve, "SOURCE", broken)
+    with pytest.raises(c_valve.CompileFailed, match=r"valve_lanes\.c"):
+        c_valve.build(np.dtype(np.float64))
+
+
 def test_missing_compiler_is_reported(monkeypatch):
     monkeypatch.setenv("CC", "no-such-compiler-here")
     with pytest.raises(c_valve.CompilerMissing, match="no-such-compiler-here"):
