@@ -26,6 +26,7 @@ from studies.reference import c_valve
 from studies.runner import evaluate_chunk
 from studies.scenes.rocker import HALF_TURN_DEG, grid_deg
 from studies.scenes.valve import ValveScene, kernel_settings, valve_rows
+from studies.simd import host_lanes
 from studies.valve_accuracy import reference_lift
 
 CAM_STUDY = """
@@ -118,7 +119,11 @@ def bench_valve(cases: int, step: float, repeat: int) -> dict[str, Any]:
     over the scene's window and over a whole revolution, and end to end through the study
     engine), the switch-aware RK4, and scipy's event-restarted DOP853 (the accuracy
     reference)."""
-    figures: dict[str, Any] = {"kernel": _valve_kernels(cases, step, repeat)}
+    figures: dict[str, Any] = {
+        "lanes_per_vector_float64": host_lanes(np.float64),
+        "lanes_per_vector_float32": host_lanes(np.float32),
+        "kernel": _valve_kernels(cases, step, repeat),
+    }
     for integrator, n in [
         ("lanes", cases),
         ("lanes_f32", cases),

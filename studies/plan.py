@@ -77,9 +77,41 @@ def _plan(definition: StudyDefinition | None, problems: list[str]) -> Plan:
     asked, curves = list(definition.responses), list(definition.curves)
     stages = scene.stages_for(asked, curves)
     stored = scene.stored_responses(asked, curves)
+    clashes = _name_clashes(definition, scene, design, stored)
+    if clashes:
+        raise StudyError(source, clashes)
     return Plan(
         definition, scene, design, factor_values, points, settings, tuple(stages), tuple(stored)
     )
+
+
+def _name_clashes(
+    d: StudyDefinition, scene: Scene, design: designs.Design, stored: list[str]
+) -> list[str]:
+    """Names that two variables of ``results.nc`` would share (one message per clash)."""
+    owners: dict[str, list[str]] = {}
+    named = [("coordinate", "run")]
+    for f in d.factors:
+        named += [("factor", f.name), ("coordinate", f"{f.name}_level")]
+    named += [("array column", f"{e}_level") for e in design.error_columns]
+    named += [("interaction column", f"{n}_level") for n in design.interactions]
+    named += [("design label", label) for label in design.labels]
+    named += [("response", r) for r in stored]
+    named += [("curve", c) for c in d.curves]
+    if d.curves and scene.curve_axis is not None:
+        named.append(("curve axis", scene.curve_axis.name))
+    for kind, name in named:
+        owners.setdefault(name, []).append(kind)
+    return [
+        f"{' and '.join(kinds)} share the name {name!r} in results.nc: "
+        + (
+            f"leave {name!r} out of curves (the factor keeps its value per run)"
+            if "curve" in kinds
+            else "rename or drop one of them"
+        )
+        for name, kinds in owners.items()
+        if len(kinds) > 1
+    ]
 
 
 def _design(d: StudyDefinition) -> designs.Design:

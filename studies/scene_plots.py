@@ -443,7 +443,9 @@ def _short(ds: xr.Dataset, name: str) -> str:
 
 def valve_lift_figure(ds: xr.Dataset) -> Figure | None:
     """Stored valve-lift curves (theoretical Y dashed, actual y solid), a line per first factor."""
-    names = [c for c in ("valve_lift", "actual_lift") if c in ds]
+    names = [
+        c for c in ("valve_lift", "actual_lift") if c in ds.data_vars and "cam_angle" in ds[c].dims
+    ]
     if not names:
         return None
     factors = _factors(ds)

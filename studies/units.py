@@ -26,6 +26,7 @@ UNITS: dict[str, Unit] = {
     "deg": Unit("angle", math.pi / 180.0),
     "rad/s": Unit("angular speed", 1.0),
     "rpm": Unit("angular speed", 2.0 * math.pi / 60.0),
+    "rad/s^2": Unit("angular acceleration", 1.0),
     "m/s": Unit("speed", 1.0),
     "m/s^2": Unit("acceleration", 1.0),
     "s": Unit("time", 1.0),

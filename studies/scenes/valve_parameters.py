@@ -9,7 +9,7 @@ rate 30 N/mm, seat stiffness 5e4 N/mm with 900 N s/m of seat damping, no externa
 **Integrator settings** (``[settings]``):
 
 * ``integrator`` — ``lanes`` (plain fixed-step RK4, 32 cases per SIMD block, double
-  precision), ``lanes_f32`` (the same in single precision, 8 lanes per AVX2 vector: the
+  precision), ``lanes_f32`` (the same in single precision, twice the lanes per vector: the
   fastest; curves, when stored, still come from the double-precision one-case kernel),
   ``rk4`` (the same scheme one case per prange iteration) or ``rk4_switch_aware`` (contact and
   seat switches located inside steps: fourth order, much slower per step);

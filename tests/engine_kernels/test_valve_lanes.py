@@ -23,9 +23,11 @@ import pytest
 from hypothesis import given
 from hypothesis import settings as hypothesis_settings
 from hypothesis import strategies as st
+from llvmlite import binding as llvmlite_binding
 
 from engine_kernels import valve, valve_lanes
 from engine_kernels._jit import FASTMATH
+from studies.simd import host_lanes, widest_vector
 
 RPM = 2 * math.pi / 60
 MASS = 0.033 + 0.015 / 3 + 5e-6 / 33.28e-3**2
@@ -174,7 +176,7 @@ def test_lane_loops_vectorise(loop):
     }[loop]
     compiled(data, *arguments)
     llvm = compiled.inspect_llvm(compiled.signatures[0])
-    assert " x double>" in llvm
+    assert widest_vector(llvm, np.float64) >= min(host_lanes(np.float64), 4)
 
 
 EPS32 = 2.0**-23
@@ -266,6 +268,18 @@ def test_single_precision_status_at_the_extremes(changes, guard):
     assert math.isfinite(single[0, valve.O_MAX_LIFT])
 
 
+def test_host_lanes_match_the_cpu_features():
+    # Every x86-64 CPU has SSE2 (4 float lanes, 2 double); with AVX2 and no forced target,
+    # LLVM must use at least 8 and 4. Guards the reference loop (studies.simd) against
+    # vectorising nothing, which would make the width tests below pass vacuously.
+    lanes = host_lanes(np.float32)
+    assert lanes >= 4
+    assert host_lanes(np.float64) * 2 == lanes
+    features = numba.core.config.CPU_FEATURES or llvmlite_binding.get_host_cpu_features().flatten()
+    if "+avx2" in features and numba.core.config.CPU_NAME in (None, "host"):
+        assert lanes >= 8
+
+
 @pytest.mark.parametrize(
     ("loop", "arguments"),
     [
@@ -275,12 +289,17 @@ def test_single_precision_status_at_the_extremes(changes, guard):
         ("_observe_seat_lanes", (True,)),
     ],
 )
-def test_single_precision_loops_use_eight_lanes(loop, arguments):
-    # The point of float32: 8 lanes per AVX2 vector. A float64 literal or a 64-bit integer
-    # in a loop would promote it back to 4 lanes (or to double arithmetic) without notice.
+def test_single_precision_loops_fill_the_host_vectors(loop, arguments):
+    # The point of float32: twice the lanes per vector of float64 (8 per AVX2 vector, 16 per
+    # AVX-512 one). A float64 literal or a 64-bit integer in a loop would promote it back to
+    # double arithmetic or narrower vectors without notice. The width is the host's
+    # (studies.simd.host_lanes), never pinned to one instruction set.
+    lanes = host_lanes(np.float32)
+    if lanes < 8:
+        pytest.skip(f"SSE-only target ({lanes} float lanes): no blend, select loops stay scalar")
     function = numba.njit(fastmath=FASTMATH)(getattr(valve_lanes, loop).py_func)
     data = np.zeros((valve_lanes.N_LANE_ROWS + valve.N_STATS) * valve_lanes.LANES, np.float32)
     function(data, *(np.float32(a) if isinstance(a, float) else a for a in arguments))
     llvm = function.inspect_llvm(function.signatures[0])
-    assert "<8 x float>" in llvm
+    assert widest_vector(llvm, np.float32) >= lanes
     assert " x double>" not in llvm

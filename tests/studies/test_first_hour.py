@@ -1,0 +1,100 @@
+"""What a new user meets first: the README's own example runs, and what `check` passes,
+`run` does not fail for a definition reason (issue: "The first hour of a new user")."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+import xarray as xr
+
+from studies.cli import main
+from studies.scenes import SCENES, get_scene
+from studies.units import UNITS, conversion_factor
+
+README = Path(__file__).resolve().parents[2] / "README.md"
+
+
+def readme_study() -> str:
+    """The TOML block of the README's "Writing a study" section, exactly as written."""
+    section = README.read_text(encoding="utf-8").split("## Writing a study", 1)[1]
+    match = re.search(r"```toml\n(.*?)```", section, re.DOTALL)
+    assert match, "the README's 'Writing a study' section has no TOML example"
+    return match.group(1)
+
+
+def test_readme_example_runs_to_the_end(tmp_path: Path) -> None:
+    study = tmp_path / "my_cam.toml"
+    study.write_text(readme_study(), encoding="utf-8")
+    outputs = tmp_path / "outputs"
+    assert main(["check", str(study)]) == 0
+    assert main(["run", str(study), "--outputs", str(outputs)]) == 0
+    (results,) = outputs.glob("my_cam/*/results.nc")
+    with xr.open_dataset(results) as ds:
+        assert ds.sizes["run"] == 6  # 3 base radii x 2 lifts
+        for response in ("max_contact_stress", "min_radius_of_curvature", "max_jerk"):
+            assert ds[response].notnull().all()
+        assert ds["acceleration"].dims == ("run", "cam_angle")
+
+
+CLASHES = {
+    "cam factor 'lift' with the curve 'lift'": """
+name = "clash_cam"
+scene = "cam"
+responses = ["max_jerk"]
+curves = ["lift"]
+[factors.lift]
+levels = [9.5, 10.8]
+""",
+    "valve factor 'valve_lift' with the curve 'valve_lift'": """
+name = "clash_valve"
+scene = "valve"
+responses = ["max_lift"]
+curves = ["valve_lift"]
+[factors.valve_lift]
+levels = [7.0, 7.815]
+""",
+}
+
+
+@pytest.mark.parametrize("text", CLASHES.values(), ids=CLASHES.keys())
+def test_check_refuses_a_factor_and_a_curve_of_one_name(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], text: str
+) -> None:
+    study = tmp_path / "clash.toml"
+    study.write_text(text, encoding="utf-8")
+    assert main(["check", str(study)]) == 2
+    err = capsys.readouterr().err
+    assert "factor and curve share the name" in err
+    assert main(["run", str(study), "--outputs", str(tmp_path / "out")]) == 2
+    assert not (tmp_path / "out").exists()
+
+
+def test_valve_lift_can_be_a_factor(tmp_path: Path) -> None:
+    # Was: "No variable named 'cam_angle'" after every point had run (a figure took the
+    # factor coordinate valve_lift for the stored valve-lift curve).
+    study = tmp_path / "valve_lift.toml"
+    study.write_text(
+        'name = "valve_lift_factor"\nscene = "valve"\nresponses = ["max_lift"]\n'
+        "[factors.valve_lift]\nlevels = [7.0, 7.815]\n",
+        encoding="utf-8",
+    )
+    assert main(["run", str(study), "--outputs", str(tmp_path / "out")]) == 0
+    (results,) = (tmp_path / "out").glob("valve_lift_factor/*/results.nc")
+    with xr.open_dataset(results) as ds:
+        lift = ds["max_lift"].values
+    # The valve follows the cam at the default speed: its peak scales with the cam's.
+    assert lift[1] / lift[0] == pytest.approx(7.815 / 7.0, rel=0.02)
+
+
+def test_every_unit_a_scene_declares_converts() -> None:
+    # Was: a crank study asking for max_rod_angular_acceleration ended with "error: 'rad/s^2'".
+    for name in SCENES:
+        scene = get_scene(name)
+        for item in (*scene.parameters, *scene.settings, *scene.responses, *scene.curves):
+            units = getattr(item, "units", None)
+            if units is None:
+                continue
+            assert units in UNITS, f"{name}.{item.name}: units {units!r} not in the table"
+            assert conversion_factor(units, units) == 1.0
