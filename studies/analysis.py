@@ -9,7 +9,8 @@ Runs whose response is NaN (failed cases) are left out.
 Range analysis (Taguchi's "k, R" table): k_i = mean response at level i, R = max k - min k,
 rank by R, best level by the sense of the response. ANOVA: sums of squares of the factor terms
 in order (type I, as statsmodels' ``anova_lm(typ=1)``; for an orthogonal array they are
-Taguchi's level sums SS = Σ n_i (k_i - ȳ)²), error = what the factors leave (the empty columns
+Taguchi's level sums SS = Σ n_i (k_i - ȳ)²; computed in O(N) by
+:mod:`studies.sums_of_squares`), error = what the factors leave (the empty columns
 and any other free degrees of freedom), F = MS / MS_error with P from the F distribution.
 """
 
@@ -22,6 +23,8 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 from scipy import stats
+
+from studies.sums_of_squares import centred, term_sums_of_squares
 
 SENSES = ("smaller", "larger")
 
@@ -142,24 +145,6 @@ def range_analysis(
     )
 
 
-def _sequential_ss(y: np.ndarray, terms: list[np.ndarray]) -> tuple[list[float], list[int]]:
-    """Type I sums of squares and degrees of freedom of categorical ``terms`` in order."""
-    x = np.ones((y.size, 1))
-    rss_before, rank_before = float(((y - y.mean()) ** 2).sum()), 1
-    ss, dof = [], []
-    for codes in terms:
-        # treatment coding: one dummy per level but the first keeps the design full-rank, so
-        # lstsq's rank detection stays reliable for saturated arrays (e.g. L27 with 12 factors)
-        dummies = (codes[:, None] == np.unique(codes)[None, 1:]).astype(float)
-        x = np.hstack([x, dummies])
-        beta, _, rank, _ = np.linalg.lstsq(x, y, rcond=None)
-        rss = float(((y - x @ beta) ** 2).sum())
-        ss.append(max(rss_before - rss, 0.0))
-        dof.append(int(rank) - rank_before)
-        rss_before, rank_before = rss, int(rank)
-    return ss, dof
-
-
 def _f_test(ms: float, dof: int, ms_error: float, dof_error: int) -> tuple[float, float]:
     if dof == 0 or dof_error == 0:
         return np.nan, np.nan
@@ -208,11 +193,11 @@ def anova(
 
     def fit(pooled: list[str]) -> dict[str, tuple[float, int]]:
         order = [f for f in names if f not in pooled] + pooled
-        ss, dof = _sequential_ss(y, [codes[f] for f in order])
-        return dict(zip(order, zip(ss, dof, strict=True), strict=True))
+        ss, dof, _ = term_sums_of_squares(y, [codes[f] for f in order])
+        return {f: (float(s), int(n)) for f, s, n in zip(order, ss, dof, strict=True)}
 
     terms = fit(pooled)
-    ss_total, dof_total = float(((y - y.mean()) ** 2).sum()), y.size - 1
+    ss_total, dof_total = float(np.sum(centred(y) ** 2)), y.size - 1
     notes = []
     if finite.sum() < finite.size:
         notes.append(
