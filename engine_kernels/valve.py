@@ -33,6 +33,7 @@ from engine_kernels.valve_guard import (
     error_estimate_is_stable,
     prepare_case,
     stability_substeps,
+    stability_substeps_batch,
     valid_valve_parameters,
 )
 from engine_kernels.valve_model import (
@@ -193,6 +194,7 @@ __all__ = [
     "prepare_case",
     "rk4_valve_step",
     "stability_substeps",
+    "stability_substeps_batch",
     "valid_valve_parameters",
     "valve_acceleration",
     "valve_energy",

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 
-from engine_kernels._jit import jit
+from engine_kernels._jit import batch, jit, prange
 from engine_kernels.rk4 import stable_substeps
 from engine_kernels.valve_model import (
     O_STATUS,
@@ -82,6 +82,19 @@ def stability_substeps(params, grid_step):
     )
     step = grid_step / params[P_SPEED]
     return stable_substeps(step, radius, STEP_RATIO_TARGET), step * radius
+
+
+@batch
+def stability_substeps_batch(rows, grid_step, needed, ratio):
+    """:func:`stability_substeps` of every parameter row (the plan's check of a design).
+
+    rows      : 2-D array  Parameter rows (``P_*``), one per case.
+    grid_step : float      Grid step Δθ [rad].
+    needed    : 1-D int64  Out: sub-steps per grid step of each case.
+    ratio     : 1-D array  Out: ``|h λ|_max`` of the full step of each case.
+    """
+    for i in prange(rows.shape[0]):
+        needed[i], ratio[i] = stability_substeps(rows[i], grid_step)
 
 
 @jit

@@ -64,7 +64,7 @@ def _plan(definition: StudyDefinition | None, problems: list[str]) -> Plan:
     factor_values = {
         f.name: np.asarray(f.levels)[design.levels[f.name]] for f in definition.factors
     }
-    points = _points(scene, definition, factor_values, design.runs)
+    points = _points(scene, definition, design, design.runs)
     settings = {
         s.name: s.to_si(definition.settings[s.name])
         if s.kind == "number"
@@ -136,22 +136,27 @@ def _design(d: StudyDefinition) -> designs.Design:
 
 
 def _points(
-    scene: Scene, d: StudyDefinition, factor_values: dict[str, np.ndarray], runs: int
+    scene: Scene, d: StudyDefinition, design: designs.Design, runs: int
 ) -> dict[str, np.ndarray]:
+    """SI values per parameter and run. A factor's levels are converted once and indexed by
+    the design; a fixed parameter is one value broadcast over the runs (a read-only view that
+    costs no memory per run)."""
     factors = {f.name: f for f in d.factors}
     points: dict[str, np.ndarray] = {}
     for p in scene.parameters:
         if p.name in factors:
-            values = factor_values[p.name]
+            f = factors[p.name]
+            levels = np.asarray(f.levels)
             if p.kind == "number":
-                values = np.array([p.to_si(v, factors[p.name].units) for v in values])
-            points[p.name] = values
+                levels = np.array([p.to_si(v, f.units) for v in f.levels])
+            points[p.name] = levels[design.levels[p.name]]
             continue
         value, units = d.parameters.get(p.name, (p.default, p.units))
         if p.kind == "number":
-            points[p.name] = np.full(runs, p.to_si(value, units))
+            points[p.name] = np.broadcast_to(p.to_si(value, units), (runs,))
         elif p.kind == "vector":
-            points[p.name] = np.tile(np.asarray(value, dtype=float) * p.to_si(1.0), (runs, 1))
+            row = np.asarray(value, dtype=float) * p.to_si(1.0)
+            points[p.name] = np.broadcast_to(row, (runs, row.size))
         else:
-            points[p.name] = np.full(runs, value, dtype=object)
+            points[p.name] = np.broadcast_to(np.array(value, dtype=object), (runs,))
     return points
