@@ -21,6 +21,7 @@ import numpy as np
 from engine_kernels import valve, valve_lanes
 from studies import provenance, tracking
 from studies.bench_plots import save_bench_figure
+from studies.bench_study import bench_study
 from studies.plan import Plan, plan_text
 from studies.reference import c_valve
 from studies.runner import evaluate_chunk
@@ -262,6 +263,7 @@ RATIOS = (
 BENCHMARKS: dict[str, Callable[[int, float, int], dict[str, Any]]] = {
     "cam": bench_cam,
     "valve": bench_valve,
+    "study": bench_study,
 }
 
 

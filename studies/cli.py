@@ -118,6 +118,12 @@ def _parser() -> argparse.ArgumentParser:
     bench = sub.add_parser("bench", help="run benchmarks (cases/s, ratios)")
     bench.add_argument("name", help="benchmark name or 'all'")
     bench.add_argument("--cases", type=int, default=20000, help="design points per timing")
+    bench.add_argument(
+        "--points",
+        type=float,
+        default=1e6,
+        help="design points of the end-to-end 'study' benchmark (e.g. 1e7)",
+    )
     bench.add_argument("--step", type=float, default=0.5, help="angle step [deg]")
     bench.add_argument("--repeat", type=int, default=3, help="timed repetitions (best kept)")
     bench.add_argument("--outputs", type=Path, default=Path("outputs"))
@@ -130,9 +136,10 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
     names = list(BENCHMARKS) if args.name == "all" else [args.name]
     for name in names:
-        path = run_benchmark(name, args.cases, args.step, args.repeat, args.outputs)
+        cases = int(args.points) if name == "study" else args.cases
+        path = run_benchmark(name, cases, args.step, args.repeat, args.outputs)
         figures = json.loads(path.read_text(encoding="utf-8"))["figures"]
-        print(f"benchmark {name} ({args.cases} cases, step {args.step} deg):")
+        print(f"benchmark {name} ({cases} cases, step {args.step} deg):")
         print("\n".join(summarize(figures)))
         print(f"  all figures in {path} (bar chart: {path.with_suffix('.png').name})")
     return 0
