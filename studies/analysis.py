@@ -1,329 +1,305 @@
-"""Range analysis and analysis of variance of a study's results.
+"""The analysis of a run, computed once: one ``xarray.Dataset`` that every renderer reads.
 
-Both work on the results Dataset (see :mod:`studies.results`): dimension ``run``; for each
-factor ``f`` the coordinates ``f`` (physical value, with ``units``) and ``f_level`` (0-based
-level index); empty orthogonal-array columns as ``<name>_level`` coordinates only, named in the
-global attribute ``error_columns``; factor names in the attribute ``factors`` (both JSON lists).
-Runs whose response is NaN (failed cases) are left out.
+:func:`analyze` computes, per analysed variable (the study's responses, run means of
+replicated ones, and their S/N ratios where Taguchi's S/N applies), everything that
+``analysis.txt``, ``report.md`` and the figures show; it is written as ``analysis.nc`` beside
+``results.nc``. The renderers (:mod:`studies.analysis_text`, :mod:`studies.markdown_report`,
+:mod:`studies.plots`) compute no statistics.
 
-Range analysis (Taguchi's "k, R" table): k_i = mean response at level i, R = max k - min k,
-rank by R, best level by the sense of the response. ANOVA: sums of squares of the factor terms
-in order (type I, as statsmodels' ``anova_lm(typ=1)``; for an orthogonal array they are
-Taguchi's level sums SS = Σ n_i (k_i - ȳ)²; computed in O(N) by
-:mod:`studies.sums_of_squares`), error = what the factors leave (the empty columns
-and any other free degrees of freedom), F = MS / MS_error with P from the F distribution.
+Dimensions: ``response`` (the analysed variables), ``term`` (factors, then interaction
+columns), ``level`` (0-based), ``source`` (the ANOVA rows: terms, ``error``, ``total``),
+``interaction`` (assigned factor pairs of an orthogonal array), ``pair`` (every factor pair of
+a full factorial) and ``level_a`` × ``level_b`` for two-way tables of means.
+
+* range analysis: ``k``, ``R``, ``rank``, ``best_level`` (over the terms), ``grand_mean``;
+* ANOVA: ``SS``, ``dof``, ``MS``, ``F``, ``P``, ``contribution`` [%], ``pooled`` on
+  (response, source), ``anova_note``;
+* predicted optimum: ``optimum_level`` (per term; -1 for interaction columns), ``predicted``,
+  ``half_width``, ``confirmation_half_width``, ``n_eff``, ``error_ms``, ``error_dof``,
+  ``model_terms``;
+* interactions of arrays: ``interaction_SS`` … and ``interaction_mean`` (response,
+  interaction, level_a, level_b);
+* full factorials (complete, the computer-experiment view): ``main_SS``, ``pair_SS``,
+  ``remainder_SS``, ``first_order`` and ``total_effect`` Sobol indices, and the two-way
+  mean over the strongest factor pair (``map_mean``, factors in ``map_x``/``map_y``);
+* several responses: the trade-off (``chosen_level``, ``decided_by``, ``conflict`` per term,
+  ``compromise`` and ``compromise_half_width`` per response).
+
+Variables that hold a response's values carry its units in the ``units`` variable (per
+response); the ANOVA SS are in units².
 """
 
 from __future__ import annotations
 
 import json
 from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
 
 import numpy as np
-import pandas as pd
 import xarray as xr
-from scipy import stats
 
-from studies.sums_of_squares import centred, term_sums_of_squares
+from studies import taguchi
+from studies.results import grid_order, write_netcdf
+from studies.sensitivity import decompose
+from studies.statistics import SENSES, anova, has_values, range_analysis, sweep_runs
 
-SENSES = ("smaller", "larger")
+__all__ = ["SENSES", "analyze", "anova", "has_values", "range_analysis", "sweep_runs"]
 
-
-def _factor_names(ds: xr.Dataset, factors: Sequence[str] | None) -> list[str]:
-    if factors is None:
-        if "factors" not in ds.attrs:
-            msg = "the Dataset has no 'factors' attribute: pass factors=[...]"
-            raise ValueError(msg)
-        factors = json.loads(ds.attrs["factors"])
-    names = list(factors)
-    missing = [f for f in names if f"{f}_level" not in ds.coords]
-    if missing:
-        msg = f"no level coordinate for factor(s) {missing} (expected '<factor>_level' on run)"
-        raise ValueError(msg)
-    return names
+ANALYSIS_NAME = "analysis.nc"
+SOURCE_COLUMNS = ("SS", "dof", "MS", "F", "P", "contribution")
+INTERACTION_COLUMNS = ("SS", "dof", "F", "P", "contribution")
 
 
-def _error_names(ds: xr.Dataset, error: Sequence[str] | None) -> list[str]:
-    if error is None:
-        error = json.loads(ds.attrs.get("error_columns", "[]"))
-    names = list(error)
-    missing = [e for e in names if f"{e}_level" not in ds.coords]
-    if missing:
-        msg = f"no level coordinate for error column(s) {missing} (expected '<name>_level')"
-        raise ValueError(msg)
-    return names
+def analyzed(ds: xr.Dataset, responses: Sequence[str]) -> tuple[xr.Dataset, list[str]]:
+    """The results with run means and S/N ratios added, and the variables to analyse: each
+    response with a finite value (its run mean when replicated), then its S/N ratio."""
+    present = [r for r in responses if has_values(ds, r)]
+    view = taguchi.with_sn(taguchi.with_means(ds, present), taguchi.sn_responses(ds, present))
+    names = [taguchi.mean_name(view, r) for r in present]
+    names += [taguchi.sn_name(r) for r in present if taguchi.sn_name(r) in view]
+    return view, names
 
 
-def has_values(ds: xr.Dataset, response: str) -> bool:
-    """True if ``response`` is finite in some run (one NaN everywhere has nothing to analyse)."""
-    return bool(np.isfinite(ds[response].values.astype(float)).any())
-
-
-def _response(ds: xr.Dataset, response: str) -> tuple[xr.DataArray, np.ndarray]:
-    """The response and the mask of runs where it is finite."""
-    if response not in ds.data_vars:
-        msg = f"no response {response!r}; the Dataset has {sorted(map(str, ds.data_vars))}"
-        raise ValueError(msg)
-    y = ds[response]
-    if y.dims != ("run",):
-        msg = f"{response!r} has dims {y.dims}; analysis needs a scalar response on 'run'"
-        raise ValueError(msg)
-    finite = np.isfinite(y.values.astype(float))
-    if not finite.any():
-        msg = f"{response!r} has no finite value to analyse"
-        raise ValueError(msg)
-    return y, finite
-
-
-def _sense(y: xr.DataArray, sense: str | None) -> str:
-    chosen = sense if sense is not None else y.attrs.get("better", "smaller")
-    if chosen not in SENSES:
-        msg = f"sense must be one of {SENSES}, got {chosen!r}"
-        raise ValueError(msg)
-    return chosen
-
-
-def _level_table(ds: xr.Dataset, y: xr.DataArray, finite: np.ndarray, f: str) -> pd.DataFrame:
-    """Per level of ``f``: mean response and the factor's value (first run at that level)."""
-    values = ds[f].values if f in ds.coords else np.full(y.size, np.nan)
-    frame = pd.DataFrame(
-        {"level": ds[f"{f}_level"].values, "y": y.values.astype(float), "value": values}
-    )[finite]
-    return frame.groupby("level").agg(k=("y", "mean"), value=("value", "first"))
-
-
-def range_analysis(
-    ds: xr.Dataset, response: str, factors: Sequence[str] | None = None, sense: str | None = None
+def analyze(
+    ds: xr.Dataset, responses: Sequence[str] | None = None, pool: Sequence[str] | None = None
 ) -> xr.Dataset:
-    """Range analysis of ``response``: level means k, range R, rank, best level per factor.
+    """Everything the outputs of a run show, computed once (see the module docstring).
 
-    ``sense`` is "smaller" or "larger" (is better); by default the response's ``better``
-    attribute, else "smaller". Returns a Dataset on dims ``factor`` x ``level`` (0-based) with
-    ``k`` (NaN where a factor has fewer levels), ``R``, ``rank`` (1 = largest R) and
-    ``best_level``; coordinates ``level_value`` (the factor's value at each level, NaN where
-    unknown or not numeric) and ``factor_units``.
+    ``responses`` default to the study's (attribute ``responses``); ``pool`` is passed to every
+    ANOVA (default: the study's ``[design] pool``, else pool only when the error has no dof).
     """
-    names = _factor_names(ds, factors)
-    y, finite = _response(ds, response)
-    chosen = _sense(y, sense)
-    tables = [_level_table(ds, y, finite, f) for f in names]
-    nlevels = max(int(t.index.max()) + 1 for t in tables)
-    k = np.full((len(names), nlevels), np.nan)
-    level_value = np.full((len(names), nlevels), np.nan)
-    for i, table in enumerate(tables):
-        k[i, table.index] = table["k"].to_numpy()
-        if pd.api.types.is_numeric_dtype(table["value"]):
-            level_value[i, table.index] = table["value"].to_numpy()
-    means = pd.DataFrame(k, index=names)
-    r = means.max(axis=1) - means.min(axis=1)
-    best = means.idxmin(axis=1) if chosen == "smaller" else means.idxmax(axis=1)
-    units = y.attrs.get("units", "")
-    long_name = y.attrs.get("long_name", response)
-    factor_units = [str(ds[f].attrs.get("units", "")) if f in ds.coords else "" for f in names]
-    return xr.Dataset(
-        {
-            "k": (("factor", "level"), k, {"units": units, "long_name": f"mean {long_name}"}),
-            "R": ("factor", r.to_numpy(), {"units": units, "long_name": "range of level means"}),
-            "rank": (
-                "factor",
-                r.rank(ascending=False, method="min").to_numpy(dtype=np.int64),
-                {"long_name": "rank of R (1 = largest)"},
-            ),
-            "best_level": (
-                "factor",
-                best.to_numpy(dtype=np.int64),
-                {"long_name": f"level with the {chosen} mean (0-based)"},
-            ),
-        },
-        coords={
-            "factor": names,
-            "level": np.arange(nlevels),
-            "level_value": (("factor", "level"), level_value),
-            "factor_units": ("factor", factor_units),
-        },
-        attrs={"response": response, "sense": chosen, "units": units, "long_name": long_name},
-    )
-
-
-def _f_test(ms: float, dof: int, ms_error: float, dof_error: int) -> tuple[float, float]:
-    if dof == 0 or dof_error == 0:
-        return np.nan, np.nan
-    if ms_error == 0.0:
-        return (np.inf, 0.0) if ms > 0.0 else (np.nan, np.nan)
-    f = ms / ms_error
-    return f, float(stats.f.sf(f, dof, dof_error))
-
-
-def anova(
-    ds: xr.Dataset,
-    response: str,
-    factors: Sequence[str] | None = None,
-    error: Sequence[str] | None = None,
-    pool: Sequence[str] | None = None,
-) -> pd.DataFrame:
-    """ANOVA table of ``response``, indexed by source: each factor, "error", "total".
-
-    Columns SS, dof, MS, F, P (F-distribution survival function), contribution (% of the total
-    SS) and pooled. ``error`` names the empty columns that form the error term (default: the
-    ``error_columns`` attribute); the error SS is everything the factors leave, so it also
-    holds any other free degrees of freedom (e.g. a full factorial analysed for main effects).
-    When the error has no degrees of freedom the factor with the smallest SS is pooled into
-    it; ``pool=[...]`` pools the named factors instead (``pool=[]``: never pool; default: the
-    ``pool`` attribute, from the study's ``[design] pool``, if there is one). Pooled rows
-    keep their SS, dof and contribution, with F and P NaN; the error row includes them.
-    ``df.attrs``: "response", "units" (of the response; SS in units²), "error_columns",
-    "pooled" (list) and "note" (a sentence on pooling or dropped runs, else "").
-    """
-    names = _factor_names(ds, factors)
-    errors = _error_names(ds, error)
-    clash = set(names) & set(errors)
-    if clash:
-        msg = f"{sorted(clash)} named both as factor and as error column"
-        raise ValueError(msg)
-    y_da, finite = _response(ds, response)
-    y = y_da.values.astype(float)[finite]
-    codes = {f: ds[f"{f}_level"].values[finite] for f in names}
-    if pool is None and "pool" in ds.attrs:
-        pool = json.loads(ds.attrs["pool"])
-    pooled = list(pool) if pool is not None else []
-    unknown = [p for p in pooled if p not in names]
-    if unknown:
-        msg = f"cannot pool {unknown}: not among the factors {names}"
-        raise ValueError(msg)
-
-    def fit(pooled: list[str]) -> dict[str, tuple[float, int]]:
-        order = [f for f in names if f not in pooled] + pooled
-        ss, dof, _ = term_sums_of_squares(y, [codes[f] for f in order])
-        return {f: (float(s), int(n)) for f, s, n in zip(order, ss, dof, strict=True)}
-
-    terms = fit(pooled)
-    ss_total, dof_total = float(np.sum(centred(y) ** 2)), y.size - 1
-    notes = []
-    if finite.sum() < finite.size:
-        notes.append(
-            f"{finite.size - finite.sum()} run(s) with no finite value (NaN or ±inf) left out."
-        )
-    free_dof = dof_total - sum(d for _, d in terms.values())
-    if pool is None and free_dof == 0:
-        smallest = min(names, key=lambda f: terms[f][0])
-        pooled = [smallest]
-        terms = fit(pooled)
-        notes.append(
-            f"The error term had no degrees of freedom, so {smallest} (smallest SS) "
-            "was pooled into error."
-        )
-    elif pooled:
-        notes.append(f"{', '.join(pooled)} pooled into error as requested.")
-    elif free_dof == 0:
-        notes.append("The error term has no degrees of freedom: F and P cannot be computed.")
-    kept = [f for f in names if f not in pooled]
-    ss_error = max(ss_total - sum(terms[f][0] for f in kept), 0.0)
-    dof_error = dof_total - sum(terms[f][1] for f in kept)
-    ms_error = ss_error / dof_error if dof_error else np.nan
-
-    def contribution(ss: float) -> float:
-        return 100.0 * ss / ss_total if ss_total > 0.0 else np.nan
-
-    rows = {}
-    for f in names:
-        ss, dof = terms[f]
-        ms = ss / dof if dof else np.nan
-        f_value, p = _f_test(ms, dof, ms_error, dof_error) if f in kept else (np.nan, np.nan)
-        rows[f] = (ss, dof, ms, f_value, p, contribution(ss), f in pooled)
-    rows["error"] = (ss_error, dof_error, ms_error, np.nan, np.nan, contribution(ss_error), False)
-    rows["total"] = (ss_total, dof_total, np.nan, np.nan, np.nan, contribution(ss_total), False)
-    table = pd.DataFrame.from_dict(
-        rows,
-        orient="index",
-        columns=["SS", "dof", "MS", "F", "P", "contribution", "pooled"],
-    )
-    table.index.name = "source"
-    table.attrs = {
-        "response": response,
-        "units": y_da.attrs.get("units", ""),
-        "error_columns": errors,
-        "pooled": pooled,
-        "note": " ".join(notes),
+    names = list(responses or json.loads(ds.attrs.get("responses", "[]")))
+    design = str(ds.attrs.get("design", ""))
+    attrs = {
+        "design": design,
+        "responses": json.dumps(names),
+        "alpha": taguchi.ALPHA,
+        "confirmation_runs": 1,
     }
-    return table
+    if design == "sweep":  # tables and plots of the runs themselves: nothing to estimate
+        present = [r for r in names if has_values(ds, r)]
+        return xr.Dataset(attrs=attrs | {"analysed": json.dumps(present)})
+    view, analysed = analyzed(ds, names)
+    terms = taguchi.model_terms(view)
+    out = _frame(view, analysed, terms)
+    tables = {}
+    for name in analysed:
+        out["varies"].loc[name] = int(taguchi.varies(view, name))
+        tables[name] = anova(view, name, factors=terms, pool=pool)
+        _range(out, view, name, terms)
+        _anova(out, tables[name], name)
+        _optimum(out, view, name, tables[name])
+        _interactions(out, view, name, tables[name])
+    if design == "full_factorial":
+        _factorial(out, view, analysed)
+    sn = {taguchi.sn_name(r) for r in names}
+    optimised = [n for n in analysed if n not in sn and int(out["varies"].loc[n])]
+    if len(optimised) > 1:
+        _tradeoff(out, view, optimised, tables)
+    for r in names:  # run means of replicated responses, for the renderers' run tables
+        if taguchi.mean_name(view, r) != r and taguchi.mean_name(view, r) in analysed:
+            out[taguchi.mean_name(view, r)] = view[taguchi.mean_name(view, r)]
+    out.attrs = attrs | {"analysed": json.dumps(analysed)}
+    return out
 
 
-def _number(value: float) -> str:
-    return "—" if not np.isfinite(value) else f"{value:.4g}"
+def write_analysis_nc(an: xr.Dataset, folder: Path) -> Path:
+    """Write the analysis Dataset as ``analysis.nc`` in ``folder``."""
+    return write_netcdf(an, Path(folder) / ANALYSIS_NAME)
 
 
-def format_tables(
-    ds: xr.Dataset,
-    response: str,
-    factors: Sequence[str] | None = None,
-    sense: str | None = None,
-    error: Sequence[str] | None = None,
-    pool: Sequence[str] | None = None,
-) -> str:
-    """Range-analysis and ANOVA tables of ``response`` as text, with units."""
-    ra = range_analysis(ds, response, factors, sense)
-    table = anova(ds, response, factors, error, pool)
-    units = ra.attrs["units"]
-    unit = f" [{units}]" if units else ""
-    nlevels = ra.sizes["level"]
-    rows = []
-    for f in ra.factor.values:
-        r = ra.sel(factor=f)
-        values = [v for v in r.level_value.values if np.isfinite(v)]
-        fu = str(r.factor_units.values)
-        best = int(r.best_level)
-        best_value = r.level_value.values[best]
-        rows.append(
-            {
-                "factor": f,
-                "levels": ", ".join(_number(v) for v in values) + (f" {fu}" if fu else ""),
-                **{f"k{i + 1}": _number(r.k.values[i]) for i in range(nlevels)},
-                "R": _number(float(r.R)),
-                "rank": int(r["rank"]),
-                "best": f"{best + 1}"
-                + (f" ({_number(best_value)} {fu})".rstrip() if np.isfinite(best_value) else ""),
-            }
-        )
-    ra_text = pd.DataFrame(rows).to_string(index=False)
-    shown = table.copy()
-    shown.index = [
-        f"{s} (pooled)" if p else s for s, p in zip(table.index, table["pooled"], strict=True)
-    ]
-    shown = shown.drop(columns="pooled").rename(columns={"contribution": "contribution %"})
-    anova_text = shown.to_string(
-        formatters=dict.fromkeys(["SS", "MS", "F", "P", "contribution %"], _number), na_rep=""
+# --- the frame ------------------------------------------------------------------------------
+def _frame(view: xr.Dataset, names: list[str], terms: list[str]) -> xr.Dataset:
+    nlevels = max(int(view[f"{t}_level"].max()) + 1 for t in terms) if terms else 1
+    pairs = list(taguchi.interaction_pairs(view))
+    sources = [*terms, "error", "total"]
+    nan = np.nan
+
+    def full(dims: tuple[str, ...], value: Any = nan, dtype: Any = float) -> tuple:
+        shape = tuple(sizes[d] for d in dims)
+        return dims, np.full(shape, value, dtype=dtype)
+
+    sizes = {
+        "response": len(names),
+        "term": len(terms),
+        "level": nlevels,
+        "source": len(sources),
+        "interaction": len(pairs),
+        "level_a": nlevels,
+        "level_b": nlevels,
+    }
+    rt, rs = ("response", "term"), ("response", "source")
+    data = {
+        "varies": full(("response",), 0, np.int8),
+        "units": ("response", [str(view[n].attrs.get("units", "")) for n in names]),
+        "long_name": ("response", [str(view[n].attrs.get("long_name", n)) for n in names]),
+        "sense": ("response", [str(view[n].attrs.get("better", "smaller")) for n in names]),
+        "sn_kind": ("response", [str(view[n].attrs.get("sn_kind", "")) for n in names]),
+        "observations": ("response", [int(view[n].attrs.get("observations", 0)) for n in names]),
+        "grand_mean": full(("response",)),
+        "k": full(("response", "term", "level")),
+        "R": full(rt),
+        "rank": full(rt, 0, np.int32),
+        "best_level": full(rt, -1, np.int32),
+        **{c: full(rs) for c in SOURCE_COLUMNS},
+        "pooled": full(rs, 0, np.int8),
+        "anova_note": ("response", np.full(len(names), "", dtype=object)),
+        "optimum_level": full(rt, -1, np.int32),
+        "model_terms": ("response", np.full(len(names), "", dtype=object)),
+        **{
+            v: full(("response",))
+            for v in ("predicted", "half_width", "confirmation_half_width", "n_eff", "error_ms")
+        },
+        "error_dof": full(("response",), 0, np.int64),
+        **{f"interaction_{c}": full(("response", "interaction")) for c in INTERACTION_COLUMNS},
+        "interaction_pooled": full(("response", "interaction"), 0, np.int8),
+        "interaction_mean": full(("response", "interaction", "level_a", "level_b")),
+    }
+    value, units = _level_values(view, terms, nlevels)
+    coords = {
+        "response": names,
+        "term": terms,
+        "level": np.arange(nlevels),
+        "source": sources,
+        "interaction": [f"{a} x {b}" for a, b in pairs],
+        "level_value": (("term", "level"), value),
+        "term_units": ("term", units),
+        "is_factor": ("term", [int(t in taguchi.factor_names(view)) for t in terms]),
+        "interaction_a": ("interaction", [a for a, _ in pairs]),
+        "interaction_b": ("interaction", [b for _, b in pairs]),
+    }
+    return xr.Dataset(data, coords=coords)
+
+
+def _level_values(view: xr.Dataset, terms: list[str], nlevels: int) -> tuple[np.ndarray, list[str]]:
+    """The value of each term at each level (NaN where not numeric or absent) and units."""
+    value = np.full((len(terms), nlevels), np.nan)
+    units = []
+    for i, t in enumerate(terms):
+        numeric = t in view.coords and np.issubdtype(view[t].dtype, np.number)
+        if numeric:
+            for level, v in taguchi.level_values(view, t).items():
+                value[i, level] = float(v)
+        units.append(str(view[t].attrs.get("units", "")) if t in view.coords else "")
+    return value, units
+
+
+# --- per response ---------------------------------------------------------------------------
+def _range(out: xr.Dataset, view: xr.Dataset, name: str, terms: list[str]) -> None:
+    ra = range_analysis(view, name, terms)
+    at = {"response": name}
+    out["k"].loc[at] = np.pad(
+        ra.k.values, ((0, 0), (0, out.sizes["level"] - ra.sizes["level"])), constant_values=np.nan
     )
-    ss_unit = f" (SS in ({units})^2)" if units not in ("", "1", "-") else ""
-    lines = [
-        (
-            f"Range analysis of {response} ({ra.attrs['long_name']}){unit}; "
-            f"{ra.attrs['sense']} is better; k_i = mean at level i"
-        ),
-        ra_text,
-        "",
-        f"ANOVA of {response}{ss_unit}",
-        anova_text,
-    ]
-    if table.attrs["note"]:
-        lines.append(f"Note: {table.attrs['note']}")
-    return "\n".join(lines)
+    for v in ("R", "rank", "best_level"):
+        out[v].loc[at] = ra[v].values
+    y = view[name].values.astype(float)
+    out["grand_mean"].loc[at] = float(np.mean(y[np.isfinite(y)]))
 
 
-def sweep_runs(ds: xr.Dataset, factor: str) -> xr.Dataset:
-    """The runs of a one-factor sweep that move ``factor`` (plus the base run), by value."""
-    swept = ds["swept_factor"].values
-    keep = (swept == factor) | (swept == "base")
-    return ds.isel(run=np.flatnonzero(keep)).sortby(factor)
+def _anova(out: xr.Dataset, table: Any, name: str) -> None:
+    at = {"response": name}
+    for c in SOURCE_COLUMNS:
+        out[c].loc[at] = table[c].to_numpy(dtype=float)
+    out["pooled"].loc[at] = table["pooled"].to_numpy(dtype=np.int8)
+    out["anova_note"].loc[at] = table.attrs["note"]
 
 
-def format_sweep(ds: xr.Dataset, responses: Sequence[str]) -> str:
-    """One table per swept factor: factor value against every response (with units)."""
-    blocks = []
-    for f in json.loads(ds.attrs["factors"]):
-        part = sweep_runs(ds, f)
-        columns = {f"{f} [{ds[f].attrs.get('units', '')}]": part[f].values}
-        for r in responses:
-            columns[f"{r} [{ds[r].attrs.get('units', '')}]"] = part[r].values
-        table = pd.DataFrame(columns).to_string(index=False, float_format=_number)
-        blocks.append(f"Sweep of {f} (other factors at their base levels)\n{table}")
-    return "\n\n".join(blocks)
+def _optimum(out: xr.Dataset, view: xr.Dataset, name: str, table: Any) -> None:
+    p = taguchi.predict_optimum(view, name, table=table)
+    at = {"response": name}
+    levels = [p.levels.get(t, -1) for t in out["term"].values]
+    out["optimum_level"].loc[at] = levels
+    out["model_terms"].loc[at] = ",".join(p.terms)
+    for v, value in (
+        ("predicted", p.mean),
+        ("half_width", p.half_width),
+        ("confirmation_half_width", p.confirmation_half_width),
+        ("n_eff", p.n_eff),
+        ("error_ms", p.error_ms),
+        ("error_dof", p.error_dof),
+    ):
+        out[v].loc[at] = value
+
+
+def _interactions(out: xr.Dataset, view: xr.Dataset, name: str, table: Any) -> None:
+    if not out.sizes["interaction"]:
+        return
+    inter = taguchi.interaction_anova(table, view)
+    at = {"response": name}
+    for c in INTERACTION_COLUMNS:
+        out[f"interaction_{c}"].loc[at] = inter[c].to_numpy(dtype=float)
+    out["interaction_pooled"].loc[at] = inter["pooled"].to_numpy(dtype=np.int8)
+    for i, (a, b) in enumerate(taguchi.interaction_pairs(view)):
+        means = taguchi.interaction_means(view, name, a, b)
+        la, lb = means[f"{a}_level"].values, means[f"{b}_level"].values
+        block = out["interaction_mean"].values[out.indexes["response"].get_loc(name), i]
+        block[np.ix_(la, lb)] = means.values
+
+
+# --- full factorial: the computer-experiment view -------------------------------------------
+def _factorial(out: xr.Dataset, view: xr.Dataset, names: list[str]) -> None:
+    """Main, two-factor and remainder SS and Sobol indices of each response that is finite in
+    every run of a complete full factorial (otherwise the grid has holes: left NaN)."""
+    try:
+        factors, counts, order = grid_order(view)
+    except ValueError:
+        return
+    pairs = [f"{a} x {b}" for i, a in enumerate(factors) for b in factors[i + 1 :]]
+    nr, nf, most = out.sizes["response"], len(factors), max(counts)
+    new = {
+        "main_SS": (("response", "factor"), np.full((nr, nf), np.nan)),
+        "first_order": (("response", "factor"), np.full((nr, nf), np.nan)),
+        "total_effect": (("response", "factor"), np.full((nr, nf), np.nan)),
+        "pair_SS": (("response", "pair"), np.full((nr, len(pairs)), np.nan)),
+        "remainder_SS": ("response", np.full(nr, np.nan)),
+        "total_SS": ("response", np.full(nr, np.nan)),
+        "map_x": ("response", np.full(nr, "", dtype=object)),
+        "map_y": ("response", np.full(nr, "", dtype=object)),
+        "map_mean": (("response", "map_level_y", "map_level_x"), np.full((nr, most, most), np.nan)),
+    }
+    for i, name in enumerate(out["response"].values):
+        if name not in names:
+            continue
+        y = view[name].values.astype(float)[order]
+        if not np.isfinite(y).all():
+            continue
+        grid = y.reshape(counts)
+        dec = decompose(grid, tuple(factors))
+        new["main_SS"][1][i], new["pair_SS"][1][i] = dec.main, dec.pair
+        new["first_order"][1][i], new["total_effect"][1][i] = dec.first_order, dec.total_effect
+        new["remainder_SS"][1][i], new["total_SS"][1][i] = dec.remainder, dec.total
+        if nf >= 2:
+            a, b = np.argsort(-dec.total_effect, kind="stable")[:2]
+            x, yy = sorted((int(a), int(b)))
+            mean = grid.mean(axis=tuple(k for k in range(nf) if k not in (x, yy)))
+            new["map_x"][1][i], new["map_y"][1][i] = factors[x], factors[yy]
+            new["map_mean"][1][i, : counts[yy], : counts[x]] = mean.T
+    out.update(new)
+    out.coords["factor"] = factors
+    out.coords["pair"] = pairs
+
+
+# --- several responses ----------------------------------------------------------------------
+def _tradeoff(out: xr.Dataset, view: xr.Dataset, names: list[str], tables: dict) -> None:
+    result = taguchi.tradeoff(view, names, tables={n: tables[n] for n in names})
+    terms = list(out["term"].values)
+    chosen = np.array([result.levels.get(t, -1) for t in terms], dtype=np.int32)
+    table = result.table
+    out["chosen_level"] = ("term", chosen)
+    out["decided_by"] = (
+        "term",
+        [str(table.loc[t, "decided by"]) if t in table.index else "" for t in terms],
+    )
+    out["conflict"] = (
+        "term",
+        [int(bool(table.loc[t, "conflict"])) if t in table.index else 0 for t in terms],
+    )
+    compromise = np.full(out.sizes["response"], np.nan)
+    half = np.full(out.sizes["response"], np.nan)
+    for n, row in result.predictions.iterrows():
+        i = out.indexes["response"].get_loc(n)
+        compromise[i], half[i] = row["compromise"], row["half width"]
+    out["compromise"] = ("response", compromise)
+    out["compromise_half_width"] = ("response", half)

@@ -2,10 +2,14 @@
 
 Sections: the study and run; the design (array, column assignment with dummy levels,
 interaction and error columns); the runs; per response the range analysis, the ANOVA (pooling
-always stated), interaction effects, S/N ratios and the predicted optimum with its confidence
-interval; a trade-off summary when there are several responses; the confirmation run as a
-study file (also written to ``confirmation.toml`` when the study text is known). Figures are
-linked by file name, only those that were written. Sweeps get their tables and figures.
+always stated), interaction effects, the variance decomposition of a full factorial, S/N
+ratios and the predicted optimum with its confidence interval; a trade-off summary when there
+are several responses; the confirmation run as a study file (also written to
+``confirmation.toml`` when the study text is known). Figures are linked by file name, only
+those that were written. Sweeps get their tables and figures.
+
+A renderer: every number comes from the results or from the analysis Dataset
+(:func:`studies.analysis.analyze`); nothing here computes a statistic.
 """
 
 from __future__ import annotations
@@ -16,12 +20,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pandas as pd
 import xarray as xr
 
 from studies import plots, taguchi
-from studies.analysis import has_values, range_analysis, sweep_runs
+from studies.analysis_text import NO_NOISE, decomposition_frame
 from studies.designs import orthogonal_array
+from studies.statistics import sweep_runs
 
 REPORT_NAME = "report.md"
 CONFIRMATION_NAME = "confirmation.toml"
@@ -29,13 +33,18 @@ MAX_RUN_ROWS = 100  # runs listed in full; larger designs point to results.nc
 
 
 def write_report(
-    ds: xr.Dataset, folder: Path, responses: Sequence[str], figures: Sequence[Path] = ()
+    ds: xr.Dataset,
+    an: xr.Dataset,
+    folder: Path,
+    responses: Sequence[str],
+    figures: Sequence[Path] = (),
 ) -> list[Path]:
     """Write ``report.md`` (and ``confirmation.toml`` for array and factorial runs with the
-    study text) into ``folder``; return the paths, report first."""
+    study text) into ``folder``; return the paths, report first. ``an`` is the analysis of
+    ``ds`` (:func:`studies.analysis.analyze`)."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    text, confirmation = _report(ds, list(responses), {Path(f).name for f in figures})
+    text, confirmation = _report(ds, an, list(responses), {Path(f).name for f in figures})
     path = folder / REPORT_NAME
     path.write_text(text, encoding="utf-8")
     paths = [path]
@@ -45,9 +54,11 @@ def write_report(
     return paths
 
 
-def report_text(ds: xr.Dataset, responses: Sequence[str], figures: Sequence[str] = ()) -> str:
+def report_text(
+    ds: xr.Dataset, an: xr.Dataset, responses: Sequence[str], figures: Sequence[str] = ()
+) -> str:
     """The Markdown text of :func:`write_report` (``figures``: file names that exist)."""
-    return _report(ds, list(responses), {Path(f).name for f in figures})[0]
+    return _report(ds, an, list(responses), {Path(f).name for f in figures})[0]
 
 
 # --- formatting ---------------------------------------------------------------------------------
@@ -112,26 +123,30 @@ def _other_figures(lines: list[str], figures: set[str]) -> list[str]:
 
 
 # --- sections -----------------------------------------------------------------------------------
-def _report(ds: xr.Dataset, responses: list[str], figures: set[str]) -> tuple[str, str]:
-    lines = _header(ds, responses)
-    responses = [r for r in responses if has_values(ds, r)]
+def _report(
+    ds: xr.Dataset, an: xr.Dataset, responses: list[str], figures: set[str]
+) -> tuple[str, str]:
+    analysed = json.loads(an.attrs.get("analysed", "[]"))
+    lines = _header(ds, responses, analysed)
+    responses = [r for r in responses if taguchi.mean_name(ds, r) in analysed]
     if ds.attrs.get("design") == "sweep":
         lines += _sweep(ds, responses, figures)
         lines += _other_figures(lines, figures)
         return "\n".join(lines).rstrip() + "\n", ""
-    view = taguchi.with_sn(taguchi.with_means(ds, responses), taguchi.sn_responses(ds, responses))
-    lines += _design(ds)
+    view = ds.assign({n: an[n] for n in an.data_vars if "run" in an[n].dims})
+    lines += _design(view)
     lines += _runs(view, responses)
-    optima = {}
+    optimised = []
     for r in responses:
-        if taguchi.varies(view, taguchi.mean_name(view, r)):
-            section, optima[r] = _response(view, r, figures)
+        name = taguchi.mean_name(view, r)
+        if int(an["varies"].sel(response=name)):
+            lines += _response(view, an, r, figures)
+            optimised.append(name)
         else:
-            section = _constant(view, r, figures)
-        lines += section
-    levels = next(iter(optima.values())).levels if optima else {}
-    if len(optima) > 1:
-        section, levels = _tradeoff(view, list(optima))
+            lines += _constant(view, r, figures)
+    levels = _optimum_levels(an, optimised[0]) if optimised else {}
+    if len(optimised) > 1:
+        section, levels = _tradeoff(an, view, optimised)
         lines += section
     confirmation = taguchi.confirmation_toml(view, levels) if levels else ""
     if confirmation:
@@ -156,7 +171,7 @@ def _report(ds: xr.Dataset, responses: list[str], figures: set[str]) -> tuple[st
     return "\n".join(lines).rstrip() + "\n", confirmation
 
 
-def _header(ds: xr.Dataset, responses: list[str]) -> list[str]:
+def _header(ds: xr.Dataset, responses: list[str], analysed: list[str]) -> list[str]:
     a = ds.attrs
     title = a.get("title") or a.get("study_name") or "Study results"
     commit = str(a.get("git_commit", ""))[:10]
@@ -175,7 +190,7 @@ def _header(ds: xr.Dataset, responses: list[str]) -> list[str]:
         shown.append(
             f"{r} ({_label(str(y.attrs.get('long_name', r)), _units(ds, r))}"
             + (f", {sense} is better" if sense else "")
-            + ("" if has_values(ds, r) else ", NaN in every run: not analysed")
+            + ("" if taguchi.mean_name(ds, r) in analysed else ", NaN in every run: not analysed")
             + ")"
         )
     rows.append(("responses", "; ".join(shown)))
@@ -264,98 +279,122 @@ def _shown(view: xr.Dataset, response: str) -> str:
     return f"{response} (mean over replicates)" if replicated else response
 
 
-def _range_rows(ds: xr.Dataset, response: str) -> tuple[list[str], list[list[Any]]]:
-    ra = range_analysis(ds, response)
-    nlevels = ra.sizes["level"]
+def _range_rows(view: xr.Dataset, an: xr.Dataset, name: str) -> tuple[list[str], list[list[Any]]]:
+    r = an.sel(response=name)
+    factors = taguchi.factor_names(view)
+    nlevels = int(np.isfinite(r.k.sel(term=factors).values).any(axis=0).sum())
     header = ["factor", *[f"k{i + 1}" for i in range(nlevels)], "R", "rank", "best level"]
     rows = []
-    for f in ra.factor.values:
-        r = ra.sel(factor=f)
+    for f in factors:
+        row = r.sel(term=f)
         rows.append(
             [
                 f,
-                *[_num(float(k)) for k in r.k.values],
-                _num(float(r.R)),
-                int(r["rank"]),
-                _level_text(ds, str(f), int(r.best_level)),
+                *[_num(float(k)) for k in row.k.values[:nlevels]],
+                _num(float(row.R)),
+                int(row["rank"]),
+                _level_text(view, f, int(row.best_level)),
             ]
         )
     return header, rows
 
 
-def _anova_lines(table: pd.DataFrame, units: str) -> list[str]:
-    rows = []
-    for source, row in table.iterrows():
-        name = f"{source} (pooled)" if row["pooled"] else str(source)
-        rows.append(
-            [
-                name,
-                _num(row["SS"]),
-                int(row["dof"]),
-                _num(row["MS"]),
-                _num(row["F"]),
-                _num(row["P"], 3),
-                _pct(row["contribution"]),
-            ]
+def _anova_lines(view: xr.Dataset, an: xr.Dataset, name: str, units: str) -> list[str]:
+    r = an.sel(response=name)
+    rows = [
+        [f"{source} (pooled)" if pooled else str(source), _num(float(ss)), int(dof),
+         _num(float(ms)), _num(float(f)), _num(float(p), 3), _pct(float(c))]
+        for source, ss, dof, ms, f, p, c, pooled in zip(
+            an["source"].values, r.SS.values, r.dof.values, r.MS.values, r.F.values,
+            r.P.values, r.contribution.values, r.pooled.values, strict=True,
         )
+    ]  # fmt: skip
     squared = f"{units}²" if units.isalpha() else f"({units})²"
     header = ["source", _label("SS", squared if units != "1" else ""), "dof", "MS", "F", "P", "%"]
-    pooled = table.attrs.get("pooled", [])
+    pooled = [str(t) for t, p in zip(an["source"].values, r.pooled.values, strict=True) if p]
     pooling = f"Pooled into error: {', '.join(pooled)}." if pooled else "No term pooled into error."
-    errors = table.attrs.get("error_columns", [])
+    errors = json.loads(view.attrs.get("error_columns", "[]"))
     source = (
         f"Error from the empty column(s) {', '.join(errors)}"
         if errors
         else "Error from the dof the terms leave"
     )
-    note = table.attrs.get("note", "")
+    note = str(r.anova_note.values)
     return [_table(header, rows), "", f"{source}. {pooling} {note}".rstrip(), ""]
 
 
-def _response(view: xr.Dataset, response: str, figures: set[str]) -> tuple[list[str], Any]:
+def _decomposition_lines(an: xr.Dataset, name: str) -> list[str]:
+    if "first_order" not in an or not np.isfinite(an.first_order.sel(response=name)).any():
+        return []
+    frame = decomposition_frame(an, name)
+    rows = [
+        [source, _num(row["SS"]), _pct(row["share %"]), _num(row["S1"], 3), _num(row["ST"], 3)]
+        for source, row in frame.iterrows()
+    ]
+    return [
+        "### Variance decomposition (computer experiment)",
+        "",
+        _table(["source", "SS", "%", "S1", "ST"], rows),
+        "",
+        f"{NO_NOISE} S1 and ST are the first-order and total Sobol indices over the grid.",
+        "",
+    ]
+
+
+def _response(view: xr.Dataset, an: xr.Dataset, response: str, figures: set[str]) -> list[str]:
     mean = taguchi.mean_name(view, response)
-    y = view[mean]
-    units = str(y.attrs.get("units", ""))
-    sense = str(y.attrs.get("better", "smaller"))
+    r = an.sel(response=mean)
+    units, sense = str(r.units.values), str(r.sense.values)
     lines = [
-        f"## {response}: {_label(str(y.attrs.get('long_name', response)), units)}",
+        f"## {response}: {_label(str(r.long_name.values), units)}",
         "",
         f"{sense.capitalize()} is better. k_i = mean at level i.",
         "",
         "### Range analysis",
         "",
     ]
-    header, rows = _range_rows(view, mean)
+    header, rows = _range_rows(view, an, mean)
     lines += [_table(header, rows), ""]
     lines += _figure(f"main_effects_{response}.png", f"Main effects on {response}", figures)
-    table = taguchi.anova_table(view, mean)
-    lines += ["### ANOVA", "", *_anova_lines(table, units)]
-    pairs = taguchi.interaction_pairs(view)
-    if pairs:
-        lines += ["### Interactions", ""]
-        inter = taguchi.interaction_anova(table, view)
-        rows = [
-            [f"{name} (pooled)" if r["pooled"] else name, _num(r["SS"]), int(r["dof"]),
-             _num(r["F"]), _num(r["P"], 3), _pct(r["contribution"])]
-            for name, r in inter.iterrows()
-        ]  # fmt: skip
-        lines += [_table(["interaction", "SS", "dof", "F", "P", "%"], rows), ""]
-        for a, b in pairs:
-            means = taguchi.interaction_means(view, mean, a, b)
-            ua, ub = _units(view, a), _units(view, b)
-            head = [f"{a} \\ {b}", *[_value(v, ub) for v in means[b].values]]
-            body = [
-                [_value(va, ua), *[_num(float(v)) for v in means.values[i]]]
-                for i, va in enumerate(means[a].values)
-            ]
-            lines += [f"{_label(f'Mean {response}', units)} by level of {a} and {b}:", ""]
-            lines += [_table(head, body), ""]
-            lines += _figure(plots.interaction_png(response, a, b), f"{a} x {b}", figures)
-    if taguchi.sn_name(response) in view:
-        lines += _sn_lines(view, response, figures)
-    optimum = taguchi.predict_optimum(view, mean)
-    lines += _optimum_lines(view, optimum, response)
-    return lines, optimum
+    lines += ["### ANOVA", "", *_anova_lines(view, an, mean, units)]
+    lines += _decomposition_lines(an, mean)
+    lines += _figure(plots.map_png(response), f"Map of {response}", figures)
+    if an.sizes["interaction"]:
+        lines += _interaction_lines(view, an, response, figures)
+    sn = taguchi.sn_name(response)
+    if sn in an["response"].values:
+        lines += _sn_lines(view, an, response, figures)
+    lines += _optimum_lines(view, an, mean, response)
+    return lines
+
+
+def _interaction_lines(
+    view: xr.Dataset, an: xr.Dataset, response: str, figures: set[str]
+) -> list[str]:
+    mean = taguchi.mean_name(view, response)
+    r = an.sel(response=mean)
+    rows = [
+        [f"{name} (pooled)" if r.interaction_pooled.values[i] else str(name),
+         _num(float(r.interaction_SS.values[i])), int(r.interaction_dof.values[i]),
+         _num(float(r.interaction_F.values[i])), _num(float(r.interaction_P.values[i]), 3),
+         _pct(float(r.interaction_contribution.values[i]))]
+        for i, name in enumerate(an["interaction"].values)
+    ]  # fmt: skip
+    lines = ["### Interactions", "", _table(["interaction", "SS", "dof", "F", "P", "%"], rows), ""]
+    units = str(r.units.values)
+    pairs = zip(an["interaction_a"].values, an["interaction_b"].values, strict=True)
+    for i, (a, b) in enumerate(pairs):
+        means = r.interaction_mean.values[i]
+        la = np.flatnonzero(np.isfinite(means).any(axis=1))
+        lb = np.flatnonzero(np.isfinite(means).any(axis=0))
+        va, vb = taguchi.level_values(view, a), taguchi.level_values(view, b)
+        ua, ub = _units(view, a), _units(view, b)
+        head = [f"{a} \\ {b}", *[_value(vb[j], ub) for j in lb]]
+        body = [[_value(va[i_a], ua), *[_num(float(means[i_a, j])) for j in lb]] for i_a in la]
+        lines += [f"{_label(f'Mean {response}', units)} by level of {a} and {b}:", ""]
+        lines += [_table(head, body), ""]
+        lines += _figure(plots.interaction_png(response, a, b), f"{a} x {b}", figures)
+    return lines
 
 
 def _constant(view: xr.Dataset, response: str, figures: set[str]) -> list[str]:
@@ -372,29 +411,26 @@ def _constant(view: xr.Dataset, response: str, figures: set[str]) -> list[str]:
     ]
 
 
-def _sn_lines(view: xr.Dataset, response: str, figures: set[str]) -> list[str]:
+def _sn_lines(view: xr.Dataset, an: xr.Dataset, response: str, figures: set[str]) -> list[str]:
     sn = taguchi.sn_name(response)
-    attrs = view[sn].attrs
-    n = int(attrs["observations"])
+    n = int(an["observations"].sel(response=sn))
+    kind = str(an["sn_kind"].sel(response=sn).values)
     lines = [
         "### Signal-to-noise ratio",
         "",
-        (
-            f"S/N ({attrs['sn_kind']} is better) in dB over {n} observation(s) per run; "
-            "larger S/N is better."
-        ),
+        (f"S/N ({kind} is better) in dB over {n} observation(s) per run; larger S/N is better."),
         "",
     ]
     if n == 1:
         lines[-2] += " With one observation per run the S/N is a log transform of the response."
-    header, rows = _range_rows(view, sn)
+    header, rows = _range_rows(view, an, sn)
     lines += [_table(header, rows), ""]
-    optimum = taguchi.predict_optimum(view, sn)
+    p = prediction(an, sn)
     lines += [
-        f"Predicted S/N at its best levels: {_num(optimum.mean)} dB"
+        f"Predicted S/N at its best levels: {_num(p.mean)} dB"
         + (
-            f" ± {_num(optimum.half_width)} dB ({100 * (1 - optimum.alpha):g} % confidence)."
-            if np.isfinite(optimum.half_width)
+            f" ± {_num(p.half_width)} dB ({100 * (1 - p.alpha):g} % confidence)."
+            if np.isfinite(p.half_width)
             else "."
         ),
         "",
@@ -403,7 +439,41 @@ def _sn_lines(view: xr.Dataset, response: str, figures: set[str]) -> list[str]:
     return lines
 
 
-def _optimum_lines(view: xr.Dataset, p: taguchi.Prediction, response: str) -> list[str]:
+def _optimum_levels(an: xr.Dataset, name: str) -> dict[str, int]:
+    r = an.sel(response=name)
+    return {
+        str(t): int(level)
+        for t, level, factor in zip(
+            an["term"].values, r.optimum_level.values, an["is_factor"].values, strict=True
+        )
+        if factor
+    }
+
+
+def prediction(an: xr.Dataset, name: str) -> taguchi.Prediction:
+    """The predicted optimum of ``name`` as the analysis Dataset holds it."""
+    r = an.sel(response=name)
+    terms = str(r.model_terms.values)
+    return taguchi.Prediction(
+        response=name,
+        units=str(r.units.values),
+        sense=str(r.sense.values),
+        levels=_optimum_levels(an, name),
+        terms=tuple(terms.split(",")) if terms else (),
+        mean=float(r.predicted),
+        grand_mean=float(r.grand_mean),
+        n_eff=float(r.n_eff),
+        error_ms=float(r.error_ms),
+        error_dof=int(r.error_dof),
+        alpha=float(an.attrs["alpha"]),
+        half_width=float(r.half_width),
+        confirmation_runs=int(an.attrs["confirmation_runs"]),
+        confirmation_half_width=float(r.confirmation_half_width),
+    )
+
+
+def _optimum_lines(view: xr.Dataset, an: xr.Dataset, name: str, response: str) -> list[str]:
+    p = prediction(an, name)
     rows = [
         [f, p.levels[f] + 1, _value(taguchi.level_values(view, f)[p.levels[f]], _units(view, f))]
         for f in taguchi.factor_names(view)
@@ -452,11 +522,11 @@ def _observed(view: xr.Dataset, p: taguchi.Prediction, units: str) -> list[str]:
     return [f"Observed at these levels: {shown}. The prediction is the additive model's."]
 
 
-def _tradeoff(view: xr.Dataset, responses: list[str]) -> tuple[list[str], dict[str, int]]:
-    means = {taguchi.mean_name(view, r): r for r in responses}
-    result = taguchi.tradeoff(view, list(means))
-    t = result.table
-    factors = [str(f) for f in t.index]
+def _tradeoff(
+    an: xr.Dataset, view: xr.Dataset, names: list[str]
+) -> tuple[list[str], dict[str, int]]:
+    shown = {taguchi.mean_name(view, r): r for r in json.loads(an.attrs["responses"])}
+    factors = taguchi.factor_names(view)
     lines = [
         "## Trade-off summary",
         "",
@@ -468,29 +538,44 @@ def _tradeoff(view: xr.Dataset, responses: list[str]) -> tuple[list[str], dict[s
         "",
     ]
     header = ["response", "better", *factors]
-    rows = [
-        [r, view[m].attrs.get("better", "smaller"),
-         *[f"{int(taguchi.number(t, f, f'best {m}'))} "
-           f"({_pct(taguchi.number(t, f, f'% {m}'))} %)" for f in factors]]
-        for m, r in means.items()
-    ]  # fmt: skip
-    chosen = [_level_text(view, f, result.levels[f]) for f in factors]
-    rows.append(["**chosen level**", "", *chosen])
-    rows.append(["decided by", "", *[means[str(t.loc[f, "decided by"])] for f in factors]])
-    rows.append(["conflict", "", *["yes" if t.loc[f, "conflict"] else "no" for f in factors]])
+    rows = []
+    for m in names:
+        r = an.sel(response=m)
+        cells = [
+            f"{int(r.optimum_level.sel(term=f)) + 1} "
+            f"({_pct(float(r.contribution.sel(source=f)))} %)"
+            for f in factors
+        ]
+        rows.append([shown.get(m, m), str(r.sense.values), *cells])
+    chosen = {f: int(an["chosen_level"].sel(term=f)) for f in factors}
+    rows.append(["**chosen level**", "", *[_level_text(view, f, chosen[f]) for f in factors]])
+    rows.append(
+        [
+            "decided by",
+            "",
+            *[shown.get(str(v), str(v)) for v in an["decided_by"].sel(term=factors).values],
+        ]
+    )
+    rows.append(
+        ["conflict", "", *["yes" if c else "no" for c in an["conflict"].sel(term=factors).values]]
+    )
     lines += [_table(header, rows), ""]
-    rows = [
-        [means[str(m)], p["sense"], _num(p["own optimum"]), _num(p["compromise"]),
-         _num(p["half width"]), p["units"] if p["units"] != "1" else ""]
-        for m, p in result.predictions.iterrows()
-    ]  # fmt: skip
+    rows = []
+    for m in names:
+        r = an.sel(response=m)
+        units = str(r.units.values)
+        rows.append(
+            [shown.get(m, m), str(r.sense.values), _num(float(r.predicted)),
+             _num(float(r.compromise)), _num(float(r.compromise_half_width)),
+             units if units != "1" else ""]
+        )  # fmt: skip
     lines += [
         "Predicted mean of each response at its own optimum and at the chosen levels:",
         "",
         _table(["response", "better", "own optimum", "chosen levels", "± (CI)", "units"], rows),
         "",
     ]
-    return lines, result.levels
+    return lines, chosen
 
 
 def _sweep(ds: xr.Dataset, responses: list[str], figures: set[str]) -> list[str]:

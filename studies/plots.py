@@ -17,11 +17,12 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from studies import taguchi
-from studies.analysis import range_analysis, sweep_runs
+from studies.statistics import sweep_runs
 
 PANEL_SIZE = (3.0, 3.0)  # inches per factor panel
 DPI = 120
 TITLE_CHARS_PER_INCH = 11  # what fits at the default title size
+MARKER_LEVELS = 40  # from this many levels on, main effects are a line without markers
 
 
 def _title(fig: Figure, text: str) -> None:
@@ -34,39 +35,38 @@ def _label(name: str, units: str) -> str:
     return f"{name} [{units}]" if units else name
 
 
-def main_effects_figure(
-    ds: xr.Dataset, response: str, factors: Sequence[str] | None = None
-) -> Figure:
-    """One panel per factor: level mean of ``response`` against the factor's value.
+def main_effects_figure(an: xr.Dataset, response: str) -> Figure:
+    """One panel per factor: level mean of ``response`` against the factor's value, from the
+    analysis Dataset (:func:`studies.analysis.analyze`).
 
     The dashed line is the grand mean of the response. Factors without numeric values are
-    plotted against their 1-based level number.
+    plotted against their 1-based level number; 40+ levels are drawn as a line without markers.
     """
-    ra = range_analysis(ds, response, factors)
-    names = [str(f) for f in ra.factor.values]
-    grand_mean = float(np.nanmean(ds[response].values.astype(float)))
+    r = an.sel(response=response)
+    names = [str(t) for t in an["term"].values if int(an["is_factor"].sel(term=t))]
+    units = str(r.units.values)
     fig = Figure(figsize=(PANEL_SIZE[0] * len(names), PANEL_SIZE[1]), layout="constrained")
     axes = fig.subplots(1, len(names), sharey=True, squeeze=False)[0]
     for ax, f in zip(axes, names, strict=True):
-        row = ra.sel(factor=f)
+        row = r.sel(term=f)
         k = row.k.values
         values = row.level_value.values
         present = np.isfinite(k)
         numeric = bool(np.isfinite(values[present]).all())
         x = values[present] if numeric else row.level.values[present] + 1
-        ax.plot(x, k[present], marker="o")
-        ax.axhline(grand_mean, linestyle="--", color="0.5", label="grand mean")
-        unit = str(row.factor_units.values)
+        ax.plot(x, k[present], marker="o" if present.sum() < MARKER_LEVELS else None)
+        ax.axhline(float(r.grand_mean), linestyle="--", color="0.5", label="grand mean")
+        unit = str(row.term_units.values)
         ax.set_xlabel(_label(f, unit) if numeric else f"{f} (level)")
         if not numeric:
             ax.set_xticks(x)
-    axes[0].set_ylabel(_label(response, ra.attrs["units"]))
+    axes[0].set_ylabel(_label(response, units))
     axes[0].legend(loc="best", fontsize="small")
-    _title(fig, f"Main effects on {response}: {ra.attrs['long_name']}")
+    _title(fig, f"Main effects on {response}: {r.long_name.values}")
     return fig
 
 
-def save_main_effects(ds: xr.Dataset, responses: str | Sequence[str], folder: Path) -> list[Path]:
+def save_main_effects(an: xr.Dataset, responses: str | Sequence[str], folder: Path) -> list[Path]:
     """Write ``main_effects_<response>.png`` for each response into ``folder``."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -74,7 +74,7 @@ def save_main_effects(ds: xr.Dataset, responses: str | Sequence[str], folder: Pa
     paths = []
     for name in names:
         path = folder / f"main_effects_{name}.png"
-        main_effects_figure(ds, name).savefig(path, dpi=DPI)
+        main_effects_figure(an, name).savefig(path, dpi=DPI)
         paths.append(path)
     return paths
 
@@ -114,69 +114,110 @@ def interaction_png(response: str, a: str, b: str) -> str:
     return f"interaction_{response}_{a}_x_{b}.png"
 
 
-def sn_figure(ds: xr.Dataset, response: str, kind: str | None = None) -> Figure:
-    """Main effects on the S/N ratio [dB] of ``response`` (see :mod:`studies.taguchi`).
-
-    ``kind`` ("smaller", "larger", "nominal") defaults to the response's ``better`` attribute.
-    A response with a ``replicate`` dimension gives one S/N value per run over its replicates.
-    """
-    view = taguchi.with_sn(ds, response, {response: kind} if kind else None)
+def sn_figure(an: xr.Dataset, response: str) -> Figure:
+    """Main effects on the S/N ratio [dB] of ``response`` (see :mod:`studies.taguchi`), from
+    the analysis Dataset, which holds it as ``<response>_sn``."""
     name = taguchi.sn_name(response)
-    fig = main_effects_figure(view, name)
+    fig = main_effects_figure(an, name)
     fig.axes[0].set_ylabel("S/N ratio [dB]")
-    _title(fig, f"S/N ratio of {response} ({view[name].attrs['sn_kind']} is better)")
+    _title(fig, f"S/N ratio of {response}: {an['long_name'].sel(response=name).values}")
     return fig
 
 
-def interaction_figure(ds: xr.Dataset, response: str, a: str, b: str) -> Figure:
+def interaction_figure(an: xr.Dataset, response: str, a: str, b: str) -> Figure:
     """Mean ``response`` against the levels of ``a``, one line per level of ``b``.
 
     Parallel lines mean no interaction. Factors without numeric values are plotted against
     their 1-based level number.
     """
-    means = taguchi.interaction_means(ds, response, a, b)
-    x = means[a].values
-    numeric = np.issubdtype(x.dtype, np.number)
+    r = an.sel(response=response, interaction=f"{a} x {b}")
+    means = r.interaction_mean.values
+    rows = np.isfinite(means).any(axis=1)
+    cols = np.isfinite(means).any(axis=0)
+    x = an["level_value"].sel(term=a).values[rows]
+    numeric = bool(np.isfinite(x).all())
     if not numeric:
-        x = means[f"{a}_level"].values + 1
-    units_a = ds[a].attrs.get("units", "") if a in ds.coords else ""
-    units_b = ds[b].attrs.get("units", "") if b in ds.coords else ""
+        x = np.flatnonzero(rows) + 1
+    units_a = str(an["term_units"].sel(term=a).values)
+    units_b = str(an["term_units"].sel(term=b).values)
+    values_b = an["level_value"].sel(term=b).values
     fig = Figure(figsize=(1.5 * PANEL_SIZE[0], 1.3 * PANEL_SIZE[1]), layout="constrained")
     ax = fig.subplots()
-    for j, value in enumerate(means[b].values):
-        shown = f"{value:g}" if isinstance(value, int | float | np.number) else str(value)
+    for j in np.flatnonzero(cols):
+        shown = f"{values_b[j]:g}" if np.isfinite(values_b[j]) else f"level {j + 1}"
         label = f"{b} = {shown} {units_b}".rstrip()
-        ax.plot(x, means.values[:, j], marker="o", label=label)
+        ax.plot(x, means[rows, j], marker="o", label=label)
     ax.set_xlabel(_label(a, units_a) if numeric else f"{a} (level)")
     if not numeric:
         ax.set_xticks(x)
-    y = ds[response]
-    ax.set_ylabel(_label(y.attrs.get("long_name", response), y.attrs.get("units", "")))
+    ax.set_ylabel(_label(str(r.long_name.values), str(r.units.values)))
     ax.legend(loc="best", fontsize="small")
     _title(fig, f"Interaction {a} × {b} on {response}")
     return fig
 
 
-def save_sn_plots(ds: xr.Dataset, responses: Sequence[str], folder: Path) -> list[Path]:
+def save_sn_plots(an: xr.Dataset, responses: Sequence[str], folder: Path) -> list[Path]:
     """Write ``sn_<response>.png`` for each response into ``folder``."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     paths = []
     for name in responses:
         path = folder / sn_png(name)
-        sn_figure(ds, name).savefig(path, dpi=DPI)
+        sn_figure(an, name).savefig(path, dpi=DPI)
         paths.append(path)
     return paths
 
 
-def save_interaction_plots(ds: xr.Dataset, responses: Sequence[str], folder: Path) -> list[Path]:
+def save_interaction_plots(an: xr.Dataset, responses: Sequence[str], folder: Path) -> list[Path]:
     """Write ``interaction_<response>_<a>_x_<b>.png`` per response and assigned interaction."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
+    pairs = list(zip(an["interaction_a"].values, an["interaction_b"].values, strict=True))
     paths = []
     for name in responses:
-        for a, b in taguchi.interaction_pairs(ds):
+        for a, b in pairs:
             path = folder / interaction_png(name, a, b)
-            interaction_figure(ds, name, a, b).savefig(path, dpi=DPI)
+            interaction_figure(an, name, str(a), str(b)).savefig(path, dpi=DPI)
+            paths.append(path)
+    return paths
+
+
+def map_png(response: str) -> str:
+    return f"map_{response}.png"
+
+
+def map_figure(an: xr.Dataset, response: str) -> Figure | None:
+    """Heat map of ``response`` (mean over the other factors) over the factor pair with the
+    largest total-effect indices of a full factorial; None when the analysis has no map."""
+    if "map_mean" not in an:
+        return None
+    r = an.sel(response=response)
+    fx, fy = str(r.map_x.values), str(r.map_y.values)
+    if not fx:
+        return None
+    x = an["level_value"].sel(term=fx).values
+    y = an["level_value"].sel(term=fy).values
+    nx, ny = int(np.isfinite(x).sum()), int(np.isfinite(y).sum())
+    if nx < 2 or ny < 2:
+        return None
+    grid = r.map_mean.values[:ny, :nx]
+    fig = Figure(figsize=(5.2, 4.0), layout="constrained")
+    ax = fig.subplots()
+    mesh = ax.pcolormesh(x[:nx], y[:ny], grid, shading="nearest", cmap="viridis")
+    fig.colorbar(mesh, ax=ax, label=_label(response, str(r.units.values)))
+    ax.set_xlabel(_label(fx, str(an["term_units"].sel(term=fx).values)))
+    ax.set_ylabel(_label(fy, str(an["term_units"].sel(term=fy).values)))
+    ax.set_title(f"{response}: mean over the other factors", fontsize="medium")
+    return fig
+
+
+def save_maps(an: xr.Dataset, responses: Sequence[str], folder: Path) -> list[Path]:
+    """Write ``map_<response>.png`` for each response of a full factorial that has a map."""
+    paths = []
+    for name in responses:
+        fig = map_figure(an, name)
+        if fig is not None:
+            path = Path(folder) / map_png(name)
+            fig.savefig(path, dpi=DPI)
             paths.append(path)
     return paths

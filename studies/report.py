@@ -1,9 +1,11 @@
 """What a run writes beside its results: ``analysis.txt``, ``report.md`` and the figures.
 
-Orthogonal-array and full-factorial runs get range analysis and ANOVA per response (interaction
-columns as terms), main-effect, S/N and interaction plots; sweeps get a table and a
-response-vs-factor plot per swept factor. ``report.md`` (:mod:`studies.markdown_report`) adds
-S/N ratios, the predicted optimum and the confirmation run.
+The analysis is computed once (:func:`studies.analysis.analyze`, saved as ``analysis.nc``);
+everything else renders it. Orthogonal-array and full-factorial runs get range analysis and
+ANOVA per response (interaction columns as terms), main-effect, S/N and interaction plots, and
+for full factorials the variance decomposition and a map over the strongest factor pair;
+sweeps get a table and a response-vs-factor plot per swept factor. ``report.md``
+(:mod:`studies.markdown_report`) adds S/N ratios, the predicted optimum and the confirmation run.
 """
 
 from __future__ import annotations
@@ -13,11 +15,17 @@ from pathlib import Path
 
 import xarray as xr
 
-from studies import analysis, markdown_report, plots, scene_plots, scene_summaries, taguchi
+from studies import analysis, analysis_text, markdown_report, plots, scene_plots, scene_summaries
 
 
-def write_analysis(ds: xr.Dataset, folder: Path, responses: list[str] | None = None) -> list[Path]:
-    """Write ``analysis.txt`` and PNG figures into ``folder``; return the paths (text first).
+def write_analysis(
+    ds: xr.Dataset,
+    folder: Path,
+    responses: list[str] | None = None,
+    pool: list[str] | None = None,
+) -> list[Path]:
+    """Analyse once (``analysis.nc``), then render ``analysis.txt``, ``report.md`` and the PNG
+    figures into ``folder``; return the paths (text first).
 
     A response that is NaN in every run (e.g. ``jump_start`` when no design point separates)
     gets a line saying so instead of tables and figures.
@@ -30,24 +38,30 @@ def write_analysis(ds: xr.Dataset, folder: Path, responses: list[str] | None = N
             f"responses not in the results: {', '.join(missing)} "
             f"(available: {', '.join(map(str, ds.data_vars))})"
         )
+    folder.mkdir(parents=True, exist_ok=True)
+    an = analysis.analyze(ds, scalar, pool)
+    done = json.loads(an.attrs["analysed"])
+    analysed = [r for r in scalar if r in done]
     header = _header(ds)
-    analysed = [r for r in scalar if analysis.has_values(ds, r)]
     if ds.attrs.get("design") == "sweep":
-        body = [analysis.format_sweep(ds, analysed)]
+        body = [analysis_text.format_sweep(ds, analysed)]
         figures = plots.save_sweep_plots(ds, analysed, folder)
     else:
-        terms = taguchi.model_terms(ds) or None
-        body = [analysis.format_tables(ds, r, terms) for r in analysed]
-        figures = plots.save_main_effects(ds, analysed, folder)
-        figures += plots.save_sn_plots(ds, taguchi.sn_responses(ds, analysed), folder)
-        figures += plots.save_interaction_plots(ds, analysed, folder)
+        body = [analysis_text.format_tables(an, r) for r in analysed]
+        varying = [r for r in analysed if int(an["varies"].sel(response=r))]
+        figures = plots.save_main_effects(an, varying, folder)
+        sn = [r for r in analysed if f"{r}_sn" in an["response"].values]
+        figures += plots.save_sn_plots(an, sn, folder)
+        figures += plots.save_interaction_plots(an, analysed, folder)
+        figures += plots.save_maps(an, varying, folder)
     body += [_no_value_note(ds[r]) for r in scalar if r not in analysed]
     body += scene_summaries.scene_summaries(ds)
     figures += scene_plots.save_scene_figures(ds, folder)
     text_path = folder / "analysis.txt"
     text_path.write_text("\n\n".join([header, *body]) + "\n", encoding="utf-8")
-    reports = markdown_report.write_report(ds, folder, scalar, figures)
-    return [text_path, *reports, *figures]
+    reports = markdown_report.write_report(ds, an, folder, scalar, figures)
+    nc = analysis.write_analysis_nc(an, folder)
+    return [text_path, *reports, nc, *figures]
 
 
 def _no_value_note(y: xr.DataArray) -> str:

@@ -134,11 +134,43 @@ def write_netcdf(ds: xr.Dataset, path: Path) -> Path:
     return path
 
 
-def unstack_factorial(ds: xr.Dataset) -> xr.Dataset:
-    """A full-factorial result with one dimension per factor instead of ``run``."""
+def grid_order(ds: xr.Dataset) -> tuple[list[str], tuple[int, ...], np.ndarray]:
+    """Factors, level counts and the run at each grid cell (C order) of a complete full
+    factorial; ValueError for any other design or an incomplete one."""
     if ds.attrs.get("design") != "full_factorial":
-        msg = f"unstack needs a full_factorial result, this one is {ds.attrs.get('design')!r}"
+        msg = f"a grid view needs a full_factorial result, this one is {ds.attrs.get('design')!r}"
         raise ValueError(msg)
     factors = json.loads(ds.attrs["factors"])
-    levels = [f"{f}_level" for f in factors]
-    return ds.drop_vars(levels).set_index(run=factors).unstack("run")
+    codes = [ds[f"{f}_level"].values.astype(np.int64) for f in factors]
+    counts = tuple(int(c.max()) + 1 for c in codes)
+    flat = np.ravel_multi_index(codes, counts)
+    order = np.full(int(np.prod(counts)), -1, dtype=np.int64)
+    order[flat] = np.arange(flat.size)
+    if flat.size != order.size or (order < 0).any():
+        msg = f"the full factorial is incomplete: {flat.size} runs for {order.size} grid cells"
+        raise ValueError(msg)
+    return factors, counts, order
+
+
+def as_grid(ds: xr.Dataset) -> xr.Dataset:
+    """A full-factorial result with one dimension per factor instead of ``run``.
+
+    Each factor is a dimension whose coordinate is its value at each level (so
+    ``grid.sel(cam_speed=5000)`` works), with ``<factor>_level`` beside it; every variable on
+    ``run`` is reshaped in O(N) (curves keep their angle dimension).
+    """
+    factors, counts, order = grid_order(ds)
+    coords: dict[str, Any] = {}
+    for f, n in zip(factors, counts, strict=True):
+        first = np.empty(n, dtype=np.int64)
+        first[ds[f"{f}_level"].values[order[::-1]]] = order[::-1]  # the last write wins
+        coords[f] = (f, ds[f].values[first], dict(ds[f].attrs))
+        coords[f"{f}_level"] = (f, np.arange(n, dtype=np.int32), {"units": "1"})
+    data_vars = {}
+    for name, da in ds.data_vars.items():
+        if da.dims[:1] != ("run",):
+            continue
+        values = da.values[order].reshape(counts + da.shape[1:])
+        data_vars[name] = ((*factors, *da.dims[1:]), values, dict(da.attrs))
+    coords |= {c: ds[c] for c in ds.coords if "run" not in ds[c].dims}
+    return xr.Dataset(data_vars, coords=coords, attrs=dict(ds.attrs))

@@ -21,6 +21,14 @@ from collections.abc import Sequence
 import numpy as np
 
 RANK_TOLERANCE = 1e-9  # relative pivot below which a dummy column counts as dependent
+# A sum of squares below this fraction of the total is round-off of a zero effect (an effect
+# the response does not have still leaves ~ε² of the total from the centred sums): reported 0.
+ROUND_OFF = 1e-12
+
+
+def without_round_off(ss: np.ndarray, total: float) -> np.ndarray:
+    """``ss`` with the entries at round-off level of ``total`` set to exactly zero."""
+    return np.where(np.abs(ss) <= ROUND_OFF * total, 0.0, ss)
 
 
 def centred(y: np.ndarray) -> np.ndarray:
@@ -59,9 +67,8 @@ def term_sums_of_squares(
     d = centred(np.asarray(y, dtype=float))
     total = float(d @ d)
     codes = [np.asarray(t, dtype=np.int64) for t in terms]
-    if is_balanced(codes):
-        return (*_balanced(d, codes), total)
-    return (*_sequential(d, codes), total)
+    ss, dof = _balanced(d, codes) if is_balanced(codes) else _sequential(d, codes)
+    return without_round_off(ss, total), dof, total
 
 
 def _balanced(d: np.ndarray, terms: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:

@@ -44,7 +44,7 @@ import pandas as pd
 import xarray as xr
 from scipy import stats
 
-from studies.analysis import SENSES, anova
+from studies.statistics import SENSES, anova
 
 SN_KINDS = ("smaller", "larger", "nominal")
 REPLICATE = "replicate"
@@ -180,7 +180,7 @@ def model_terms(ds: xr.Dataset) -> list[str]:
 
 
 def anova_table(ds: xr.Dataset, response: str, pool: Sequence[str] | None = None) -> pd.DataFrame:
-    """:func:`studies.analysis.anova` over factors and interaction columns (error: the rest)."""
+    """:func:`studies.statistics.anova` over factors and interaction columns (error: the rest)."""
     return anova(ds, response, factors=model_terms(ds), pool=pool)
 
 
@@ -281,10 +281,15 @@ class _Model:
     """Level means of the model terms and the ANOVA error of one response."""
 
     def __init__(
-        self, ds: xr.Dataset, response: str, pool: Sequence[str] | None, terms: Sequence[str] | None
+        self,
+        ds: xr.Dataset,
+        response: str,
+        pool: Sequence[str] | None,
+        terms: Sequence[str] | None,
+        table: pd.DataFrame | None = None,
     ) -> None:
         self.ds, self.response = ds, response
-        self.table = anova_table(ds, response, pool)
+        self.table = anova_table(ds, response, pool) if table is None else table
         available = model_terms(ds)
         if terms is None:
             terms = [t for t in available if not self.table.loc[t, "pooled"]]
@@ -363,13 +368,15 @@ def predict(
     terms: Sequence[str] | None = None,
     alpha: float = ALPHA,
     confirmation_runs: int = 1,
+    table: pd.DataFrame | None = None,
 ) -> Prediction:
     """Predicted mean of ``response`` at ``levels`` (factor → 0-based level) with intervals.
 
     ``terms`` are the model terms (factors, interaction columns); by default those the ANOVA
-    keeps (not pooled, see :func:`anova_table`). ``pool`` is passed to the ANOVA.
+    keeps (not pooled, see :func:`anova_table`). ``pool`` is passed to the ANOVA; ``table`` is
+    that ANOVA when the caller has it already.
     """
-    model = _Model(ds, response, pool, terms)
+    model = _Model(ds, response, pool, terms, table)
     missing = sorted({f for f in factor_names(ds) if f not in levels})
     if missing:
         msg = f"levels missing for factor(s) {missing}"
@@ -386,6 +393,7 @@ def predict_optimum(
     terms: Sequence[str] | None = None,
     alpha: float = ALPHA,
     confirmation_runs: int = 1,
+    table: pd.DataFrame | None = None,
 ) -> Prediction:
     """The best level combination of ``response`` and its predicted mean with intervals.
 
@@ -399,7 +407,7 @@ def predict_optimum(
         msg = f"sense must be one of {SENSES}, got {chosen!r}"
         raise ValueError(msg)
     sign = 1.0 if chosen == "smaller" else -1.0
-    model = _Model(ds, response, pool, terms)
+    model = _Model(ds, response, pool, terms, table)
     factors = factor_names(ds)
     levels = {}
     for f in factors:
@@ -512,11 +520,18 @@ class TradeOff:
     levels: dict[str, int]
 
 
-def tradeoff(ds: xr.Dataset, responses: Sequence[str], alpha: float = ALPHA) -> TradeOff:
-    """Trade-off summary of several responses on the same runs (each with its own ANOVA)."""
+def tradeoff(
+    ds: xr.Dataset,
+    responses: Sequence[str],
+    alpha: float = ALPHA,
+    tables: Mapping[str, pd.DataFrame] | None = None,
+) -> TradeOff:
+    """Trade-off summary of several responses on the same runs (each with its own ANOVA;
+    ``tables``: those ANOVAs when the caller has them already)."""
     factors = factor_names(ds)
-    optima = {r: predict_optimum(ds, r, alpha=alpha) for r in responses}
-    share = {r: anova_table(ds, r)["contribution"] for r in responses}
+    tables = {r: anova_table(ds, r) for r in responses} if tables is None else tables
+    optima = {r: predict_optimum(ds, r, alpha=alpha, table=tables[r]) for r in responses}
+    share = {r: tables[r]["contribution"] for r in responses}
     rows = {}
     levels = {}
     for f in factors:
@@ -534,7 +549,7 @@ def tradeoff(ds: xr.Dataset, responses: Sequence[str], alpha: float = ALPHA) -> 
     table.index.name = "factor"
     preds = {}
     for r in responses:
-        at = predict(ds, r, levels, alpha=alpha)
+        at = predict(ds, r, levels, alpha=alpha, table=tables[r])
         preds[r] = {
             "own optimum": optima[r].mean,
             "compromise": at.mean,

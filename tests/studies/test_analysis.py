@@ -19,7 +19,8 @@ from hypothesis import strategies as st
 from statsmodels.formula.api import ols
 from statsmodels.stats.anova import anova_lm
 
-from studies.analysis import anova, format_tables, range_analysis
+from studies.analysis import analyze, anova, range_analysis
+from studies.analysis_text import format_tables
 from studies.designs.orthogonal_arrays import orthogonal_array
 from studies.plots import main_effects_figure, save_main_effects
 
@@ -254,14 +255,14 @@ def test_format_tables_shows_units_sources_and_notes():
     table = orthogonal_array("L9")
     y = np.array([1.0, 4.0, 2.0, 8.0, 5.0, 7.0, 3.0, 9.0, 6.0])
     ds = make_dataset(table, ["A", "B", "C", "D"], [], y, VALUES | {"D": [1.0, 2.0, 3.0]})
-    text = format_tables(ds, "stress")
+    text = format_tables(analyze(ds, ["stress"]), "stress")
     for expected in ["Range analysis", "[MPa]", "(MPa)^2", "deg", "7, 9, 11", "error", "total",
                      "(pooled)", "Note:"]:  # fmt: skip
         assert expected in text, expected
 
 
 def test_main_effects_figure_has_one_panel_per_factor(l9):
-    fig = main_effects_figure(l9, "stress")
+    fig = main_effects_figure(analyze(l9, ["stress"]), "stress")
     axes = fig.axes
     assert len(axes) == 3
     assert axes[0].get_xlabel() == "A [deg]"
@@ -279,7 +280,7 @@ def test_factor_without_numeric_values_uses_level_numbers(l9):
     ra = range_analysis(ds, "stress")
     assert np.isnan(ra.level_value.sel(factor="A")).all()
     assert np.isfinite(ra.level_value.sel(factor="B")).all()
-    ax = main_effects_figure(ds, "stress").axes[0]
+    ax = main_effects_figure(analyze(ds, ["stress"]), "stress").axes[0]
     assert ax.get_xlabel() == "A (level)"
     np.testing.assert_allclose(ax.get_lines()[0].get_xdata(), [1, 2, 3])
 
@@ -287,7 +288,8 @@ def test_factor_without_numeric_values_uses_level_numbers(l9):
 def test_save_main_effects_writes_pngs(l9, tmp_path):
     l9["flow"] = l9["stress"] * 2.0
     l9["flow"].attrs = {"units": "kg/s"}
-    paths = save_main_effects(l9, ["stress", "flow"], tmp_path / "plots")
+    an = analyze(l9, ["stress", "flow"])
+    paths = save_main_effects(an, ["stress", "flow"], tmp_path / "plots")
     assert [p.name for p in paths] == ["main_effects_stress.png", "main_effects_flow.png"]
     for p in paths:
         data = p.read_bytes()

@@ -18,6 +18,7 @@ import pytest
 import xarray as xr
 
 from studies import designs
+from studies.analysis import analyze
 from studies.markdown_report import report_text, write_report
 from studies.plots import interaction_figure, sn_figure
 from studies.report import write_analysis
@@ -151,9 +152,9 @@ def test_write_analysis_writes_report_and_every_figure(path: Path, tmp_path: Pat
     assert all(len(v["levels"]) == 1 for v in study["factors"].values())
 
 
-def l27_dataset(replicates: int = 0) -> xr.Dataset:
+def l27_dataset(replicates: int = 0, pair: tuple[str, str] = ("A", "B")) -> xr.Dataset:
     counts = dict.fromkeys("ABCD", 3) | {"E": 2}
-    design = designs.orthogonal("auto", counts, dict.fromkeys(counts), (), [("A", "B")])
+    design = designs.orthogonal("auto", counts, dict.fromkeys(counts), (), [pair])
     coords: dict = {}
     units = {"A": "mm", "B": "deg", "D": "N", "E": "mm"}
     for f in counts:
@@ -205,7 +206,7 @@ def test_report_shows_interactions_dummy_levels_and_their_figures(tmp_path: Path
 
 def test_report_of_a_replicated_response_uses_run_means() -> None:
     ds = l27_dataset(replicates=3)
-    text = report_text(ds, ["force"])
+    text = report_text(ds, analyze(ds, ["force"]), ["force"])
     tables_are_well_formed(text)
     assert "over 3 observation(s) per run" in text
     assert "force (mean over replicates)" in text
@@ -215,7 +216,8 @@ def test_report_of_a_replicated_response_uses_run_means() -> None:
 
 def test_several_responses_get_a_tradeoff_summary() -> None:
     ds = study_dataset(CATALOG / "isac_l9.toml", seed=3)
-    text = report_text(ds, json.loads(ds.attrs["responses"]))
+    responses = json.loads(ds.attrs["responses"])
+    text = report_text(ds, analyze(ds, responses), responses)
     block = section(text, "## Trade-off summary")
     tables_are_well_formed(block)
     for f in json.loads(ds.attrs["factors"]):
@@ -243,14 +245,15 @@ def test_sweep_report(tmp_path: Path) -> None:
 
 def test_write_report_links_only_existing_figures(tmp_path: Path) -> None:
     ds = study_dataset(CATALOG / "isac_l9.toml")
-    paths = write_report(ds, tmp_path, ["max_jerk"], [tmp_path / "main_effects_max_jerk.png"])
+    an = analyze(ds, ["max_jerk"])
+    paths = write_report(ds, an, tmp_path, ["max_jerk"], [tmp_path / "main_effects_max_jerk.png"])
     assert [p.name for p in paths] == ["report.md", "confirmation.toml"]
     assert links(paths[0].read_text(encoding="utf-8")) == ["main_effects_max_jerk.png"]
 
 
 def test_interaction_figure_plots_cell_means_with_units() -> None:
     ds = l27_dataset()
-    ax = interaction_figure(ds, "force", "A", "B").axes[0]
+    ax = interaction_figure(analyze(ds, ["force"]), "force", "A", "B").axes[0]
     assert ax.get_xlabel() == "A [mm]"
     assert ax.get_ylabel() == "force [N]"
     lines = ax.get_lines()
@@ -260,13 +263,15 @@ def test_interaction_figure_plots_cell_means_with_units() -> None:
         np.testing.assert_allclose(line.get_xdata(), [10.0, 20.0, 30.0])
         expected = [y[(a == i) & (b == j)].mean() for i in range(3)]
         np.testing.assert_allclose(line.get_ydata(), expected, rtol=1e-12)
-    ax_c = interaction_figure(ds, "force", "C", "A").axes[0]  # text levels → level numbers
-    assert ax_c.get_xlabel() == "C (level)"
+    text_levels = l27_dataset(pair=("C", "A"))
+    ax_c = interaction_figure(analyze(text_levels, ["force"]), "force", "C", "A").axes[0]
+    assert ax_c.get_xlabel() == "C (level)"  # text levels → level numbers
+    np.testing.assert_allclose(ax_c.get_lines()[0].get_xdata(), [1, 2, 3])
 
 
 def test_sn_figure_plots_level_means_of_the_sn_ratio() -> None:
     ds = l27_dataset(replicates=3)
-    fig = sn_figure(ds, "force")
+    fig = sn_figure(analyze(ds, ["force"]), "force")
     ax = fig.axes[0]
     assert ax.get_ylabel() == "S/N ratio [dB]"
     assert "smaller is better" in fig.get_suptitle()

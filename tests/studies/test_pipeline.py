@@ -11,7 +11,7 @@ import pytest
 import xarray as xr
 
 from studies.plan import plan_text
-from studies.results import unstack_factorial
+from studies.results import as_grid
 from studies.study_run import run_plan, run_study
 from study_text import recorded_stages
 
@@ -116,11 +116,21 @@ def test_curves_only_when_asked(tmp_path: Path) -> None:
     assert with_curves["cam_angle"].attrs["units"] == "deg"
 
 
-def test_full_factorial_unstacks(tmp_path: Path) -> None:
+def test_full_factorial_as_grid(tmp_path: Path) -> None:
     ds = run_plan(plan_text(small()), tmp_path, progress=False).dataset
-    cube = unstack_factorial(ds)
-    assert cube["max_jerk"].dims == ("base_radius", "cam_speed")
-    assert cube["max_jerk"].shape == (2, 3)
+    grid = as_grid(ds)
+    assert grid["max_jerk"].dims == ("base_radius", "cam_speed")
+    assert grid["max_jerk"].shape == (2, 3)
+    # every cell is the run at those factor values (brute-force lookup over the runs)
+    for i, radius in enumerate(grid["base_radius"].values):
+        for j, speed in enumerate(grid["cam_speed"].values):
+            run = np.flatnonzero((ds["base_radius"] == radius) & (ds["cam_speed"] == speed))
+            assert grid["max_jerk"].values[i, j] == ds["max_jerk"].values[run[0]]
+    speed = float(grid["cam_speed"].values[1])
+    assert grid.sel(cam_speed=speed)["max_jerk"].dims == ("base_radius",)
+    # a shuffled run order gives the same grid
+    shuffled = ds.isel(run=np.random.default_rng(1).permutation(ds.sizes["run"]))
+    np.testing.assert_array_equal(as_grid(shuffled)["max_jerk"].values, grid["max_jerk"].values)
 
 
 def test_runs_are_listed_by_cli(isac, capsys: pytest.CaptureFixture[str]) -> None:
