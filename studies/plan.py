@@ -26,7 +26,6 @@ class Plan:
     definition: StudyDefinition
     scene: Scene
     design: designs.Design
-    factor_values: dict[str, np.ndarray]
     points: dict[str, np.ndarray]
     settings: dict[str, Any]
     stages: tuple[str, ...]
@@ -35,6 +34,11 @@ class Plan:
     @property
     def runs(self) -> int:
         return self.design.runs
+
+    def factor_values(self, name: str, part: slice = slice(None)) -> np.ndarray:
+        """The factor's value (as written in the study) in the runs ``part``."""
+        factor = next(f for f in self.definition.factors if f.name == name)
+        return np.asarray(factor.levels)[self.design.levels[name][part]]
 
 
 def plan_study(name_or_path: str | Path) -> Plan:
@@ -61,9 +65,6 @@ def _plan(definition: StudyDefinition | None, problems: list[str]) -> Plan:
         problems = problems + exc.problems
     if design is None or problems:
         raise StudyError(source, problems)
-    factor_values = {
-        f.name: np.asarray(f.levels)[design.levels[f.name]] for f in definition.factors
-    }
     points = _points(scene, definition, design, design.runs)
     settings = {
         s.name: s.to_si(definition.settings[s.name])
@@ -80,9 +81,7 @@ def _plan(definition: StudyDefinition | None, problems: list[str]) -> Plan:
     clashes = _name_clashes(definition, scene, design, stored)
     if clashes:
         raise StudyError(source, clashes)
-    return Plan(
-        definition, scene, design, factor_values, points, settings, tuple(stages), tuple(stored)
-    )
+    return Plan(definition, scene, design, points, settings, tuple(stages), tuple(stored))
 
 
 def _name_clashes(

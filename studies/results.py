@@ -36,7 +36,7 @@ def build_dataset(plan: Plan, ev: Evaluation, attrs: dict[str, Any]) -> xr.Datas
         long_name = param.long_name if param else f.name
         coords[f.name] = (
             "run",
-            plan.factor_values[f.name],
+            plan.factor_values(f.name),
             {"units": f.units, "long_name": long_name},
         )
         coords[f"{f.name}_level"] = (

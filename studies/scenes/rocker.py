@@ -116,14 +116,17 @@ def chain_keys(points: dict[str, np.ndarray]) -> dict[tuple, np.ndarray]:
     """
     coefficients = np.asarray(points["polydyne_coefficients"], dtype=float)
     columns = [*coefficients.T, *(np.asarray(points[name]) for name in KEY_NAMES)]
-    group = np.zeros(len(coefficients), dtype=np.int64)
+    group: np.ndarray | None = None
     for column in columns:
         if len(column) and bool((column == column[0]).all()):
             continue
         codes, uniques = pd.factorize(column)
-        group = pd.factorize(group * len(uniques) + codes)[0]
-    order = np.argsort(group, kind="stable")
-    members = np.split(order, np.cumsum(np.bincount(group))[:-1])
+        group = codes if group is None else pd.factorize(group * len(uniques) + codes)[0]
+    if group is None:  # one chain for every point
+        members = [np.arange(len(coefficients))]
+    else:
+        order = np.argsort(group, kind="stable")
+        members = np.split(order, np.cumsum(np.bincount(group))[:-1])
     return {
         (*(points[name][idx[0]] for name in KEY_NAMES), tuple(coefficients[idx[0]].tolist())): idx
         for idx in members

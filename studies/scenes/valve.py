@@ -101,9 +101,14 @@ _PARAM_COLUMN = {
 }
 
 
-def valve_rows(points: dict[str, np.ndarray], idx: np.ndarray) -> np.ndarray:
-    """Kernel parameter rows (``engine_kernels.valve.P_*``, SI) of the design points idx."""
-    rows = np.zeros((len(idx), len(valve.VALVE_PARAM_NAMES)))
+CHECK_BLOCK = 1 << 18  # design points per block of the stability check
+
+
+def valve_rows(points: dict[str, np.ndarray], idx: np.ndarray | slice) -> np.ndarray:
+    """Kernel parameter rows (``engine_kernels.valve.P_*``, SI) of the design points idx
+    (indices or a slice)."""
+    first = points["cam_speed"][idx]
+    rows = np.zeros((len(first), len(valve.VALVE_PARAM_NAMES)))
     for name, column in _PARAM_COLUMN.items():
         rows[:, column] = points[name][idx]
     return rows
@@ -157,30 +162,35 @@ def stability_problems(
     points: dict[str, np.ndarray], settings: dict[str, Any], steps: np.ndarray
 ) -> list[str]:
     """Points whose RK4 step [rad] (one per point) needs more sub-steps than
-    ``max_substeps`` (SPEC §4); checked in one compiled batch per distinct step."""
+    ``max_substeps`` (SPEC §4); checked by a compiled batch over blocks of points, so the
+    parameter rows of a 10⁷-point design never sit in memory at once."""
     found = PointProblems()
     limit = int(settings["max_substeps"])
-    rows = valve_rows(points, np.arange(len(points["cam_speed"])))
-    needed = np.empty(rows.shape[0], dtype=np.int64)
-    ratio = np.empty(rows.shape[0])
-    distinct = np.unique(steps)
-    if distinct.size == 1:
-        valve.stability_substeps_batch(rows, float(distinct[0]), needed, ratio)
-    for step in distinct if distinct.size > 1 else ():
-        at = np.flatnonzero(steps == step)
-        part_needed, part_ratio = needed[at], ratio[at]
-        valve.stability_substeps_batch(rows[at], float(step), part_needed, part_ratio)
-        needed[at], ratio[at] = part_needed, part_ratio
-    for i in np.flatnonzero(needed > limit):
-        row, step = rows[i], steps[i]
-        found.add(
-            int(i),
-            f"angle_step = {step_deg(step):g} deg at cam_speed = {row[valve.P_SPEED] * RPM:g} "
-            f"rpm with seat_stiffness = {row[valve.P_SEAT_STIFFNESS] / 1e3:g} N/mm gives "
-            f"|h λ| = {ratio[i]:.3g}: {needed[i]} RK4 sub-steps per step would be needed to "
-            f"keep |h λ| ≤ {valve.STEP_RATIO_TARGET:g}, more than max_substeps = {limit} (use "
-            "a smaller angle_step or a larger max_substeps)",
-        )
+    runs = len(points["cam_speed"])
+    for start in range(0, runs, CHECK_BLOCK):
+        part = slice(start, min(start + CHECK_BLOCK, runs))
+        rows, block_steps = valve_rows(points, part), steps[part]
+        needed = np.empty(rows.shape[0], dtype=np.int64)
+        ratio = np.empty(rows.shape[0])
+        for step in np.unique(block_steps):
+            at = block_steps == step
+            if at.all():
+                valve.stability_substeps_batch(rows, float(step), needed, ratio)
+                break
+            part_needed, part_ratio = needed[at], ratio[at]
+            valve.stability_substeps_batch(rows[at], float(step), part_needed, part_ratio)
+            needed[at], ratio[at] = part_needed, part_ratio
+        for i in np.flatnonzero(needed > limit):
+            row, step = rows[i], block_steps[i]
+            found.add(
+                start + int(i),
+                f"angle_step = {step_deg(step):g} deg at cam_speed = "
+                f"{row[valve.P_SPEED] * RPM:g} rpm with seat_stiffness = "
+                f"{row[valve.P_SEAT_STIFFNESS] / 1e3:g} N/mm gives |h λ| = {ratio[i]:.3g}: "
+                f"{needed[i]} RK4 sub-steps per step would be needed to keep |h λ| ≤ "
+                f"{valve.STEP_RATIO_TARGET:g}, more than max_substeps = {limit} (use a smaller "
+                "angle_step or a larger max_substeps)",
+            )
     return found.messages()
 
 
