@@ -28,7 +28,23 @@ COMPRESSION = {"zlib": True, "complevel": 4}
 
 
 def build_dataset(plan: Plan, ev: Evaluation, attrs: dict[str, Any]) -> xr.Dataset:
-    """The Dataset of a finished evaluation; ``attrs`` are added as global attributes."""
+    """The Dataset of a finished evaluation held in memory; ``attrs`` are added as global
+    attributes. (A run streams the same layout to disk: :mod:`studies.results_writer`.)"""
+    ds = layout(plan, attrs)
+    data_vars: dict[str, Any] = {}
+    for name in plan.responses:
+        if name not in ev.scalars:
+            continue  # a status response missing from chunks an older version checkpointed
+        dims, dtype, attrs_r = response_layout(plan, name)
+        data_vars[name] = (dims, stored_values(ev.scalars[name], dtype), attrs_r)
+    for name in plan.definition.curves:
+        dims, _, attrs_c = curve_layout(plan, name)
+        data_vars[name] = (dims, ev.curves[name], attrs_c)
+    return ds.assign(data_vars)
+
+
+def layout(plan: Plan, attrs: dict[str, Any]) -> xr.Dataset:
+    """Coordinates and global attributes of a run's results, without its responses."""
     d, scene, design = plan.definition, plan.scene, plan.design
     coords: dict[str, Any] = {"run": ("run", np.arange(plan.runs), {"long_name": "design point"})}
     for f in d.factors:
@@ -58,25 +74,6 @@ def build_dataset(plan: Plan, ev: Evaluation, attrs: dict[str, Any]) -> xr.Datas
         )
     for label, values in design.labels.items():
         coords[label] = ("run", values.astype(str), {"long_name": label.replace("_", " ")})
-    data_vars: dict[str, Any] = {}
-    for name in plan.responses:
-        r = scene.response(name)
-        assert r is not None
-        if name not in ev.scalars:
-            continue  # a status response missing from chunks an older version checkpointed
-        values = ev.scalars[name]
-        attrs_r: dict[str, Any] = {
-            "units": r.units,
-            "long_name": r.long_name,
-            "better": d.sense.get(name, r.sense),
-        }
-        if r.flag:
-            values = np.where(np.isnan(values), -1, values).astype(np.int8)
-            attrs_r |= {
-                "flag_values": np.array([-1, 0, 1], dtype=np.int8),
-                "flag_meanings": "not_evaluated fails passes",
-            }
-        data_vars[name] = ("run", values, attrs_r)
     if d.curves:
         axis = scene.curve_axis
         assert axis is not None
@@ -85,15 +82,7 @@ def build_dataset(plan: Plan, ev: Evaluation, attrs: dict[str, Any]) -> xr.Datas
             scene.curve_coordinate(plan.settings),
             {"units": axis.units, "long_name": axis.long_name},
         )
-        for name in d.curves:
-            c = scene.curve(name)
-            assert c is not None
-            data_vars[name] = (
-                ("run", axis.name),
-                ev.curves[name],
-                {"units": c.units, "long_name": c.long_name},
-            )
-    ds = xr.Dataset(data_vars, coords=coords)
+    ds = xr.Dataset(coords=coords)
     ds.attrs = {
         "title": f"{d.name}: {d.description}".strip(": "),
         "study_name": d.name,
@@ -108,29 +97,65 @@ def build_dataset(plan: Plan, ev: Evaluation, attrs: dict[str, Any]) -> xr.Datas
         "settings": json.dumps(d.settings),
         "study_toml": d.text,
         "Conventions": "CF-1.10",
-        **{
-            k: (
-                json.dumps(v)
-                if isinstance(v, (dict, list))
-                else int(v)
-                if isinstance(v, bool)
-                else v
-            )
-            for k, v in attrs.items()
-        },
+        **global_attributes(attrs),
     }
     return ds
 
 
-def write_netcdf(ds: xr.Dataset, path: Path) -> Path:
-    """Write compressed netCDF4 (every numeric variable zlib-compressed)."""
+def global_attributes(attrs: dict[str, Any]) -> dict[str, Any]:
+    """Attributes netCDF can hold: dicts and lists as JSON strings, booleans as ints."""
+    return {
+        k: json.dumps(v) if isinstance(v, dict | list) else int(v) if isinstance(v, bool) else v
+        for k, v in attrs.items()
+    }
+
+
+def response_layout(plan: Plan, name: str) -> tuple[tuple[str, ...], type, dict[str, Any]]:
+    """Dimensions, stored type and attributes of a scalar response."""
+    r = plan.scene.response(name)
+    assert r is not None
+    attrs_r: dict[str, Any] = {
+        "units": r.units,
+        "long_name": r.long_name,
+        "better": plan.definition.sense.get(name, r.sense),
+    }
+    if not r.flag:
+        return ("run",), np.float64, attrs_r
+    flags = {
+        "flag_values": np.array([-1, 0, 1], dtype=np.int8),
+        "flag_meanings": "not_evaluated fails passes",
+    }
+    return ("run",), np.int8, attrs_r | flags
+
+
+def curve_layout(plan: Plan, name: str) -> tuple[tuple[str, ...], type, dict[str, Any]]:
+    """Dimensions, stored type and attributes of a curve."""
+    c, axis = plan.scene.curve(name), plan.scene.curve_axis
+    assert c is not None
+    assert axis is not None
+    return ("run", axis.name), np.float64, {"units": c.units, "long_name": c.long_name}
+
+
+def stored_values(values: np.ndarray, dtype: type) -> np.ndarray:
+    """A response as stored: pass/fail flags as int8 with -1 where not evaluated."""
+    if dtype is np.int8:
+        return np.where(np.isnan(values), -1, values).astype(np.int8)
+    return values
+
+
+def write_netcdf(ds: xr.Dataset, path: Path, atomic: bool = True) -> Path:
+    """Write compressed netCDF4 (every numeric variable zlib-compressed); ``atomic``: under a
+    temporary name renamed into place, so an interrupted write leaves no partial file."""
     encoding = {
         name: dict(COMPRESSION)
         for name in list(ds.data_vars) + list(ds.coords)
         if ds[name].dtype.kind in "fiu"
     }
     path.parent.mkdir(parents=True, exist_ok=True)
-    ds.to_netcdf(path, engine="netcdf4", format="NETCDF4", encoding=encoding)
+    target = path.with_name(path.name + ".writing") if atomic else path
+    ds.to_netcdf(target, engine="netcdf4", format="NETCDF4", encoding=encoding)
+    if atomic:
+        target.replace(path)
     return path
 
 

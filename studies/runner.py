@@ -14,7 +14,7 @@ same pure function of the plan, so results are identical whichever executor ran 
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from concurrent.futures import Executor, Future, as_completed
 from dataclasses import dataclass, field
 
@@ -52,20 +52,25 @@ def evaluate(
     chunk_size: int = DEFAULT_CHUNK_SIZE,
     progress: bool = True,
     on_chunk: Callable[[int, SceneOutput], None] | None = None,
-    done: dict[int, SceneOutput] | None = None,
+    done: Mapping[int, SceneOutput | None] | None = None,
     executor: Executor | None = None,
+    collect: bool = True,
 ) -> Evaluation:
     """Evaluate every design point of ``plan``.
 
-    ``on_chunk(index, output)`` sees each newly finished chunk (the run record checkpoints it);
-    ``done`` holds chunks finished by an earlier, interrupted run, which are not recomputed;
-    ``executor`` runs the chunks elsewhere (``compile_s`` then counts only the local warm-up).
+    ``on_chunk(index, output)`` sees each newly finished chunk (the run record checkpoints it
+    and streams it into results.nc); ``done`` holds chunks finished by an earlier, interrupted
+    run, which are not recomputed; ``executor`` runs the chunks elsewhere (``compile_s`` then
+    counts only the local warm-up). With ``collect=False`` no chunk is kept (``on_chunk`` has
+    them all; the Evaluation holds the timings only), so memory does not grow with the study,
+    and ``done`` needs only its keys.
     """
     if chunk_size < 1:
         msg = f"chunk_size = {chunk_size} must be a positive number of design points"
         raise ValueError(msg)
-    parts: dict[int, SceneOutput] = dict(done or {})
-    todo = [(i, part) for i, part in enumerate(chunks(plan.runs, chunk_size)) if i not in parts]
+    finished = set(done or {})
+    parts: dict[int, SceneOutput] = {i: o for i, o in (done or {}).items() if o is not None}
+    todo = [(i, part) for i, part in enumerate(chunks(plan.runs, chunk_size)) if i not in finished]
     t0 = time.perf_counter()
     if todo:
         evaluate_chunk(plan, slice(todo[0][1].start, todo[0][1].start + 1))
@@ -82,14 +87,16 @@ def evaluate(
     )
     with bar:
         for index, part, out in _results(plan, todo, executor):
-            parts[index] = out
+            if collect:
+                parts[index] = out
             if on_chunk is not None:
                 on_chunk(index, out)
             bar.update(part.stop - part.start)
     run_s = time.perf_counter() - t1
-    ordered = [parts[i] for i in sorted(parts)]
-    scalars = {k: np.concatenate([p.scalars[k] for p in ordered]) for k in ordered[0].scalars}
-    curves = {k: np.concatenate([p.curves[k] for p in ordered]) for k in ordered[0].curves}
+    ordered = [parts[i] for i in sorted(parts)] if collect else []
+    first = ordered[0] if ordered else SceneOutput({}, {})
+    scalars = {k: np.concatenate([p.scalars[k] for p in ordered]) for k in first.scalars}
+    curves = {k: np.concatenate([p.curves[k] for p in ordered]) for k in first.curves}
     timings = {
         "compile_s": compile_s,
         "run_s": run_s,

@@ -22,11 +22,12 @@ import xarray as xr
 from studies import provenance, tracking
 from studies.plan import Plan, plan_study
 from studies.report import write_analysis
-from studies.results import build_dataset, write_netcdf
-from studies.runner import DEFAULT_CHUNK_SIZE, evaluate
+from studies.results_writer import ResultsWriter
+from studies.runner import DEFAULT_CHUNK_SIZE, chunks, evaluate
 from studies.scenes import SceneOutput
 
 CHECKPOINTS = "chunks"
+RESULTS_NAME = "results.nc"
 
 DEFAULT_OUTPUTS = Path("outputs")
 
@@ -94,7 +95,9 @@ def resume_run(run_id: str, outputs: Path = DEFAULT_OUTPUTS, progress: bool = Tr
         raise ValueError(f"run {record.run_id} is already finished: nothing to resume")
     plan = plan_study(folder / "study.toml")
     done = {
-        int(path.stem): _load_chunk(path) for path in sorted((folder / CHECKPOINTS).glob("*.npz"))
+        int(path.stem): path
+        for path in sorted((folder / CHECKPOINTS).glob("*.npz"))
+        if path.stem.isdigit()  # not a temporary file a kill left mid-write
     }
     record.status, record.error = "running", ""
     return _execute(plan, outputs, record, progress, done)
@@ -105,33 +108,45 @@ def _execute(
     outputs: Path,
     record: tracking.RunRecord,
     progress: bool,
-    done: dict[int, SceneOutput],
+    done: dict[int, Path],
     executor: Executor | None = None,
 ) -> RunResult:
     folder = Path(record.folder)
     record.write()
     tracking.register(outputs, record)
+    attrs = {
+        "run_id": record.run_id,
+        "git_commit": record.git_commit,
+        "git_dirty": record.git_dirty,
+        "versions": record.versions,
+        "created": record.started,
+    }
+    writer = None
     try:
+        writer = ResultsWriter(plan, folder / RESULTS_NAME, attrs, record.chunk_size)
+        parts = list(chunks(plan.runs, record.chunk_size))
+        for index in sorted(done):
+            writer.write(parts[index], _load_chunk(done[index]))
+
+        def finished(index: int, out: SceneOutput) -> None:
+            _save_chunk(folder, index, out)
+            writer.write(parts[index], out)
+
         ev = evaluate(
             plan,
             chunk_size=record.chunk_size,
             progress=progress,
-            on_chunk=lambda index, out: _save_chunk(folder, index, out),
-            done=done,
+            on_chunk=finished,
+            done=dict.fromkeys(done),
             executor=executor,
+            collect=False,
         )
-        attrs = {
-            "run_id": record.run_id,
-            "git_commit": record.git_commit,
-            "git_dirty": record.git_dirty,
-            "versions": record.versions,
-            "timings": ev.timings,
-            "created": record.started,
-        }
-        ds = build_dataset(plan, ev, attrs)
-        files = [write_netcdf(ds, folder / "results.nc")]
+        files = [writer.close({"timings": ev.timings})]
+        ds = xr.open_dataset(files[0], cache=False)
         files += write_analysis(ds, folder)
     except BaseException as exc:
+        if writer is not None:
+            writer.abandon()
         record.status, record.finished, record.error = "failed", tracking.now(), repr(exc)
         record.write()
         tracking.register(outputs, record)
