@@ -82,21 +82,34 @@ def analyze(
         return xr.Dataset(attrs=attrs | {"analysed": json.dumps(present)})
     view, analysed = analyzed(ds, names)
     terms = taguchi.model_terms(view)
-    out = _frame(view, analysed, terms)
-    tables = {}
+    # The level codes once in memory, then one response at a time: a 10⁷-run result is never
+    # held whole.
+    base = view.drop_vars(list(view.data_vars))
+    base = base.assign_coords(
+        {f"{t}_level": base[f"{t}_level"].variable.copy(deep=False).load() for t in terms}
+    )  # the level codes stay in memory (4 B per run and term); factor values are read on use
+    out = _frame(base, view, analysed, terms)
+    grid = _grid(base) if design == "full_factorial" else None
+    tables, optima = {}, {}
     for name in analysed:
-        out["varies"].loc[name] = int(taguchi.varies(view, name))
-        tables[name] = anova(view, name, factors=terms, pool=pool)
-        _range(out, view, name, terms)
+        # a bare Variable: no coordinates to compare (and load) on assignment; view stays lazy
+        one = base.assign({name: view[name].variable.copy(deep=False).load()})
+        out["varies"].loc[name] = int(taguchi.varies(one, name))
+        tables[name] = anova(one, name, factors=terms, pool=pool)
+        _range(out, one, name, terms)
         _anova(out, tables[name], name)
-        _optimum(out, view, name, tables[name])
-        _interactions(out, view, name, tables[name])
-    if design == "full_factorial":
-        _factorial(out, view, analysed)
+        optima[name] = _optimum(out, one, name, tables[name])
+        _interactions(out, one, name, tables[name])
+        if grid is not None:
+            _factorial(out, one, name, grid)
+    if grid is not None:
+        out.coords["factor"] = grid[0]
+        out.coords["pair"] = [f"{a} x {b}" for i, a in enumerate(grid[0]) for b in grid[0][i + 1 :]]
     sn = {taguchi.sn_name(r) for r in names}
     optimised = [n for n in analysed if n not in sn and int(out["varies"].loc[n])]
     if len(optimised) > 1:
-        _tradeoff(out, view, optimised, tables)
+        lazy = base.assign({n: view[n].variable for n in optimised})
+        _tradeoff(out, lazy, optimised, tables, optima)
     for r in names:  # run means of replicated responses, for the renderers' run tables
         if taguchi.mean_name(view, r) != r and taguchi.mean_name(view, r) in analysed:
             out[taguchi.mean_name(view, r)] = view[taguchi.mean_name(view, r)]
@@ -110,8 +123,8 @@ def write_analysis_nc(an: xr.Dataset, folder: Path) -> Path:
 
 
 # --- the frame ------------------------------------------------------------------------------
-def _frame(view: xr.Dataset, names: list[str], terms: list[str]) -> xr.Dataset:
-    nlevels = max(int(view[f"{t}_level"].max()) + 1 for t in terms) if terms else 1
+def _frame(base: xr.Dataset, view: xr.Dataset, names: list[str], terms: list[str]) -> xr.Dataset:
+    nlevels = max(int(base[f"{t}_level"].max()) + 1 for t in terms) if terms else 1
     pairs = list(taguchi.interaction_pairs(view))
     sources = [*terms, "error", "total"]
     nan = np.nan
@@ -156,7 +169,7 @@ def _frame(view: xr.Dataset, names: list[str], terms: list[str]) -> xr.Dataset:
         "interaction_pooled": full(("response", "interaction"), 0, np.int8),
         "interaction_mean": full(("response", "interaction", "level_a", "level_b")),
     }
-    value, units = _level_values(view, terms, nlevels)
+    value, label, units = _level_values(base, terms, nlevels)
     coords = {
         "response": names,
         "term": terms,
@@ -164,6 +177,7 @@ def _frame(view: xr.Dataset, names: list[str], terms: list[str]) -> xr.Dataset:
         "source": sources,
         "interaction": [f"{a} x {b}" for a, b in pairs],
         "level_value": (("term", "level"), value),
+        "level_label": (("term", "level"), label),
         "term_units": ("term", units),
         "is_factor": ("term", [int(t in taguchi.factor_names(view)) for t in terms]),
         "interaction_a": ("interaction", [a for a, _ in pairs]),
@@ -172,17 +186,22 @@ def _frame(view: xr.Dataset, names: list[str], terms: list[str]) -> xr.Dataset:
     return xr.Dataset(data, coords=coords)
 
 
-def _level_values(view: xr.Dataset, terms: list[str], nlevels: int) -> tuple[np.ndarray, list[str]]:
-    """The value of each term at each level (NaN where not numeric or absent) and units."""
+def _level_values(
+    base: xr.Dataset, terms: list[str], nlevels: int
+) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """Each term's value at each level (NaN where not numeric or absent), its label ("" where
+    absent: the value as text, or the 1-based level number without a value) and its units."""
     value = np.full((len(terms), nlevels), np.nan)
+    label = np.full((len(terms), nlevels), "", dtype=object)
     units = []
     for i, t in enumerate(terms):
-        numeric = t in view.coords and np.issubdtype(view[t].dtype, np.number)
-        if numeric:
-            for level, v in taguchi.level_values(view, t).items():
+        numeric = t in base.coords and np.issubdtype(base[t].dtype, np.number)
+        for level, v in taguchi.level_values(base, t).items():
+            label[i, level] = str(v)
+            if numeric:
                 value[i, level] = float(v)
-        units.append(str(view[t].attrs.get("units", "")) if t in view.coords else "")
-    return value, units
+        units.append(str(base[t].attrs.get("units", "")) if t in base.coords else "")
+    return value, label, units
 
 
 # --- per response ---------------------------------------------------------------------------
@@ -206,7 +225,7 @@ def _anova(out: xr.Dataset, table: Any, name: str) -> None:
     out["anova_note"].loc[at] = table.attrs["note"]
 
 
-def _optimum(out: xr.Dataset, view: xr.Dataset, name: str, table: Any) -> None:
+def _optimum(out: xr.Dataset, view: xr.Dataset, name: str, table: Any) -> taguchi.Prediction:
     p = taguchi.predict_optimum(view, name, table=table)
     at = {"response": name}
     levels = [p.levels.get(t, -1) for t in out["term"].values]
@@ -221,6 +240,7 @@ def _optimum(out: xr.Dataset, view: xr.Dataset, name: str, table: Any) -> None:
         ("error_dof", p.error_dof),
     ):
         out[v].loc[at] = value
+    return p
 
 
 def _interactions(out: xr.Dataset, view: xr.Dataset, name: str, table: Any) -> None:
@@ -239,62 +259,82 @@ def _interactions(out: xr.Dataset, view: xr.Dataset, name: str, table: Any) -> N
 
 
 # --- full factorial: the computer-experiment view -------------------------------------------
-def _factorial(out: xr.Dataset, view: xr.Dataset, names: list[str]) -> None:
-    """Main, two-factor and remainder SS and Sobol indices of each response that is finite in
-    every run of a complete full factorial (otherwise the grid has holes: left NaN)."""
+def _grid(base: xr.Dataset) -> tuple[list[str], tuple[int, ...], np.ndarray] | None:
+    """Factors, level counts and grid order of a complete full factorial (None otherwise)."""
     try:
-        factors, counts, order = grid_order(view)
+        return grid_order(base)
     except ValueError:
+        return None
+
+
+def _factorial(
+    out: xr.Dataset,
+    one: xr.Dataset,
+    name: str,
+    grid: tuple[list[str], tuple[int, ...], np.ndarray],
+) -> None:
+    """Main, two-factor and remainder SS and Sobol indices of a response that is finite in
+    every run of a complete full factorial (otherwise the grid has holes: left NaN)."""
+    factors, counts, order = grid
+    if "main_SS" not in out:
+        nr, nf, most = out.sizes["response"], len(factors), max(counts)
+        npairs = nf * (nf - 1) // 2
+        out.update(
+            {
+                "main_SS": (("response", "factor"), np.full((nr, nf), np.nan)),
+                "first_order": (("response", "factor"), np.full((nr, nf), np.nan)),
+                "total_effect": (("response", "factor"), np.full((nr, nf), np.nan)),
+                "pair_SS": (("response", "pair"), np.full((nr, npairs), np.nan)),
+                "remainder_SS": ("response", np.full(nr, np.nan)),
+                "total_SS": ("response", np.full(nr, np.nan)),
+                "map_x": ("response", np.full(nr, "", dtype=object)),
+                "map_y": ("response", np.full(nr, "", dtype=object)),
+                "map_mean": (
+                    ("response", "map_level_y", "map_level_x"),
+                    np.full((nr, most, most), np.nan),
+                ),
+            }
+        )
+    y = one[name].values.astype(float)[order]
+    if not np.isfinite(y).all():
         return
-    pairs = [f"{a} x {b}" for i, a in enumerate(factors) for b in factors[i + 1 :]]
-    nr, nf, most = out.sizes["response"], len(factors), max(counts)
-    new = {
-        "main_SS": (("response", "factor"), np.full((nr, nf), np.nan)),
-        "first_order": (("response", "factor"), np.full((nr, nf), np.nan)),
-        "total_effect": (("response", "factor"), np.full((nr, nf), np.nan)),
-        "pair_SS": (("response", "pair"), np.full((nr, len(pairs)), np.nan)),
-        "remainder_SS": ("response", np.full(nr, np.nan)),
-        "total_SS": ("response", np.full(nr, np.nan)),
-        "map_x": ("response", np.full(nr, "", dtype=object)),
-        "map_y": ("response", np.full(nr, "", dtype=object)),
-        "map_mean": (("response", "map_level_y", "map_level_x"), np.full((nr, most, most), np.nan)),
-    }
-    for i, name in enumerate(out["response"].values):
-        if name not in names:
-            continue
-        y = view[name].values.astype(float)[order]
-        if not np.isfinite(y).all():
-            continue
-        grid = y.reshape(counts)
-        dec = decompose(grid, tuple(factors))
-        new["main_SS"][1][i], new["pair_SS"][1][i] = dec.main, dec.pair
-        new["first_order"][1][i], new["total_effect"][1][i] = dec.first_order, dec.total_effect
-        new["remainder_SS"][1][i], new["total_SS"][1][i] = dec.remainder, dec.total
-        if nf >= 2:
-            a, b = np.argsort(-dec.total_effect, kind="stable")[:2]
-            x, yy = sorted((int(a), int(b)))
-            mean = grid.mean(axis=tuple(k for k in range(nf) if k not in (x, yy)))
-            new["map_x"][1][i], new["map_y"][1][i] = factors[x], factors[yy]
-            new["map_mean"][1][i, : counts[yy], : counts[x]] = mean.T
-    out.update(new)
-    out.coords["factor"] = factors
-    out.coords["pair"] = pairs
+    i = out.indexes["response"].get_loc(name)
+    values = y.reshape(counts)
+    dec = decompose(values, tuple(factors))
+    out["main_SS"].values[i], out["pair_SS"].values[i] = dec.main, dec.pair
+    out["first_order"].values[i], out["total_effect"].values[i] = dec.first_order, dec.total_effect
+    out["remainder_SS"].values[i], out["total_SS"].values[i] = dec.remainder, dec.total
+    if len(factors) >= 2:
+        a, b = np.argsort(-dec.total_effect, kind="stable")[:2]
+        x, yy = sorted((int(a), int(b)))
+        mean = values.mean(axis=tuple(k for k in range(len(factors)) if k not in (x, yy)))
+        out["map_x"].values[i], out["map_y"].values[i] = factors[x], factors[yy]
+        out["map_mean"].values[i, : counts[yy], : counts[x]] = mean.T
 
 
 # --- several responses ----------------------------------------------------------------------
-def _tradeoff(out: xr.Dataset, view: xr.Dataset, names: list[str], tables: dict) -> None:
-    result = taguchi.tradeoff(view, names, tables={n: tables[n] for n in names})
+def _tradeoff(
+    out: xr.Dataset,
+    view: xr.Dataset,
+    names: list[str],
+    tables: dict[str, Any],
+    optima: dict[str, taguchi.Prediction],
+) -> None:
+    result = taguchi.tradeoff(
+        view, names, tables={n: tables[n] for n in names}, optima={n: optima[n] for n in names}
+    )
     terms = list(out["term"].values)
-    chosen = np.array([result.levels.get(t, -1) for t in terms], dtype=np.int32)
     table = result.table
-    out["chosen_level"] = ("term", chosen)
+    out["chosen_level"] = ("term", np.array([result.levels.get(t, -1) for t in terms], np.int32))
     out["decided_by"] = (
         "term",
-        [str(table.loc[t, "decided by"]) if t in table.index else "" for t in terms],
+        np.array(
+            [str(table.loc[t, "decided by"]) if t in table.index else "" for t in terms], object
+        ),
     )
     out["conflict"] = (
         "term",
-        [int(bool(table.loc[t, "conflict"])) if t in table.index else 0 for t in terms],
+        np.array([int(bool(table.loc[t, "conflict"])) if t in table.index else 0 for t in terms]),
     )
     compromise = np.full(out.sizes["response"], np.nan)
     half = np.full(out.sizes["response"], np.nan)

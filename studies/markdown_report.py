@@ -100,10 +100,21 @@ def _value(value: Any, units: str) -> str:
     return f"{shown} {units}".rstrip()
 
 
-def _level_text(ds: xr.Dataset, factor: str, level: int) -> str:
+def _levels(an: xr.Dataset, term: str) -> dict[int, Any]:
+    """Level index → the term's value (a number, else its label), for the levels it has."""
+    values = an["level_value"].sel(term=term).values
+    labels = an["level_label"].sel(term=term).values
+    return {
+        i: float(v) if np.isfinite(v) else str(label)
+        for i, (v, label) in enumerate(zip(values, labels, strict=True))
+        if label != ""
+    }
+
+
+def _level_text(an: xr.Dataset, factor: str, level: int) -> str:
     """1-based level number and the factor's value: ``2 (9 deg)``."""
-    value = taguchi.level_values(ds, factor)[level]
-    return f"{level + 1} ({_value(value, _units(ds, factor))})"
+    units = str(an["term_units"].sel(term=factor).values)
+    return f"{level + 1} ({_value(_levels(an, factor)[level], units)})"
 
 
 def _figure(name: str, caption: str, figures: set[str]) -> list[str]:
@@ -134,8 +145,8 @@ def _report(
         lines += _other_figures(lines, figures)
         return "\n".join(lines).rstrip() + "\n", ""
     view = ds.assign({n: an[n] for n in an.data_vars if "run" in an[n].dims})
-    lines += _design(view)
-    lines += _runs(view, responses)
+    lines += _design(view, an)
+    lines += _runs(view, an, responses)
     optimised = []
     for r in responses:
         name = taguchi.mean_name(view, r)
@@ -197,7 +208,7 @@ def _header(ds: xr.Dataset, responses: list[str], analysed: list[str]) -> list[s
     return [f"# {title}", "", _table(["", ""], rows), ""]
 
 
-def _design(ds: xr.Dataset) -> list[str]:
+def _design(ds: xr.Dataset, an: xr.Dataset) -> list[str]:
     factors = taguchi.factor_names(ds)
     name = str(ds.attrs.get("design", ""))
     columns = json.loads(ds.attrs.get("array_columns", "{}"))
@@ -218,7 +229,7 @@ def _design(ds: xr.Dataset) -> list[str]:
         col = columns.get(label)
         col_levels = array_levels[col - 1] if col and array_levels else None
         if label in factors:
-            values = taguchi.level_values(ds, label)
+            values = _levels(an, label)
             units = _units(ds, label)
             role = "factor"
             if col_levels and len(values) < col_levels:
@@ -247,7 +258,7 @@ def _array_levels(name: str) -> list[int] | None:
         return None
 
 
-def _runs(view: xr.Dataset, responses: list[str]) -> list[str]:
+def _runs(view: xr.Dataset, an: xr.Dataset, responses: list[str]) -> list[str]:
     n = view.sizes["run"]
     lines = ["## Runs", ""]
     if n > MAX_RUN_ROWS:
@@ -259,10 +270,7 @@ def _runs(view: xr.Dataset, responses: list[str]) -> list[str]:
     rows = []
     for i in range(n):
         row: list[Any] = [i + 1]
-        row += [
-            _value(taguchi.level_values(view, f)[int(view[f"{f}_level"].values[i])], "")
-            for f in factors
-        ]
+        row += [_value(_levels(an, f)[int(view[f"{f}_level"].values[i])], "") for f in factors]
         row += [_num(float(view[m].values[i])) for m in means]
         rows.append(row)
     note = (
@@ -293,7 +301,7 @@ def _range_rows(view: xr.Dataset, an: xr.Dataset, name: str) -> tuple[list[str],
                 *[_num(float(k)) for k in row.k.values[:nlevels]],
                 _num(float(row.R)),
                 int(row["rank"]),
-                _level_text(view, f, int(row.best_level)),
+                _level_text(an, f, int(row.best_level)),
             ]
         )
     return header, rows
@@ -387,7 +395,7 @@ def _interaction_lines(
         means = r.interaction_mean.values[i]
         la = np.flatnonzero(np.isfinite(means).any(axis=1))
         lb = np.flatnonzero(np.isfinite(means).any(axis=0))
-        va, vb = taguchi.level_values(view, a), taguchi.level_values(view, b)
+        va, vb = _levels(an, a), _levels(an, b)
         ua, ub = _units(view, a), _units(view, b)
         head = [f"{a} \\ {b}", *[_value(vb[j], ub) for j in lb]]
         body = [[_value(va[i_a], ua), *[_num(float(means[i_a, j])) for j in lb]] for i_a in la]
@@ -475,7 +483,7 @@ def prediction(an: xr.Dataset, name: str) -> taguchi.Prediction:
 def _optimum_lines(view: xr.Dataset, an: xr.Dataset, name: str, response: str) -> list[str]:
     p = prediction(an, name)
     rows = [
-        [f, p.levels[f] + 1, _value(taguchi.level_values(view, f)[p.levels[f]], _units(view, f))]
+        [f, p.levels[f] + 1, _value(_levels(an, f)[p.levels[f]], _units(view, f))]
         for f in taguchi.factor_names(view)
     ]
     units = f" {p.units}" if p.units and p.units != "1" else ""
@@ -548,7 +556,7 @@ def _tradeoff(
         ]
         rows.append([shown.get(m, m), str(r.sense.values), *cells])
     chosen = {f: int(an["chosen_level"].sel(term=f)) for f in factors}
-    rows.append(["**chosen level**", "", *[_level_text(view, f, chosen[f]) for f in factors]])
+    rows.append(["**chosen level**", "", *[_level_text(an, f, chosen[f]) for f in factors]])
     rows.append(
         [
             "decided by",

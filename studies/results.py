@@ -18,6 +18,7 @@ import json
 from pathlib import Path
 from typing import Any
 
+import netCDF4
 import numpy as np
 import xarray as xr
 
@@ -25,6 +26,22 @@ from studies.plan import Plan
 from studies.runner import Evaluation
 
 COMPRESSION = {"zlib": True, "complevel": 4}
+# netCDF-C keeps a cache of decompressed chunks per variable (64 MiB by default): reading or
+# writing every variable of a 10⁷-run file once, in order, would fill a gigabyte of them. One
+# mebibyte holds the few chunks that sequential access touches.
+CHUNK_CACHE_BYTES = 1 << 20
+
+
+def small_chunk_cache() -> None:
+    """Make netCDF files opened from now on keep a small chunk cache per variable."""
+    netCDF4.set_chunk_cache(CHUNK_CACHE_BYTES)
+
+
+def open_results(path: Path) -> xr.Dataset:
+    """A results file opened lazily, memory flat in its size: variables are read when used
+    and not kept (``cache=False``), with a small chunk cache."""
+    small_chunk_cache()
+    return xr.open_dataset(path, cache=False)
 
 
 def build_dataset(plan: Plan, ev: Evaluation, attrs: dict[str, Any]) -> xr.Dataset:

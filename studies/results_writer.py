@@ -23,6 +23,7 @@ from studies.results import (
     global_attributes,
     layout,
     response_layout,
+    small_chunk_cache,
     stored_values,
     write_netcdf,
 )
@@ -37,6 +38,7 @@ class ResultsWriter:
     def __init__(self, plan: Plan, path: Path, attrs: dict[str, Any], chunk_size: int) -> None:
         self.plan, self.path = plan, Path(path)
         self.partial = self.path.with_name(self.path.name + PARTIAL_SUFFIX)
+        small_chunk_cache()
         write_netcdf(layout(plan, attrs), self.partial, atomic=False)
         self.file = netCDF4.Dataset(self.partial, "r+")
         self.file.set_auto_maskandscale(False)

@@ -93,17 +93,19 @@ def _level_table(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Levels of ``f`` with a finite response, their mean response and the factor's value
     there (NaN where it has none); O(N) by ``bincount``."""
-    codes = ds[f"{f}_level"].values[finite].astype(np.int64)
+    codes = ds[f"{f}_level"].values
     n = int(codes.max()) + 1
-    counts = np.bincount(codes, minlength=n)
-    sums = np.bincount(codes, weights=y.values.astype(float)[finite], minlength=n)
+    complete = bool(finite.all())
+    counts = np.bincount(codes, weights=None if complete else finite, minlength=n)
+    values = y.values if complete else np.where(finite, y.values, 0.0)
+    sums = np.bincount(codes, weights=values, minlength=n)
     present = np.flatnonzero(counts)
     k = sums[present] / counts[present]
     value = np.full(present.size, np.nan)
     if f in ds.coords and np.issubdtype(ds[f].dtype, np.number):
         first = np.zeros(n, dtype=np.int64)
         first[codes[::-1]] = np.arange(codes.size)[::-1]  # the last write wins: the first run
-        value = ds[f].values[finite][first[present]].astype(float)
+        value = ds[f].values[first[present]].astype(float)
     return present, k, value
 
 
@@ -206,8 +208,11 @@ def anova(
         msg = f"{sorted(clash)} named both as factor and as error column"
         raise ValueError(msg)
     y_da, finite = _response(ds, response)
-    y = y_da.values.astype(float)[finite]
-    codes = {f: ds[f"{f}_level"].values[finite] for f in names}
+    complete = bool(finite.all())
+    y = y_da.values.astype(float) if complete else y_da.values.astype(float)[finite]
+    codes = {
+        f: ds[f"{f}_level"].values if complete else ds[f"{f}_level"].values[finite] for f in names
+    }
     if pool is None and "pool" in ds.attrs:
         pool = json.loads(ds.attrs["pool"])
     pooled = list(pool) if pool is not None else []

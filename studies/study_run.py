@@ -22,6 +22,7 @@ import xarray as xr
 from studies import provenance, tracking
 from studies.plan import Plan, plan_study
 from studies.report import write_analysis
+from studies.results import open_results
 from studies.results_writer import ResultsWriter
 from studies.runner import DEFAULT_CHUNK_SIZE, chunks, evaluate
 from studies.scenes import SceneOutput
@@ -142,7 +143,7 @@ def _execute(
             collect=False,
         )
         files = [writer.close({"timings": ev.timings})]
-        ds = xr.open_dataset(files[0], cache=False)
+        ds = open_results(files[0])
         files += write_analysis(ds, folder)
     except BaseException as exc:
         if writer is not None:

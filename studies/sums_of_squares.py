@@ -50,7 +50,8 @@ def is_balanced(terms: Sequence[np.ndarray]) -> bool:
     for a in range(len(terms)):
         for b in range(a + 1, len(terms)):
             width = counts[b].size
-            joint = np.bincount(terms[a] * width + terms[b], minlength=counts[a].size * width)
+            combined = terms[a].astype(np.int64) * width + terms[b]
+            joint = np.bincount(combined, minlength=counts[a].size * width)
             expected = np.outer(counts[a], counts[b]) / total
             if not np.array_equal(joint.reshape(counts[a].size, width), expected):
                 return False
@@ -66,7 +67,7 @@ def term_sums_of_squares(
     """
     d = centred(np.asarray(y, dtype=float))
     total = float(d @ d)
-    codes = [np.asarray(t, dtype=np.int64) for t in terms]
+    codes = [np.asarray(t) for t in terms]
     ss, dof = _balanced(d, codes) if is_balanced(codes) else _sequential(d, codes)
     return without_round_off(ss, total), dof, total
 
@@ -87,7 +88,7 @@ def _dummies(terms: list[np.ndarray]) -> tuple[list[np.ndarray], list[np.ndarray
     present, recoded = [], []
     for t in terms:
         levels = np.unique(t)
-        lookup = np.full(int(levels.max()) + 1, -1, dtype=np.int64)
+        lookup = np.full(int(levels.max()) + 1, -1, dtype=np.int32)
         lookup[levels[1:]] = np.arange(levels.size - 1)
         present.append(levels[1:])
         recoded.append(lookup[t])
@@ -120,7 +121,8 @@ def normal_equations(
             if wb == 0:
                 continue
             both = keep & (cb >= 0)
-            joint = np.bincount(ca[both] * wb + cb[both], minlength=wa * wb).reshape(wa, wb)
+            combined = ca[both].astype(np.int64) * wb + cb[both]
+            joint = np.bincount(combined, minlength=wa * wb).reshape(wa, wb)
             sb = slice(starts[b], starts[b] + wb)
             gram[sa, sb] = joint
             gram[sb, sa] = joint.T

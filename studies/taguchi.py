@@ -301,7 +301,9 @@ class _Model:
         self.pairs = interaction_columns(ds)
         y = ds[response].values.astype(float)
         self.finite = np.isfinite(y)
-        self.y = y[self.finite]
+        self.complete = bool(self.finite.all())
+        self.y = y if self.complete else y[self.finite]
+        self.y_all = y if self.complete else np.where(self.finite, y, 0.0)  # for level sums
         self.grand = float(self.y.mean())
         self.means = {t: self.level_means(t) for t in self.terms}
         dof = sum(int(number(self.table, t, "dof")) for t in self.terms)
@@ -311,8 +313,8 @@ class _Model:
         """Mean response at each level index of a factor or column (NaN where no value)."""
         codes = self.ds[f"{name}_level"].values
         n = int(codes.max()) + 1
-        counts = np.bincount(codes[self.finite], minlength=n)
-        sums = np.bincount(codes[self.finite], weights=self.y, minlength=n)
+        counts = np.bincount(codes, weights=None if self.complete else self.finite, minlength=n)
+        sums = np.bincount(codes, weights=self.y_all, minlength=n)
         with np.errstate(invalid="ignore", divide="ignore"):
             return sums / counts
 
@@ -525,12 +527,14 @@ def tradeoff(
     responses: Sequence[str],
     alpha: float = ALPHA,
     tables: Mapping[str, pd.DataFrame] | None = None,
+    optima: Mapping[str, Prediction] | None = None,
 ) -> TradeOff:
     """Trade-off summary of several responses on the same runs (each with its own ANOVA;
-    ``tables``: those ANOVAs when the caller has them already)."""
+    ``tables`` and ``optima``: those ANOVAs and optima when the caller has them already)."""
     factors = factor_names(ds)
     tables = {r: anova_table(ds, r) for r in responses} if tables is None else tables
-    optima = {r: predict_optimum(ds, r, alpha=alpha, table=tables[r]) for r in responses}
+    if optima is None:
+        optima = {r: predict_optimum(ds, r, alpha=alpha, table=tables[r]) for r in responses}
     share = {r: tables[r]["contribution"] for r in responses}
     rows = {}
     levels = {}
