@@ -8,7 +8,8 @@ By default chunks run here, one after another (each chunk is already parallel in
 compiled kernels). Any ``concurrent.futures.Executor`` can run them instead — a Dask cluster's
 ``Client.get_executor()`` (see :func:`dask_executor`) or a process pool started with the
 ``spawn`` method (the kernels' threading layer must not be forked). Every chunk is the
-same pure function of the plan, so results are identical whichever executor ran them.
+same pure function of its design points, so results are identical whichever executor ran
+them; a task carries only its chunk's points (never the whole plan).
 """
 
 from __future__ import annotations
@@ -17,12 +18,13 @@ import time
 from collections.abc import Callable, Iterator, Mapping
 from concurrent.futures import Executor, Future, as_completed
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from tqdm.auto import tqdm
 
 from studies.plan import Plan
-from studies.scenes import SceneOutput
+from studies.scenes import Scene, SceneOutput, get_scene
 
 DEFAULT_CHUNK_SIZE = 2048
 
@@ -41,10 +43,33 @@ def chunks(runs: int, size: int) -> Iterator[slice]:
         yield slice(start, min(start + size, runs))
 
 
+def chunk_points(plan: Plan, part: slice) -> dict[str, np.ndarray]:
+    """The SI parameter values of the design points ``part``."""
+    return {k: v[part] for k, v in plan.points.items()}
+
+
 def evaluate_chunk(plan: Plan, part: slice) -> SceneOutput:
-    points = {k: v[part] for k, v in plan.points.items()}
     d = plan.definition
-    return plan.scene.evaluate(points, plan.settings, list(plan.responses), list(d.curves))
+    return plan.scene.evaluate(
+        chunk_points(plan, part), plan.settings, list(plan.responses), list(d.curves)
+    )
+
+
+_WORKER_SCENES: dict[str, Scene] = {}
+
+
+def evaluate_part(
+    scene: str,
+    points: dict[str, np.ndarray],
+    settings: dict[str, Any],
+    responses: list[str],
+    curves: list[str],
+) -> SceneOutput:
+    """One chunk on an executor's worker: only the chunk's points travel with the task; the
+    scene is built once per worker process (its caches are reused across chunks)."""
+    if scene not in _WORKER_SCENES:
+        _WORKER_SCENES[scene] = get_scene(scene)
+    return _WORKER_SCENES[scene].evaluate(points, settings, responses, curves)
 
 
 def evaluate(
@@ -114,8 +139,17 @@ def _results(
         for index, part in todo:
             yield index, part, evaluate_chunk(plan, part)
         return
+    d = plan.definition
     futures: dict[Future[SceneOutput], tuple[int, slice]] = {
-        executor.submit(evaluate_chunk, plan, part): (index, part) for index, part in todo
+        executor.submit(
+            evaluate_part,
+            d.scene,
+            chunk_points(plan, part),
+            plan.settings,
+            list(plan.responses),
+            list(d.curves),
+        ): (index, part)
+        for index, part in todo
     }
     for future in as_completed(futures):
         index, part = futures[future]

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import multiprocessing
-from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+import pickle
+from concurrent.futures import Executor, Future, ProcessPoolExecutor, ThreadPoolExecutor
 
 import numpy as np
 import pytest
@@ -65,3 +66,42 @@ def test_dask_cluster_gives_identical_results(serial) -> None:
             plan_text(STUDY), chunk_size=4, progress=False, executor=client.get_executor()
         )
     assert_same(serial, clustered)
+
+
+def test_dask_local_cluster_of_worker_processes_gives_identical_results(serial) -> None:
+    distributed = pytest.importorskip("dask.distributed")
+    with (
+        distributed.LocalCluster(
+            n_workers=2, processes=True, threads_per_worker=1, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        assert len(client.scheduler_info()["workers"]) == 2
+        clustered = evaluate(
+            plan_text(STUDY), chunk_size=4, progress=False, executor=client.get_executor()
+        )
+    assert_same(serial, clustered)
+
+
+class Recorder(Executor):
+    """Runs each task at once and records the pickled size of what it was given."""
+
+    def __init__(self) -> None:
+        self.sizes: list[int] = []
+
+    def submit(self, fn, /, *args, **kwargs):
+        self.sizes.append(len(pickle.dumps((fn, args, kwargs))))
+        future: Future = Future()
+        future.set_result(fn(*args, **kwargs))
+        return future
+
+
+def test_a_task_carries_only_its_chunk(serial) -> None:
+    # What an executor receives for one chunk: the chunk's points, not the whole plan.
+    small, big = Recorder(), Recorder()
+    assert_same(serial, evaluate(plan_text(STUDY), chunk_size=4, progress=False, executor=small))
+    levels = str(list(range(10, 110)))  # 300 runs instead of 15, the same chunk size
+    large = plan_text(STUDY.replace("[16.0, 18.0, 20.0, 22.0, 24.0]", levels))
+    evaluate(large, chunk_size=4, progress=False, executor=big)
+    assert len(big.sizes) == 75
+    assert max(big.sizes) <= 1.2 * max(small.sizes)  # tasks do not grow with the study
