@@ -393,8 +393,8 @@ def _interaction_lines(
     pairs = zip(an["interaction_a"].values, an["interaction_b"].values, strict=True)
     for i, (a, b) in enumerate(pairs):
         means = r.interaction_mean.values[i]
-        la = np.flatnonzero(np.isfinite(means).any(axis=1))
-        lb = np.flatnonzero(np.isfinite(means).any(axis=0))
+        la = np.flatnonzero(np.isfinite(means).any(axis=1)).tolist()
+        lb = np.flatnonzero(np.isfinite(means).any(axis=0)).tolist()
         va, vb = _levels(an, a), _levels(an, b)
         ua, ub = _units(view, a), _units(view, b)
         head = [f"{a} \\ {b}", *[_value(vb[j], ub) for j in lb]]

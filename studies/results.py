@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
+from typing import Any, Final
 
 import netCDF4
 import numpy as np
@@ -25,7 +25,8 @@ import xarray as xr
 from studies.plan import Plan
 from studies.runner import Evaluation
 
-COMPRESSION = {"zlib": True, "complevel": 4}
+COMPRESSION_LEVEL: Final = 4
+COMPRESSION = {"zlib": True, "complevel": COMPRESSION_LEVEL}
 # netCDF-C keeps a cache of decompressed chunks per variable (64 MiB by default): reading or
 # writing every variable of a 10⁷-run file once, in order, would fill a gigabyte of them. One
 # mebibyte holds the few chunks that sequential access touches.
@@ -214,5 +215,5 @@ def as_grid(ds: xr.Dataset) -> xr.Dataset:
             continue
         values = da.values[order].reshape(counts + da.shape[1:])
         data_vars[name] = ((*factors, *da.dims[1:]), values, dict(da.attrs))
-    coords |= {c: ds[c] for c in ds.coords if "run" not in ds[c].dims}
+    coords |= {str(c): ds[c] for c in ds.coords if "run" not in ds[c].dims}
     return xr.Dataset(data_vars, coords=coords, attrs=dict(ds.attrs))

@@ -18,7 +18,7 @@ import numpy as np
 
 from studies.plan import Plan
 from studies.results import (
-    COMPRESSION,
+    COMPRESSION_LEVEL,
     curve_layout,
     global_attributes,
     layout,
@@ -60,15 +60,14 @@ class ResultsWriter:
         attrs: dict[str, Any],
         chunks: tuple[int, ...],
     ) -> None:
-        fill = {"fill_value": np.nan} if dtype is np.float64 else {"fill_value": False}
         variable = self.file.createVariable(
             name,
-            dtype,
+            np.dtype(dtype),
             dims,
-            zlib=COMPRESSION["zlib"],
-            complevel=COMPRESSION["complevel"],
+            zlib=True,
+            complevel=COMPRESSION_LEVEL,
             chunksizes=chunks,
-            **fill,
+            fill_value=np.nan if dtype is np.float64 else False,
         )
         variable.setncatts(attrs)
         self.dtypes[name] = dtype
