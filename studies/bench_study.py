@@ -22,6 +22,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+import netCDF4
 import numpy as np
 
 from studies.definition import find_study
@@ -81,6 +82,8 @@ def bench_study(points: int, step: float, repeat: int) -> dict[str, Any]:  # noq
         timings = json.loads(record.read_text(encoding="utf-8"))["timings"]
         (results,) = outputs.glob("bench_study/*/results.nc")
         size = results.stat().st_size
+        with netCDF4.Dataset(results) as stored:
+            stored_runs = len(stored.dimensions["run"])
         shutil.rmtree(outputs, ignore_errors=True)
     runs = int(math.prod(level_counts(points)))
     return {
@@ -96,4 +99,5 @@ def bench_study(points: int, step: float, repeat: int) -> dict[str, Any]:  # noq
         "wall_over_compute": wall / timings["run_s"],
         "peak_rss_mb": round(peak, 1),
         "results_nc_mb": round(size / 1e6, 1),
+        "results_nc_runs": stored_runs,
     }

@@ -78,3 +78,15 @@ def test_bench_figure_has_one_bar_per_timing(tmp_path) -> None:
     assert path is not None
     assert path.stat().st_size > 1000
     assert save_bench_figure("empty", {"c_reference": "skipped"}, tmp_path / "none.png") is None
+
+
+def test_bench_study_runs_the_valve_study_end_to_end() -> None:
+    from studies.bench_study import bench_study, level_counts
+
+    assert level_counts(10**6) == (40, 25, 25, 40)
+    assert level_counts(10**7) == (100, 40, 50, 50)
+    figures = bench_study(16, 0.5, 1)
+    assert figures["points"] == figures["results_nc_runs"] == 16
+    assert figures["end_to_end"]["seconds"] > figures["compute"]["seconds"] > 0
+    assert figures["wall_over_compute"] > 1
+    assert figures["peak_rss_mb"] > 0
