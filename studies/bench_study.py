@@ -62,8 +62,9 @@ def run_command(args: list[str]) -> tuple[float, float]:
     process = subprocess.Popen(args, stdout=subprocess.DEVNULL)
     _, status, usage = os.wait4(process.pid, 0)
     wall = time.perf_counter() - t0
-    if os.waitstatus_to_exitcode(status) != 0:
-        msg = f"{' '.join(args)} failed with exit code {os.waitstatus_to_exitcode(status)}"
+    process.returncode = os.waitstatus_to_exitcode(status)  # reaped here, not by Popen
+    if process.returncode != 0:
+        msg = f"{' '.join(args)} failed with exit code {process.returncode}"
         raise RuntimeError(msg)
     return wall, usage.ru_maxrss / 1024.0  # kB on Linux
 
