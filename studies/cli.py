@@ -59,7 +59,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--outputs", type=Path, default=Path("outputs"), help="run-folder root")
     run.add_argument(
         "--chunk-size",
-        type=int,
+        type=positive_int,
         default=None,
         help="design points per chunk (bounds memory; default: the runner's)",
     )
@@ -129,6 +129,18 @@ def _parser() -> argparse.ArgumentParser:
     bench.add_argument("--outputs", type=Path, default=Path("outputs"))
     bench.set_defaults(func=_cmd_bench)
     return p
+
+
+def positive_int(text: str) -> int:
+    """An argparse type: a whole number of at least 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1 or str(value) != text.strip():
+        msg = f"{text!r} is not a positive whole number of design points"
+        raise argparse.ArgumentTypeError(msg)
+    return value
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:

@@ -15,7 +15,13 @@ from typing import Any
 import numpy as np
 
 from studies import designs
-from studies.definition import StudyDefinition, StudyError, parse_study, read_study
+from studies.definition import (
+    StudyDefinition,
+    StudyError,
+    find_study,
+    parse_study,
+    read_study,
+)
 from studies.scenes import Scene, get_scene
 
 
@@ -44,17 +50,16 @@ class Plan:
 def plan_study(name_or_path: str | Path) -> Plan:
     """Read, validate and plan a catalogue study or a TOML file (StudyError if not runnable)."""
     definition, problems = read_study(name_or_path)
-    return _plan(definition, problems)
+    return _plan(definition, problems, str(find_study(name_or_path)))
 
 
 def plan_text(text: str, source: str = "<string>") -> Plan:
     """Like :func:`plan_study` for TOML text."""
     definition, problems = parse_study(text, source)
-    return _plan(definition, problems)
+    return _plan(definition, problems, source)
 
 
-def _plan(definition: StudyDefinition | None, problems: list[str]) -> Plan:
-    source = definition.source if definition else "<string>"
+def _plan(definition: StudyDefinition | None, problems: list[str], source: str) -> Plan:
     if definition is None or (problems and not definition.factors):
         raise StudyError(source, problems)
     scene = get_scene(definition.scene)

@@ -10,6 +10,7 @@ written.
 
 from __future__ import annotations
 
+import difflib
 import json
 import shutil
 from concurrent.futures import Executor
@@ -29,6 +30,7 @@ from studies.scenes import SceneOutput
 
 CHECKPOINTS = "chunks"
 RESULTS_NAME = "results.nc"
+ORIGINAL_STUDY = CHECKPOINTS + "/study.toml"  # the text the checkpoints were computed from
 
 DEFAULT_OUTPUTS = Path("outputs")
 
@@ -62,9 +64,10 @@ def run_plan(
     """Run a validated plan in a new run folder under ``outputs`` (chunks on ``executor``)."""
     d = plan.definition
     commit, dirty = provenance.git_state()
-    run_id = tracking.new_run_id(d.text)
-    folder = tracking.run_folder(outputs, d.name, run_id)
+    run_id, folder = tracking.run_folder(outputs, d.name, tracking.new_run_id(d.text))
     (folder / "study.toml").write_text(d.text, encoding="utf-8")
+    (folder / CHECKPOINTS).mkdir()
+    (folder / ORIGINAL_STUDY).write_text(d.text, encoding="utf-8")
     record = tracking.RunRecord(
         run_id=run_id,
         study=d.name,
@@ -94,6 +97,7 @@ def resume_run(run_id: str, outputs: Path = DEFAULT_OUTPUTS, progress: bool = Tr
     record = tracking.RunRecord(**json.loads((folder / "run.json").read_text(encoding="utf-8")))
     if record.status == "finished":
         raise ValueError(f"run {record.run_id} is already finished: nothing to resume")
+    _check_unchanged(folder / "study.toml", record.definition_sha256)
     plan = plan_study(folder / "study.toml")
     done = {
         int(path.stem): path
@@ -157,6 +161,33 @@ def _execute(
     record.write()
     tracking.register(outputs, record)
     return RunResult(record, ds, folder, (folder / "study.toml", folder / "run.json", *files))
+
+
+def _check_unchanged(study: Path, sha256: str) -> None:
+    """Refuse to resume a run whose study file changed since it started (its checkpoints
+    would be mixed with points of another definition)."""
+    text = study.read_text(encoding="utf-8")
+    if tracking.definition_hash(text) == sha256:
+        return
+    original = _recorded_text(study.parent)
+    changed = [
+        line
+        for line in difflib.unified_diff(original.splitlines(), text.splitlines(), lineterm="", n=0)
+        if line[:1] in "+-" and line[:3] not in ("+++", "---")
+    ]
+    shown = "; ".join(changed[:6]) if original else "the recorded text is not available"
+    msg = (
+        f"{study} was edited after the run started (changed: {shown}). Resuming would mix "
+        f"design points of two definitions; run the edited study anew: "
+        f"python -m studies run {study}"
+    )
+    raise ValueError(msg)
+
+
+def _recorded_text(folder: Path) -> str:
+    """The study text a run started with, as its checkpoints or results recorded it."""
+    record = folder / ORIGINAL_STUDY
+    return record.read_text(encoding="utf-8") if record.exists() else ""
 
 
 def _save_chunk(folder: Path, index: int, out: SceneOutput) -> None:

@@ -78,6 +78,9 @@ def now() -> str:
     return dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
 
 
+RUN_ID_ATTEMPTS = 1000  # runs of one definition started in the same millisecond
+
+
 def definition_hash(text: str) -> str:
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
@@ -87,10 +90,21 @@ def new_run_id(text: str) -> str:
     return f"{stamp}-{definition_hash(text)[:6]}"
 
 
-def run_folder(outputs: Path, study: str, run_id: str) -> Path:
-    folder = outputs / study / run_id
-    folder.mkdir(parents=True, exist_ok=False)
-    return folder
+def run_folder(outputs: Path, study: str, run_id: str) -> tuple[str, Path]:
+    """Create the run's folder; the id gets a suffix ``-1``, ``-2``, … when another run of the
+    same definition took it in the same millisecond. Returns the id used and the folder."""
+    (outputs / study).mkdir(parents=True, exist_ok=True)
+    taken = run_id
+    for attempt in range(1, RUN_ID_ATTEMPTS + 1):
+        folder = outputs / study / taken
+        try:
+            folder.mkdir()
+        except FileExistsError:
+            taken = f"{run_id}-{attempt}"
+            continue
+        return taken, folder
+    msg = f"{RUN_ID_ATTEMPTS} runs of {study!r} took the id {run_id} at once: start fewer together"
+    raise FileExistsError(msg)
 
 
 def register(outputs: Path, record: RunRecord) -> None:

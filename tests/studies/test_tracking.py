@@ -46,7 +46,7 @@ def test_failed_run_resumes_from_its_last_finished_chunk(
     record = json.loads((folder / "run.json").read_text())
     assert record["status"] == "failed"
     assert "simulated crash" in record["error"]
-    assert sorted(p.name for p in (folder / "chunks").iterdir()) == ["000000.npz", "000001.npz"]
+    assert sorted(p.name for p in (folder / "chunks").glob("*.npz")) == ["000000.npz", "000001.npz"]
 
     monkeypatch.setitem(scene.stages, "geometry", original)
     resumed = resume_run(record["run_id"], tmp_path, progress=False)
@@ -72,3 +72,81 @@ def test_identical_definition_on_clean_commit_is_reused(
     assert len(tracking.list_runs(outputs)) == 1
     assert main([*args, "--force"]) == 0
     assert len(tracking.list_runs(outputs)) == 2
+
+
+def failed_run(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """A run that failed after its first two chunks (the folder)."""
+    plan = plan_text(STUDY)
+    original = plan.scene.stages["geometry"]
+    calls = {"n": 0}
+
+    def failing(ctx):
+        calls["n"] += 1
+        if calls["n"] == 4:
+            raise RuntimeError("simulated crash")
+        return original(ctx)
+
+    monkeypatch.setitem(plan.scene.stages, "geometry", failing)
+    with pytest.raises(RuntimeError):
+        run_plan(plan, tmp_path, chunk_size=3, progress=False)
+    (folder,) = (tmp_path / "resumable").iterdir()
+    return folder
+
+
+def test_resume_refuses_a_study_file_edited_after_the_run_started(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    folder = failed_run(tmp_path, monkeypatch)
+    study = folder / "study.toml"
+    study.write_text(study.read_text().replace("1600.0", "1700.0"))
+    run_id = json.loads((folder / "run.json").read_text())["run_id"]
+    with pytest.raises(ValueError, match="was edited after the run started") as error:
+        resume_run(run_id, tmp_path, progress=False)
+    assert "1600.0" in str(error.value)
+    assert "1700.0" in str(error.value)
+    assert not (folder / "results.nc").exists()
+    assert main(["run", "--resume", run_id, "--outputs", str(tmp_path)]) == 2
+    assert "edited after the run started" in capsys.readouterr().err
+
+
+def test_a_checkpoint_left_mid_write_does_not_stop_a_resume(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    folder = failed_run(tmp_path, monkeypatch)
+    (folder / "chunks" / "000002.tmp.npz").write_bytes(b"PK\x03\x04 cut short")
+    run_id = json.loads((folder / "run.json").read_text())["run_id"]
+    resumed = resume_run(run_id, tmp_path, progress=False)
+    assert resumed.record.status == "finished"
+    assert resumed.record.timings["points_computed"] == 6
+
+
+def test_runs_of_one_definition_started_together_get_distinct_ids(tmp_path: Path) -> None:
+    ids = [tracking.run_folder(tmp_path, "same", "20260101T000000000-abcdef")[0] for _ in range(3)]
+    assert ids == [
+        "20260101T000000000-abcdef",
+        "20260101T000000000-abcdef-1",
+        "20260101T000000000-abcdef-2",
+    ]
+    assert all((tmp_path / "same" / i).is_dir() for i in ids)
+
+
+@pytest.mark.parametrize("size", ["0", "-5", "1.5", "many"])
+def test_a_bad_chunk_size_is_refused_before_anything_is_written(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], size: str
+) -> None:
+    study = tmp_path / "resumable.toml"
+    study.write_text(STUDY)
+    with pytest.raises(SystemExit) as stop:
+        main(["run", str(study), "--outputs", str(tmp_path / "out"), "--chunk-size", size])
+    assert stop.value.code == 2
+    assert "not a positive whole number of design points" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_toml_error_names_the_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    study = tmp_path / "broken.toml"
+    study.write_text('name = "broken"\nscene = cam\n')
+    assert main(["check", str(study)]) == 2
+    err = capsys.readouterr().err
+    assert str(study) in err
+    assert "<string>" not in err
