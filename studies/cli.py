@@ -23,6 +23,7 @@ if TYPE_CHECKING:
     from studies.study_run import RunResult
 
 EXIT_STUDY_ERROR = 2
+EXIT_INTERRUPTED = 130  # the shell's code for a process ended by SIGINT
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -43,6 +44,10 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into `head` and the like
         sys.stderr.close()
         return 0
+    except KeyboardInterrupt as exc:  # Ctrl-C: one line, and how to go on
+        notes = "; ".join(getattr(exc, "__notes__", [])) or "nothing was recorded"
+        print(f"\ninterrupted: {notes}", file=sys.stderr)
+        return EXIT_INTERRUPTED
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -91,6 +96,12 @@ def _parser() -> argparse.ArgumentParser:
     analyze = sub.add_parser("analyze", help="tables and plots for a results.nc")
     analyze.add_argument("results", type=Path)
     analyze.add_argument("--response", action="append", help="only these responses")
+    analyze.add_argument(
+        "--to",
+        type=Path,
+        help="folder for the tables and figures (default: a new analysis-<time> folder beside "
+        "the results; the run's own analysis is never overwritten)",
+    )
     pooling = analyze.add_mutually_exclusive_group()
     pooling.add_argument(
         "--pool",
@@ -237,17 +248,22 @@ def _cmd_scenes(args: argparse.Namespace) -> int:
 
 
 def _cmd_analyze(args: argparse.Namespace) -> int:
-    import xarray as xr
+    import datetime as dt
 
     from studies.report import write_analysis
+    from studies.results import open_results
 
     if not args.results.exists():
         raise FileNotFoundError(f"no such results file: {args.results}")
-    with xr.open_dataset(args.results) as ds:
-        ds.load()
+    stamp = dt.datetime.now(dt.UTC).strftime("%Y%m%dT%H%M%S")
+    folder = args.to or args.results.parent / f"analysis-{stamp}"
+    if folder.resolve() == args.results.parent.resolve():
+        msg = f"--to {folder} is the run's own folder: its recorded analysis would be overwritten"
+        raise ValueError(msg)
+    ds = open_results(args.results)
     if args.no_pool or args.pool:
         ds.attrs["pool"] = json.dumps([] if args.no_pool else args.pool)
-    files = write_analysis(ds, args.results.parent, args.response)
+    files = write_analysis(ds, folder, args.response)
     print(files[0].read_text(encoding="utf-8"))
     for f in files:
         print(f"wrote {f}")

@@ -155,6 +155,10 @@ def _execute(
         record.status, record.finished, record.error = "failed", tracking.now(), repr(exc)
         record.write()
         tracking.register(outputs, record)
+        exc.add_note(
+            f"run {record.run_id} kept its finished chunks; resume it with: python -m studies "
+            f"run --resume {record.run_id} --outputs {outputs}"
+        )
         raise
     shutil.rmtree(folder / CHECKPOINTS, ignore_errors=True)
     record.status, record.finished, record.timings = "finished", tracking.now(), ev.timings

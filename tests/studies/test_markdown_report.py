@@ -209,8 +209,8 @@ def test_analyze_command_writes_report_and_figures(tmp_path: Path) -> None:
     ds = study_dataset(CATALOG / "isac_l9.toml")
     path = tmp_path / "results.nc"
     ds.to_netcdf(path, engine="netcdf4")
-    assert main(["analyze", str(path)]) == 0
-    names = {p.name for p in tmp_path.iterdir()}
+    assert main(["analyze", str(path), "--to", str(tmp_path / "analysis")]) == 0
+    names = {p.name for p in (tmp_path / "analysis").iterdir()}
     assert {"analysis.txt", "report.md", "confirmation.toml"} <= names
     for r in json.loads(ds.attrs["responses"]):
         assert {f"main_effects_{r}.png", f"sn_{r}.png"} <= names

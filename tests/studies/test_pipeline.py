@@ -145,10 +145,16 @@ def test_analyze_cli_writes_tables_and_plots(isac, capsys: pytest.CaptureFixture
     from studies.cli import main
 
     _, result = isac
-    assert main(["analyze", str(result.folder / "results.nc")]) == 0
+    recorded = (result.folder / "analysis.txt").read_text(encoding="utf-8")
+    assert main(["analyze", str(result.folder / "results.nc"), "--response", "max_jerk"]) == 0
     out = capsys.readouterr().out
-    assert "max_contact_stress" in out
-    assert (result.folder / "main_effects_max_jerk.png").stat().st_size > 1000
+    assert "max_jerk" in out
+    assert "max_contact_stress" not in out.split("wrote")[0]
+    (folder,) = result.folder.glob("analysis-*")  # a new folder: the run's own is kept
+    assert (folder / "main_effects_max_jerk.png").stat().st_size > 1000
+    assert (result.folder / "analysis.txt").read_text(encoding="utf-8") == recorded
+    assert main(["analyze", str(result.folder / "results.nc"), "--to", str(result.folder)]) == 2
+    assert "would be overwritten" in capsys.readouterr().err
 
 
 def test_pooling_from_the_study_and_from_the_cli(tmp_path: Path, capsys) -> None:
@@ -170,12 +176,12 @@ def test_pooling_from_the_study_and_from_the_cli(tmp_path: Path, capsys) -> None
     assert "cam_speed (pooled)" in (result.folder / "analysis.txt").read_text(encoding="utf-8")
     assert "Pooled into error: cam_speed." in (result.folder / "report.md").read_text("utf-8")
 
-    assert main(["analyze", str(path), "--pool", "base_radius"]) == 0
-    analysis = (result.folder / "analysis.txt").read_text(encoding="utf-8")
+    assert main(["analyze", str(path), "--pool", "base_radius", "--to", str(tmp_path / "a")]) == 0
+    analysis = (tmp_path / "a" / "analysis.txt").read_text(encoding="utf-8")
     assert "base_radius (pooled)" in analysis
     assert "cam_speed (pooled)" not in analysis
-    assert main(["analyze", str(path), "--no-pool"]) == 0
-    assert "(pooled)" not in (result.folder / "analysis.txt").read_text(encoding="utf-8")
+    assert main(["analyze", str(path), "--no-pool", "--to", str(tmp_path / "b")]) == 0
+    assert "(pooled)" not in (tmp_path / "b" / "analysis.txt").read_text(encoding="utf-8")
     capsys.readouterr()
     assert main(["analyze", str(path), "--pool", "cam_sped"]) == 2
     assert "cannot pool ['cam_sped']" in capsys.readouterr().err

@@ -150,3 +150,34 @@ def test_a_toml_error_names_the_file(tmp_path: Path, capsys: pytest.CaptureFixtu
     err = capsys.readouterr().err
     assert str(study) in err
     assert "<string>" not in err
+
+
+def test_ctrl_c_ends_with_one_line_naming_the_run_and_the_resume_command(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    study = tmp_path / "resumable.toml"
+    study.write_text(STUDY)
+    plan = plan_text(STUDY)
+    original = plan.scene.stages["geometry"]
+    calls = {"n": 0}
+
+    def interrupted(ctx):
+        calls["n"] += 1
+        if calls["n"] == 3:
+            raise KeyboardInterrupt
+        return original(ctx)
+
+    monkeypatch.setitem(plan.scene.stages, "geometry", interrupted)
+    monkeypatch.setattr("studies.plan.plan_study", lambda _: plan)
+    outputs = tmp_path / "out"
+    code = main(
+        ["run", str(study), "--outputs", str(outputs), "--no-progress", "--chunk-size", "3"]
+    )
+    assert code == 130
+    err = capsys.readouterr().err.strip()
+    assert "Traceback" not in err
+    assert len(err.splitlines()) == 1
+    (row,) = tracking.list_runs(outputs)
+    assert f"python -m studies run --resume {row['run_id']} --outputs {outputs}" in err
+    monkeypatch.setitem(plan.scene.stages, "geometry", original)
+    assert main(["run", "--resume", row["run_id"], "--outputs", str(outputs), "--no-progress"]) == 0
