@@ -8,6 +8,8 @@ plan is clean.
 
 from __future__ import annotations
 
+import math
+import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -23,6 +25,11 @@ from studies.definition import (
     read_study,
 )
 from studies.scenes import Scene, get_scene
+
+BYTES_PER_FACTOR = 48
+BYTES_PER_RESPONSE = 16
+MEMORY_SHARE = 0.8  # of the available memory a study may plan to use
+MAX_POINTS_VARIABLE = "ENGINE_STUDIES_MAX_POINTS"
 
 
 @dataclass(frozen=True)
@@ -89,6 +96,56 @@ def _plan(definition: StudyDefinition | None, problems: list[str], source: str) 
     return Plan(definition, scene, design, points, settings, tuple(stages), tuple(stored))
 
 
+def full_factorial_size_problem(counts: dict[str, int], responses: int) -> str:
+    """Why a full factorial of ``counts`` will not fit this machine's memory, or "".
+
+    Checked from the level counts alone, before anything is allocated. The estimate per design
+    point (``BYTES_PER_FACTOR`` per factor for its levels, values and analysis, plus
+    ``BYTES_PER_RESPONSE`` per response) is about twice what the 10⁷-point valve study of
+    ``bench study`` measured; ``ENGINE_STUDIES_MAX_POINTS`` overrides the limit.
+    """
+    runs = math.prod(counts.values())
+    per_point = BYTES_PER_FACTOR * len(counts) + BYTES_PER_RESPONSE * (responses + 2)
+    available = available_memory()
+    override = os.environ.get(MAX_POINTS_VARIABLE)
+    limit = max_points(override) if override else int(MEMORY_SHARE * available / per_point)
+    if runs <= limit:
+        return ""
+    shape = " x ".join(f"{n} {name}" for name, n in counts.items())
+    return (
+        f"full factorial of {shape} = {runs:.4g} design points needs about "
+        f"{runs * per_point / 1e9:.3g} GB to plan, run and analyse; this machine allows "
+        f"{limit:.4g} points ({available / 1e9:.3g} GB of memory available"
+        + (f", {MAX_POINTS_VARIABLE}={override}" if override else "")
+        + '). Use fewer levels, an orthogonal array (type = "auto"), or raise the limit '
+        f"with the environment variable {MAX_POINTS_VARIABLE}"
+    )
+
+
+def max_points(text: str) -> int:
+    """The value of ``ENGINE_STUDIES_MAX_POINTS`` (ValueError naming it if not a count)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not value >= 1:
+        msg = f"{MAX_POINTS_VARIABLE}={text!r} must be a number of design points, e.g. 5e7"
+        raise ValueError(msg)
+    return int(value)
+
+
+def available_memory() -> int:
+    """Memory the system can give this process now [bytes] (Linux MemAvailable)."""
+    try:
+        with Path("/proc/meminfo").open(encoding="ascii") as meminfo:
+            for line in meminfo:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+
+
 def _name_clashes(
     d: StudyDefinition, scene: Scene, design: designs.Design, stored: list[str]
 ) -> list[str]:
@@ -121,6 +178,9 @@ def _name_clashes(
 def _design(d: StudyDefinition) -> designs.Design:
     counts = {f.name: len(f.levels) for f in d.factors}
     if d.design == "full_factorial":
+        size_problem = full_factorial_size_problem(counts, len(d.responses))
+        if size_problem:
+            raise designs.DesignError([size_problem])
         return designs.full_factorial(counts)
     if d.design == "sweep":
         base = {

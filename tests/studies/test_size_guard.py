@@ -1,0 +1,64 @@
+"""A design too large for the machine is refused at planning, from its level counts alone,
+with the size and the memory estimate; a 10⁷-point study passes."""
+
+from __future__ import annotations
+
+import tracemalloc
+
+import pytest
+
+from studies import plan as planning
+from studies.definition import StudyError
+from studies.plan import full_factorial_size_problem, plan_text
+
+FACTORS = ("cam_speed", "spring_preload", "spring_rate", "drive_stiffness")
+GB = 1e9
+
+
+def huge_study(levels: int) -> str:
+    values = ", ".join(str(1000.0 + i) for i in range(levels))
+    text = 'name = "huge"\nscene = "valve"\nresponses = ["max_lift"]\n'
+    return text + "".join(f"[factors.{f}]\nlevels = [{values}]\n" for f in FACTORS)
+
+
+def test_a_trillion_point_design_is_refused_before_anything_is_allocated(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setattr(planning, "available_memory", lambda: 24 * GB)
+    text = huge_study(1000)  # four factors of 1000 levels: 10¹² points
+    tracemalloc.start()
+    with pytest.raises(StudyError) as refused:
+        plan_text(text)
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    assert peak < 50e6  # nothing the size of the design was allocated
+    message = str(refused.value)
+    assert "= 1e+12 design points" in message
+    assert "GB to plan, run and analyse" in message
+    assert "24 GB of memory available" in message
+    assert "orthogonal array" in message
+    assert "ENGINE_STUDIES_MAX_POINTS" in message
+
+
+def test_a_ten_million_point_design_passes(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(planning, "available_memory", lambda: 24 * GB)
+    counts = dict(zip(FACTORS, (100, 40, 50, 50), strict=True))
+    assert full_factorial_size_problem(counts, responses=9) == ""
+    # the estimate (~0.37 kB per point here) scales with the machine: 2 GB is too little
+    monkeypatch.setattr(planning, "available_memory", lambda: 2 * GB)
+    assert "= 1e+07 design points" in full_factorial_size_problem(counts, responses=9)
+
+
+def test_the_limit_can_be_raised_or_lowered(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("ENGINE_STUDIES_MAX_POINTS", "1e3")
+    counts = dict(zip(FACTORS, (10, 10, 10, 2), strict=True))
+    assert "ENGINE_STUDIES_MAX_POINTS=1e3" in full_factorial_size_problem(counts, responses=1)
+    monkeypatch.setenv("ENGINE_STUDIES_MAX_POINTS", "1e13")
+    monkeypatch.setattr(planning, "available_memory", lambda: 1 * GB)
+    assert full_factorial_size_problem({"a": 10**6, "b": 10**6}, responses=1) == ""
+
+
+def test_a_bad_limit_names_the_variable(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("ENGINE_STUDIES_MAX_POINTS", "lots")
+    with pytest.raises(ValueError, match="ENGINE_STUDIES_MAX_POINTS='lots' must be a number"):
+        full_factorial_size_problem({"a": 2}, responses=1)
