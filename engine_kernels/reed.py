@@ -80,6 +80,13 @@ N_MODE_OUT = 3
 MODE_OUTPUTS = ("frequency", "margin", "margin_ratio")
 MODE_OUTPUT_UNITS = ("Hz", "Hz", "-")
 
+# order_crossing columns
+CROSSING_ORDER = 0  # lowest engine order whose band holds f [-]
+CROSSING_SPEED = 1  # engine speed of that crossing [rad/s]
+ORDER_MARGIN = 2  # signed margin to the nearest order band [Hz]
+ORDER_CLEAR = 3  # 1: outside every order band widened by the margin
+N_ORDER_OUT = 4
+
 
 @jit
 def frequency_equation(x):
@@ -201,6 +208,65 @@ def band_margin(frequency, band_min, band_max):
     Reference: SPEC §6 (margin to the band).
     """
     return max(frequency - band_max, band_min - frequency)
+
+
+@jit
+def order_crossing(frequency, band_min, band_max, openings, max_order, margin, out):
+    """Engine orders against one natural frequency (SPEC §6, the intake pulse's harmonics).
+
+    The order-k excitation covers [k f_min, k f_max] over the speed range; it crosses f at the
+    engine speed ω = 2π f/(k e). Writes into ``out``: the lowest order k ≤ ``max_order`` whose
+    band holds f (NaN if none), its crossing speed [rad/s] (NaN if none), the signed margin
+    [Hz]: outside every band the distance to the nearest one (> 0), else the depth into the
+    crossing order's band to its nearest edge (< 0); and 1 if f lies outside every band widened
+    by ``margin`` (k f_min (1 − m) … k f_max (1 + m)), else 0.
+
+    frequency: float  f [Hz].
+    band_min : float  f_min = ω_min e/(2π), the first-order band's lower edge [Hz].
+    band_max : float  f_max [Hz].
+    openings : float  Excitation events (reed openings) per crank revolution e [-].
+    max_order: int    Highest engine order checked.
+    margin   : float  Relative margin m of the resonance-free check [-].
+    out      : float[4]
+    """
+    out[CROSSING_ORDER] = math.nan
+    out[CROSSING_SPEED] = math.nan
+    nearest = math.inf
+    clear = 1.0
+    for k in range(1, max_order + 1):
+        low, high = k * band_min, k * band_max
+        if math.isnan(out[CROSSING_ORDER]) and low <= frequency <= high:
+            out[CROSSING_ORDER] = k
+            out[CROSSING_SPEED] = 2.0 * math.pi * frequency / (k * openings)
+            nearest = band_margin(frequency, low, high)
+        elif math.isnan(out[CROSSING_ORDER]):
+            nearest = min(nearest, band_margin(frequency, low, high))
+        if low * (1.0 - margin) <= frequency <= high * (1.0 + margin):
+            clear = 0.0
+    out[ORDER_MARGIN] = nearest
+    out[ORDER_CLEAR] = clear
+
+
+@batch
+def order_batch(frequencies, params, max_order, margin, out):
+    """:func:`order_crossing` of every case and mode.
+
+    frequencies: float[n, q]     Natural frequencies of modes 1…q [Hz].
+    params     : float[n, N_PARAMS]
+    max_order  : int             Highest engine order checked.
+    margin     : float           Relative margin of the resonance-free check [-].
+    out        : float[n, q, 4]  Columns CROSSING_ORDER, CROSSING_SPEED [rad/s], ORDER_MARGIN
+                                 [Hz], ORDER_CLEAR.
+    Reference: SPEC §6.
+    """
+    for i in prange(frequencies.shape[0]):
+        openings = params[i, OPENINGS_PER_REVOLUTION]
+        band_min = params[i, SPEED_MIN] * openings / (2.0 * math.pi)
+        band_max = params[i, SPEED_MAX] * openings / (2.0 * math.pi)
+        for q in range(frequencies.shape[1]):
+            order_crossing(
+                frequencies[i, q], band_min, band_max, openings, max_order, margin, out[i, q]
+            )
 
 
 @batch

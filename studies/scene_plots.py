@@ -30,6 +30,8 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
+from studies.campbell import campbell_figure
+
 DPI = 120
 PANEL = (3.6, 2.8)  # inches per panel
 CRANK_CYCLE_DEG = 720.0
@@ -620,7 +622,11 @@ FIGURES: dict[str, dict[str, Callable[[xr.Dataset], Figure | None]]] = {
         "torque_harmonics": torque_harmonics_figure,
         "approximation_error": approximation_error_figure,
     },
-    "reed": {"frequency_map": frequency_map_figure, "mode_shapes": mode_shapes_figure},
+    "reed": {
+        "frequency_map": frequency_map_figure,
+        "mode_shapes": mode_shapes_figure,
+        "campbell": campbell_figure,
+    },
     "luffing": {"pass_fail_map": pass_fail_map_figure, "motor_power": motor_power_figure},
     "rocker": {"valve_lift": valve_lift_figure},
     "valve": {"valve_lift": valve_lift_figure, "jump_speed_map": jump_speed_map_figure},

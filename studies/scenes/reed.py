@@ -4,7 +4,11 @@ One stage, ``frequencies`` (:func:`engine_kernels.reed.reed_batch`): roots of th
 frequency equation [B1], natural frequencies [B2] of the first ``N_MODES`` modes, the engine
 excitation band from the speed range, the signed margin of each mode to the band (positive
 outside, negative inside), the lowest engine-order harmonic that reaches f₁ and the speed at
-which it does, and (as curves) the mode shapes along the reed.
+which it does, for every mode the lowest engine order (up to the setting ``max_order``) that
+crosses it within the speed range, at which speed, and the margin to the nearest order band,
+``resonance_free`` (no order crosses any mode within ±``resonance_margin``), and (as curves)
+the mode shapes along the reed. ``first_mode_clear``/``all_modes_clear`` compare with the
+first-order band only; ``campbell.png`` shows the orders against the modes.
 
 Materials (the ``material`` factor has string levels; E and ρ from this table):
 
@@ -104,6 +108,22 @@ SETTINGS: tuple[Parameter, ...] = (
     Parameter(
         "shape_points", "1", 51.0, "points along the reed for the mode-shape curves", 2.0, 10001.0
     ),
+    Parameter(
+        "max_order",
+        "1",
+        6.0,
+        "highest engine order checked against every natural frequency",
+        1.0,
+        100.0,
+    ),
+    Parameter(
+        "resonance_margin",
+        "1",
+        0.05,
+        "relative margin of resonance_free: each order band widened by it (0.05 = ±5 %)",
+        0.0,
+        1.0,
+    ),
 )
 
 NEEDS = ("frequencies",)
@@ -117,7 +137,30 @@ def _mode_responses() -> tuple[Response, ...]:
             Response(
                 f"{word}_margin",
                 "Hz",
-                f"margin of the {word} mode to the excitation band (> 0 outside, < 0 inside)",
+                f"margin of the {word} mode to the first-order excitation band (> 0 outside, "
+                "< 0 inside; higher orders: order_margin)",
+                NEEDS,
+                "larger",
+            ),
+            Response(
+                f"{word}_crossing_order",
+                "1",
+                f"lowest engine order (≤ max_order) crossing the {word} mode in the speed range",
+                NEEDS,
+                "larger",
+            ),
+            Response(
+                f"{word}_crossing_speed",
+                "rpm",
+                f"engine speed at which that order meets the {word} mode",
+                NEEDS,
+                "larger",
+            ),
+            Response(
+                f"{word}_order_margin",
+                "Hz",
+                f"margin of the {word} mode to the order bands 1…max_order over the speed range "
+                "(> 0: distance to the nearest band; < 0: depth into the crossing order's band)",
                 NEEDS,
                 "larger",
             ),
@@ -135,7 +178,8 @@ RESPONSES: tuple[Response, ...] = (
     Response(
         "first_mode_clear",
         "1",
-        "first natural frequency outside the excitation band",
+        "first natural frequency outside the first-order band (only the fundamental of the "
+        "excitation: see resonance_free for its harmonics)",
         NEEDS,
         "larger",
         flag=True,
@@ -143,10 +187,26 @@ RESPONSES: tuple[Response, ...] = (
     Response(
         "all_modes_clear",
         "1",
-        f"all {N_MODES} natural frequencies outside the band",
+        f"all {N_MODES} natural frequencies outside the first-order band (only the fundamental "
+        "of the excitation: see resonance_free for its harmonics)",
         NEEDS,
         "larger",
         flag=True,
+    ),
+    Response(
+        "resonance_free",
+        "1",
+        f"no engine order 1…max_order crosses any of the {N_MODES} modes within "
+        "±resonance_margin over the speed range",
+        NEEDS,
+        "larger",
+        flag=True,
+    ),
+    Response(
+        "events_per_revolution",
+        "1",
+        "reed openings (excitation events) per crank revolution: 0.5 four-stroke, 1 two-stroke",
+        NEEDS,
     ),
     Response(
         "harmonic_order",
@@ -199,10 +259,11 @@ class ReedScene(Scene):
         return np.linspace(0.0, 1.0, int(settings["shape_points"]))
 
     def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
-        problems = []
-        g = settings["shape_points"]
-        if g != round(g):
-            problems.append(f"setting shape_points = {g:g} must be a whole number")
+        problems = [
+            f"setting {name} = {settings[name]:g} must be a whole number"
+            for name in ("shape_points", "max_order")
+            if settings[name] != round(settings[name])
+        ]
         found = PointProblems()
         mm = UNITS["mm"].to_si
         rpm = UNITS["rpm"].to_si
@@ -257,6 +318,16 @@ class ReedScene(Scene):
             si[f"{word}_margin"] = modes[:, rd.MODE_MARGIN, k]
         si["first_mode_clear"] = (modes[:, rd.MODE_MARGIN, 0] > 0).astype(float)
         si["all_modes_clear"] = (modes[:, rd.MODE_MARGIN, :] > 0).all(axis=1).astype(float)
+        orders = np.empty((n, N_MODES, rd.N_ORDER_OUT))
+        frequencies = np.ascontiguousarray(modes[:, rd.MODE_FREQUENCY, :])
+        max_order, margin = int(settings["max_order"]), float(settings["resonance_margin"])
+        rd.order_batch(frequencies, params, max_order, margin, orders)
+        for k, word in enumerate(MODE_WORDS):
+            si[f"{word}_crossing_order"] = orders[:, k, rd.CROSSING_ORDER]
+            si[f"{word}_crossing_speed"] = orders[:, k, rd.CROSSING_SPEED]
+            si[f"{word}_order_margin"] = orders[:, k, rd.ORDER_MARGIN]
+        si["resonance_free"] = orders[:, :, rd.ORDER_CLEAR].min(axis=1)
+        si["events_per_revolution"] = params[:, rd.OPENINGS_PER_REVOLUTION]
         return SceneOutput(
             scalars={
                 r: si[r] / UNITS[self.response(r).units].to_si  # type: ignore[union-attr]

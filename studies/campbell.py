@@ -1,0 +1,90 @@
+"""Campbell diagram of a reed study (``campbell.png``): natural frequencies against the engine
+orders over engine speed.
+
+Each stored mode frequency is a horizontal line (a band from its lowest to its highest value
+when it varies over the design points); each engine order k is the line f = k·n·e/60 (e events
+per crank revolution, from the ``events_per_revolution`` response); the study's speed range is
+shaded; the crossings within it (the ``*_crossing_order`` / ``*_crossing_speed`` responses)
+are marked and labelled with order and speed. Axes in rpm and Hz.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+from matplotlib.figure import Figure
+
+MODES = ("first", "second", "third", "fourth")
+MAX_LABELS = 8  # crossings labelled with order and speed when there are no more than this
+MIN_ORDERS = 6  # orders drawn at least (more when a crossing has a higher one)
+
+
+def campbell_figure(ds: xr.Dataset) -> Figure | None:
+    """The Campbell diagram, or None when the results lack the frequencies or the band."""
+    needed = ("band_min", "band_max", "events_per_revolution", "first_frequency")
+    if not all(n in ds.data_vars for n in needed):
+        return None
+    events = float(np.nanmax(ds["events_per_revolution"].values))
+    speed_lo = float(np.nanmin(ds["band_min"].values)) * 60.0 / events
+    speed_hi = float(np.nanmax(ds["band_max"].values)) * 60.0 / events
+    modes = [m for m in MODES if f"{m}_frequency" in ds.data_vars]
+    crossings = _crossings(ds, modes)
+    orders = max([MIN_ORDERS, *(int(k) for k, _, _ in crossings)])
+    top = 1.25 * speed_hi
+    fig = Figure(figsize=(7.0, 4.6), layout="constrained")
+    ax = fig.subplots()
+    ax.axvspan(speed_lo, speed_hi, color="0.9", label="speed range", zorder=0)
+    speed = np.array([0.0, top])
+    highest = 0.0
+    for k in range(1, orders + 1):
+        f = k * speed * events / 60.0
+        ax.plot(speed, f, color="0.45", lw=0.8, zorder=1)
+        ax.annotate(f"{k}", (top, f[-1]), xytext=(3, 0), textcoords="offset points",
+                    fontsize="small", color="0.3", va="center")  # fmt: skip
+        highest = f[-1]
+    for j, m in enumerate(modes):
+        values = ds[f"{m}_frequency"].values
+        lo, hi = float(np.nanmin(values)), float(np.nanmax(values))
+        colour = f"C{j}"
+        label = (
+            f"{m} mode {lo:.4g} Hz" if hi <= lo * (1 + 1e-9) else f"{m} mode {lo:.4g}–{hi:.4g} Hz"
+        )
+        if lo > highest:
+            label += " (above every order line)"
+        if hi > lo * (1 + 1e-9):
+            ax.axhspan(lo, hi, color=colour, alpha=0.25, lw=0, zorder=2, label=label)
+        else:
+            ax.axhline(lo, color=colour, lw=1.5, zorder=2, label=label)
+    if crossings:
+        k, n, f = (np.array(c) for c in zip(*crossings, strict=True))
+        ax.plot(n, f, "o", color="C3", ms=5, zorder=3, label=f"crossings in range ({len(n)})")
+    if len(crossings) <= MAX_LABELS:  # more would overlap: the orders are numbered at the right
+        for k, n, f in crossings:
+            ax.annotate(f"order {k:g}\n{n:.0f} rpm", (n, f), xytext=(4, 4),
+                        textcoords="offset points", fontsize="x-small", color="C3")  # fmt: skip
+    lowest = min(float(np.nanmin(ds[f"{m}_frequency"].values)) for m in modes)
+    ax.set_xlim(0.0, top)
+    ax.set_ylim(0.0, max(highest, 1.3 * lowest))
+    ax.set_xlabel("engine speed [rpm]")
+    ax.set_ylabel("frequency [Hz]")
+    ax.set_title(
+        f"Campbell diagram: engine orders 1…{orders} (at the right), {events:g} event/rev",
+        fontsize="medium",
+    )
+    ax.legend(loc="upper left", fontsize="small")
+    return fig
+
+
+def _crossings(ds: xr.Dataset, modes: list[str]) -> list[tuple[float, float, float]]:
+    """Distinct (order, speed [rpm], frequency [Hz]) crossings in the speed range, lowest
+    order first."""
+    found = set()
+    for m in modes:
+        order, speed = f"{m}_crossing_order", f"{m}_crossing_speed"
+        if order not in ds.data_vars or speed not in ds.data_vars:
+            continue
+        frequency = ds[f"{m}_frequency"].values
+        for k, n, f in zip(ds[order].values, ds[speed].values, frequency, strict=True):
+            if np.isfinite(k) and np.isfinite(n):
+                found.add((float(k), round(float(n), 1), float(f)))
+    return sorted(found)
