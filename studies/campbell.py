@@ -56,12 +56,15 @@ def campbell_figure(ds: xr.Dataset) -> Figure | None:
         else:
             ax.axhline(lo, color=colour, lw=1.5, zorder=2, label=label)
     if crossings:
-        k, n, f = (np.array(c) for c in zip(*crossings, strict=True))
-        ax.plot(n, f, "o", color="C3", ms=5, zorder=3, label=f"crossings in range ({len(n)})")
+        speeds = [n for _, n, _ in crossings]
+        frequencies = [f for _, _, f in crossings]
+        label = f"crossings in range ({len(crossings)})"
+        ax.plot(speeds, frequencies, "o", color="C3", ms=5, zorder=3, label=label)
     if len(crossings) <= MAX_LABELS:  # more would overlap: the orders are numbered at the right
-        for k, n, f in crossings:
-            ax.annotate(f"order {k:g}\n{n:.0f} rpm", (n, f), xytext=(4, 4),
-                        textcoords="offset points", fontsize="x-small", color="C3")  # fmt: skip
+        for order, speed_rpm, frequency in crossings:
+            ax.annotate(f"order {order:g}\n{speed_rpm:.0f} rpm", (speed_rpm, frequency),
+                        xytext=(4, 4), textcoords="offset points", fontsize="x-small",
+                        color="C3")  # fmt: skip
     lowest = min(float(np.nanmin(ds[f"{m}_frequency"].values)) for m in modes)
     ax.set_xlim(0.0, top)
     ax.set_ylim(0.0, max(highest, 1.3 * lowest))
