@@ -271,33 +271,46 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
 
 
 def _cmd_runs(args: argparse.Namespace) -> int:
-    from studies.tracking import list_runs
+    from studies.tracking import current_status, list_runs, resume_command
 
     rows = list_runs(args.outputs, args.study)
     if not rows:
         print(f"no runs recorded under {args.outputs}")
         return 0
     print(
-        f"{'run id':<30} {'study':<20} {'status':<9} {'runs':>6} {'compile s':>10} "
+        f"{'run id':<30} {'study':<20} {'status':<11} {'runs':>6} {'compile s':>10} "
         f"{'run s':>8}  commit"
     )
+    resumable = []
     for r in rows:
         dirty = "+dirty" if r["git_dirty"] else ""
+        status, _ = current_status(r)
+        if status in ("interrupted", "failed"):
+            resumable.append(r)
         print(
-            f"{r['run_id']:<30} {r['study']:<20} {r['status']:<9} {r['runs']:>6} "
+            f"{r['run_id']:<30} {r['study']:<20} {status:<11} {r['runs']:>6} "
             f"{_num(r['compile_s']):>10} {_num(r['run_s']):>8}  {r['git_commit'][:10]}{dirty}"
         )
+    for r in resumable:
+        print(f"resume {r['run_id']}: {resume_command(r, args.outputs)}")
     return 0
 
 
 def _cmd_show(args: argparse.Namespace) -> int:
-    from studies.tracking import find_run
+    from studies.tracking import current_status, find_run, resume_command
 
     row = find_run(args.outputs, args.run_id)
     if row is None:
         raise KeyError(f"no unique run matches {args.run_id!r} under {args.outputs}")
-    record = json.loads((Path(row["folder"]) / "run.json").read_text(encoding="utf-8"))
+    status, record = current_status(row)
+    if record is None:
+        raise FileNotFoundError(
+            f"run {row['run_id']} is in the registry but its folder {row['folder']} is gone"
+        )
+    record["status"] = status
     print(json.dumps(record, indent=2))
+    if status in ("interrupted", "failed"):
+        print(f"resume it with: {resume_command(row, args.outputs)}")
     return 0
 
 

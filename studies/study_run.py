@@ -12,9 +12,10 @@ from __future__ import annotations
 
 import difflib
 import json
+import os
 import shutil
 from concurrent.futures import Executor
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
@@ -97,6 +98,12 @@ def resume_run(run_id: str, outputs: Path = DEFAULT_OUTPUTS, progress: bool = Tr
     record = tracking.RunRecord(**json.loads((folder / "run.json").read_text(encoding="utf-8")))
     if record.status == "finished":
         raise ValueError(f"run {record.run_id} is already finished: nothing to resume")
+    if tracking.liveness(asdict(record)) == "running":
+        msg = (
+            f"run {record.run_id} is still running (process {record.pid} on "
+            f"{record.host.get('node', '?')}, last heartbeat {record.heartbeat}): not resumed"
+        )
+        raise ValueError(msg)
     _check_unchanged(folder / "study.toml", record.definition_sha256)
     plan = plan_study(folder / "study.toml")
     done = {
@@ -117,6 +124,8 @@ def _execute(
     executor: Executor | None = None,
 ) -> RunResult:
     folder = Path(record.folder)
+    record.pid, record.host = os.getpid(), provenance.host()
+    record.heartbeat = tracking.now()
     record.write()
     tracking.register(outputs, record)
     attrs = {
@@ -136,6 +145,7 @@ def _execute(
         def finished(index: int, out: SceneOutput) -> None:
             _save_chunk(folder, index, out)
             writer.write(parts[index], out)
+            record.beat()
 
         ev = evaluate(
             plan,

@@ -19,6 +19,8 @@ from __future__ import annotations
 import datetime as dt
 import hashlib
 import json
+import os
+import platform
 import sqlite3
 from contextlib import closing
 from dataclasses import asdict, dataclass, field
@@ -28,6 +30,8 @@ from typing import Any
 from studies.runner import DEFAULT_CHUNK_SIZE
 
 REGISTRY = "registry.sqlite"
+HEARTBEAT_S = 5.0  # a running run rewrites its heartbeat at most this often
+STALE_S = 600.0  # a heartbeat older than this marks a run on another host as interrupted
 COLUMNS = (
     "run_id",
     "study",
@@ -68,10 +72,66 @@ class RunRecord:
     timings: dict[str, float] = field(default_factory=dict)
     error: str = ""
     chunk_size: int = DEFAULT_CHUNK_SIZE
+    pid: int = 0
+    heartbeat: str = ""
 
     def write(self) -> None:
+        """Write ``run.json`` (under a temporary name renamed into place: never half a file)."""
         path = Path(self.folder) / "run.json"
-        path.write_text(json.dumps(asdict(self), indent=2, default=str) + "\n", encoding="utf-8")
+        tmp = path.with_name("run.json.writing")
+        tmp.write_text(json.dumps(asdict(self), indent=2, default=str) + "\n", encoding="utf-8")
+        tmp.replace(path)
+
+    def beat(self, every_s: float = HEARTBEAT_S) -> None:
+        """Record that the run is alive (at most every ``every_s`` seconds)."""
+        last = dt.datetime.fromisoformat(self.heartbeat) if self.heartbeat else None
+        if last is None or (dt.datetime.now(dt.UTC) - last).total_seconds() >= every_s:
+            self.heartbeat = now()
+            self.write()
+
+
+def liveness(record: dict[str, Any]) -> str:
+    """The status of a recorded run as it is now: a "running" run whose process is gone (same
+    host) or whose heartbeat is older than ``STALE_S`` (another host) is "interrupted"."""
+    if record.get("status") != "running":
+        return str(record.get("status", ""))
+    same_host = record.get("host", {}).get("node") == platform.node()
+    pid = int(record.get("pid") or 0)
+    if same_host and pid:
+        return "running" if _alive(pid) else "interrupted"
+    beat = record.get("heartbeat") or record.get("started", "")
+    if not beat:
+        return "running"
+    age = (dt.datetime.now(dt.UTC) - dt.datetime.fromisoformat(beat)).total_seconds()
+    return "interrupted" if age > STALE_S else "running"
+
+
+def _alive(pid: int) -> bool:
+    """Whether a process with this id exists on this host (a zombie counts as gone)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text(encoding="ascii")
+    except OSError:
+        return True
+    return stat.rsplit(")", 1)[-1].split()[0] != "Z"
+
+
+def current_status(row: dict[str, Any]) -> tuple[str, dict[str, Any] | None]:
+    """A registry row's status now ("missing" when its folder is gone) and its run.json."""
+    path = Path(row["folder"]) / "run.json"
+    if not path.exists():
+        return "missing", None
+    record = json.loads(path.read_text(encoding="utf-8"))
+    return liveness(record), record
+
+
+def resume_command(row: dict[str, Any], outputs: Path) -> str:
+    return f"python -m studies run --resume {row['run_id']} --outputs {outputs}"
 
 
 def now() -> str:

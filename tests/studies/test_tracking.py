@@ -3,6 +3,12 @@
 from __future__ import annotations
 
 import json
+import os
+import shutil
+import sqlite3
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -181,3 +187,64 @@ def test_ctrl_c_ends_with_one_line_naming_the_run_and_the_resume_command(
     assert f"python -m studies run --resume {row['run_id']} --outputs {outputs}" in err
     monkeypatch.setitem(plan.scene.stages, "geometry", original)
     assert main(["run", "--resume", row["run_id"], "--outputs", str(outputs), "--no-progress"]) == 0
+
+
+def registered(outputs: Path) -> bool:
+    try:
+        return bool(tracking.list_runs(outputs))
+    except sqlite3.OperationalError:  # the other process is creating the registry
+        return False
+
+
+def test_after_kill_9_runs_shows_interrupted_and_the_resume_command(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    study = tmp_path / "resumable.toml"
+    study.write_text(STUDY)
+    outputs = tmp_path / "out"
+    command = [sys.executable, "-m", "studies", "run", str(study), "--outputs", str(outputs),
+               "--no-progress", "--chunk-size", "1"]  # fmt: skip
+    process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 120
+    while not registered(outputs) and time.monotonic() < deadline:
+        time.sleep(0.002)  # the run is registered (and run.json written) before it computes
+    process.kill()  # SIGKILL: no handler runs, run.json keeps "running"
+    process.wait()
+    (record,) = outputs.glob("resumable/*/run.json")
+    assert json.loads(record.read_text())["status"] == "running"
+    assert main(["runs", "--outputs", str(outputs)]) == 0
+    out = capsys.readouterr().out
+    (row,) = tracking.list_runs(outputs)
+    assert " interrupted " in out
+    command = f"python -m studies run --resume {row['run_id']} --outputs {outputs}"
+    assert command in out
+    assert main(["show", row["run_id"], "--outputs", str(outputs)]) == 0
+    shown = capsys.readouterr().out
+    assert '"status": "interrupted"' in shown
+    assert command in shown
+    assert main(["run", "--resume", row["run_id"], "--outputs", str(outputs), "--no-progress"]) == 0
+    assert tracking.list_runs(outputs)[0]["status"] == "finished"
+
+
+def test_a_live_run_is_not_resumed_and_a_deleted_folder_is_marked(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    result = run_plan(plan_text(STUDY), tmp_path, progress=False)
+    record = json.loads((result.folder / "run.json").read_text())
+    record["status"], record["pid"] = "running", os.getpid()  # this very process: alive
+    (result.folder / "run.json").write_text(json.dumps(record))
+    with pytest.raises(ValueError, match="is still running"):
+        resume_run(record["run_id"], tmp_path, progress=False)
+    shutil.rmtree(result.folder)
+    assert main(["runs", "--outputs", str(tmp_path)]) == 0
+    assert " missing " in capsys.readouterr().out
+    assert main(["show", record["run_id"], "--outputs", str(tmp_path)]) == 2
+    assert "its folder" in capsys.readouterr().err
+
+
+def test_a_stale_heartbeat_from_another_host_reads_as_interrupted() -> None:
+    old = "2020-01-01T00:00:00+00:00"
+    record = {"status": "running", "host": {"node": "elsewhere"}, "pid": 1, "heartbeat": old}
+    assert tracking.liveness(record) == "interrupted"
+    record["heartbeat"] = tracking.now()
+    assert tracking.liveness(record) == "running"
