@@ -51,14 +51,30 @@ SOURCE_COLUMNS = ("SS", "dof", "MS", "F", "P", "contribution")
 INTERACTION_COLUMNS = ("SS", "dof", "F", "P", "contribution")
 
 
-def analyzed(ds: xr.Dataset, responses: Sequence[str]) -> tuple[xr.Dataset, list[str]]:
-    """The results with run means and S/N ratios added, and the variables to analyse: each
-    response with a finite value (its run mean when replicated), then its S/N ratio."""
-    present = [r for r in responses if has_values(ds, r)]
+def presence(ds: xr.Dataset, responses: Sequence[str]) -> tuple[list[str], int]:
+    """The responses with a value in some run, and the number of runs with no value in any
+    response (NaN, or -1 "not evaluated" for pass/fail flags): points that did not run.
+    Reads each response once."""
+    present, any_value = [], np.zeros(ds.sizes["run"], dtype=bool)
+    for r in responses:
+        values = ds[r].values
+        has = values != -1 if "flag_values" in ds[r].attrs else np.isfinite(values.astype(float))
+        has = has.reshape(values.shape[0], -1).any(axis=1)
+        if has.any():
+            present.append(r)
+        any_value |= has
+    return present, int((~any_value).sum())
+
+
+def analyzed(ds: xr.Dataset, responses: Sequence[str]) -> tuple[xr.Dataset, list[str], int]:
+    """The results with run means and S/N ratios added, the variables to analyse (each
+    response with a finite value, or its run mean when replicated, then its S/N ratio) and the
+    number of runs without any value."""
+    present, without = presence(ds, responses)
     view = taguchi.with_sn(taguchi.with_means(ds, present), taguchi.sn_responses(ds, present))
     names = [taguchi.mean_name(view, r) for r in present]
     names += [taguchi.sn_name(r) for r in present if taguchi.sn_name(r) in view]
-    return view, names
+    return view, names, without
 
 
 def analyze(
@@ -78,9 +94,11 @@ def analyze(
         "confirmation_runs": 1,
     }
     if design == "sweep":  # tables and plots of the runs themselves: nothing to estimate
-        present = [r for r in names if has_values(ds, r)]
+        present, without = presence(ds, names)
+        attrs |= {"points": ds.sizes["run"], "points_without_value": without}
         return xr.Dataset(attrs=attrs | {"analysed": json.dumps(present)})
-    view, analysed = analyzed(ds, names)
+    view, analysed, without = analyzed(ds, names)
+    attrs |= {"points": ds.sizes["run"], "points_without_value": without}
     terms = taguchi.model_terms(view)
     # The level codes once in memory, then one response at a time: a 10⁷-run result is never
     # held whole.

@@ -23,6 +23,7 @@ if TYPE_CHECKING:
     from studies.study_run import RunResult
 
 EXIT_STUDY_ERROR = 2
+EXIT_POINTS_NOT_RUN = 3
 EXIT_INTERRUPTED = 130  # the shell's code for a process ended by SIGINT
 
 
@@ -69,6 +70,11 @@ def _parser() -> argparse.ArgumentParser:
         help="design points per chunk (bounds memory; default: the runner's)",
     )
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
+    run.add_argument(
+        "--strict",
+        action="store_true",
+        help=f"exit {EXIT_POINTS_NOT_RUN} when a design point gave no value for any response",
+    )
     run.add_argument(
         "--force",
         action="store_true",
@@ -184,6 +190,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     plans = [plan_study(n) for n in names]
     commit, dirty = provenance.git_state()
     executor = dask_executor(args.scheduler) if args.scheduler else None
+    incomplete = 0
     for plan in plans:
         text = plan.definition.text
         earlier = (
@@ -206,17 +213,31 @@ def _cmd_run(args: argparse.Namespace) -> int:
             executor,
         )
         _report(result)
+        incomplete += result.record.points_without_value > 0
+    if args.strict and incomplete:
+        print(
+            f"error (--strict): {incomplete} run(s) have design points that did not run",
+            file=sys.stderr,
+        )
+        return EXIT_POINTS_NOT_RUN
     return 0
 
 
 def _report(result: RunResult) -> None:
-    t = result.record.timings
+    r = result.record
+    t = r.timings
     print(
-        f"{result.record.study}: {result.record.runs} design points ({result.record.design}), "
+        f"{r.study}: {r.runs} design points ({r.design}), "
         f"compile {t['compile_s']:.2f} s, run {t['run_s']:.3f} s"
     )
     for f in result.files:
         print(f"  {f}")
+    if r.points_without_value:
+        print(
+            f"warning: {r.points_without_value} of {r.runs} design points of {r.study} gave no "
+            f"value for any response (they did not run; reasons in {r.folder}/analysis.txt)",
+            file=sys.stderr,
+        )
 
 
 def _cmd_check(args: argparse.Namespace) -> int:

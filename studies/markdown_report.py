@@ -139,6 +139,14 @@ def _report(
 ) -> tuple[str, str]:
     analysed = json.loads(an.attrs.get("analysed", "[]"))
     lines = _header(ds, responses, analysed)
+    without = int(an.attrs.get("points_without_value", 0))
+    if without:
+        note = (
+            f"**{without} of {an.attrs['points']} design points gave no value for any "
+            "response**: they did not run (the reasons are in `analysis.txt`). The tables "
+            "below use the others."
+        )
+        lines += [note, ""]
     responses = [r for r in responses if taguchi.mean_name(ds, r) in analysed]
     if ds.attrs.get("design") == "sweep":
         lines += _sweep(ds, responses, figures)

@@ -42,7 +42,7 @@ def write_analysis(
     an = analysis.analyze(ds, scalar, pool)
     done = json.loads(an.attrs["analysed"])
     analysed = [r for r in scalar if r in done]
-    header = _header(ds)
+    header = _header(ds) + not_run_line(an, "\n")
     if ds.attrs.get("design") == "sweep":
         body = [analysis_text.format_sweep(ds, analysed)]
         figures = plots.save_sweep_plots(ds, analysed, folder)
@@ -62,6 +62,18 @@ def write_analysis(
     reports = markdown_report.write_report(ds, an, folder, scalar, figures)
     nc = analysis.write_analysis_nc(an, folder)
     return [text_path, *reports, nc, *figures]
+
+
+def not_run_line(an: xr.Dataset, before: str = "") -> str:
+    """A sentence on the design points that gave no value for any response ("" if none)."""
+    without = int(an.attrs.get("points_without_value", 0))
+    if not without:
+        return ""
+    return (
+        f"{before}{without} of {an.attrs['points']} design points gave no value for any "
+        "response (they did not run: the reasons are listed further down where the scene "
+        "records them)"
+    )
 
 
 def _no_value_note(y: xr.DataArray) -> str:

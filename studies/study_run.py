@@ -22,6 +22,7 @@ import numpy as np
 import xarray as xr
 
 from studies import provenance, tracking
+from studies.analysis import ANALYSIS_NAME
 from studies.plan import Plan, plan_study
 from studies.report import write_analysis
 from studies.results import open_results
@@ -159,6 +160,8 @@ def _execute(
         files = [writer.close({"timings": ev.timings})]
         ds = open_results(files[0])
         files += write_analysis(ds, folder)
+        with xr.open_dataset(folder / ANALYSIS_NAME) as an:
+            record.points_without_value = int(an.attrs.get("points_without_value", 0))
     except BaseException as exc:
         if writer is not None:
             writer.abandon()

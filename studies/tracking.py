@@ -74,6 +74,7 @@ class RunRecord:
     chunk_size: int = DEFAULT_CHUNK_SIZE
     pid: int = 0
     heartbeat: str = ""
+    points_without_value: int = 0
 
     def write(self) -> None:
         """Write ``run.json`` (under a temporary name renamed into place: never half a file)."""

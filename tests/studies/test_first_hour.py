@@ -6,6 +6,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 import xarray as xr
 
@@ -98,3 +99,42 @@ def test_every_unit_a_scene_declares_converts() -> None:
                 continue
             assert units in UNITS, f"{name}.{item.name}: units {units!r} not in the table"
             assert conversion_factor(units, units) == 1.0
+
+
+L18_WITH_A_CONCAVE_LAW = """
+name = "law_l18"
+scene = "valve"
+responses = ["max_lift", "jump_speed"]
+[design]
+type = "L18"
+[factors.law]
+levels = ["six_segment", "polydyne"]
+[factors.cam_speed]
+levels = [3000.0, 4000.0, 5000.0]
+[factors.spring_preload]
+levels = [170.0, 205.8, 240.0]
+"""
+
+
+def test_points_that_did_not_run_are_reported_and_strict_fails(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # polydyne is not convex at the valve scene's default rise angle: its 9 of the 18 runs have
+    # an invalid chain and give no value (counted here from the stored chain status).
+    study = tmp_path / "law_l18.toml"
+    study.write_text(L18_WITH_A_CONCAVE_LAW, encoding="utf-8")
+    outputs = tmp_path / "out"
+    assert main(["run", str(study), "--outputs", str(outputs), "--no-progress"]) == 0
+    err = capsys.readouterr().err
+    (folder,) = outputs.glob("law_l18/*")
+    with xr.open_dataset(folder / "results.nc") as ds:
+        chain_invalid = int((ds["chain_status"].values != 0).sum())
+        no_value = int((~np.isfinite(ds["max_lift"].values)).sum())
+    assert chain_invalid == no_value == 9
+    assert "warning: 9 of 18 design points of law_l18 gave no value" in err
+    report = (folder / "report.md").read_text(encoding="utf-8")
+    assert report.index("**9 of 18 design points gave no value") < report.index("## Design")
+    assert "9 of 18 design points" in (folder / "analysis.txt").read_text(encoding="utf-8")
+    args = ["run", str(study), "--outputs", str(outputs), "--no-progress", "--strict", "--force"]
+    assert main(args) == 3
+    assert "--strict" in capsys.readouterr().err
