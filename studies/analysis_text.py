@@ -39,15 +39,20 @@ def range_text(an: xr.Dataset, response: str) -> str:
         fu = str(row.term_units.values)
         best = int(row.best_level)
         best_value = row.level_value.values[best]
+        levels = ", ".join(_number(v) for v in values) + (f" {fu}" if fu else "")
+        shown = f" ({_number(best_value)} {fu})".rstrip() if np.isfinite(best_value) else ""
+        if not values and int(an["is_factor"].sel(term=t)):  # categorical: the level names
+            labels = [str(label) for label in row.level_label.values]
+            levels = ", ".join(label for label in labels if label)
+            shown = f" ({labels[best]})"
         rows.append(
             {
                 "factor": t,
-                "levels": ", ".join(_number(v) for v in values) + (f" {fu}" if fu else ""),
+                "levels": levels,
                 **{f"k{i + 1}": _number(row.k.values[i]) for i in range(nlevels)},
                 "R": _number(float(row.R)),
                 "rank": int(row["rank"]),
-                "best": f"{best + 1}"
-                + (f" ({_number(best_value)} {fu})".rstrip() if np.isfinite(best_value) else ""),
+                "best": f"{best + 1}{shown}",
             }
         )
     return pd.DataFrame(rows).to_string(index=False)
@@ -78,7 +83,8 @@ def format_tables(an: xr.Dataset, response: str) -> str:
     lines = [
         (
             f"Range analysis of {response} ({r.long_name.values}){_units_suffix(units)}; "
-            f"{r.sense.values} is better; k_i = mean at level i"
+            f"{r.sense.values} is better; k_i = mean at level i (levels numbered from 1 here, "
+            "from 0 in results.nc)"
         ),
         range_text(an, response),
         "",

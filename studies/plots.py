@@ -57,9 +57,9 @@ def main_effects_figure(an: xr.Dataset, response: str) -> Figure:
         ax.plot(x, k[present], marker="o" if present.sum() < MARKER_LEVELS else None)
         ax.axhline(float(r.grand_mean), linestyle="--", color="0.5", label="grand mean")
         unit = str(row.term_units.values)
-        ax.set_xlabel(_label(f, unit) if numeric else f"{f} (level)")
-        if not numeric:
-            ax.set_xticks(x)
+        ax.set_xlabel(_label(f, unit) if numeric else f)
+        if not numeric:  # categorical: the level names at their (1-based) positions
+            ax.set_xticks(x, [str(v) for v in row.level_label.values[present]], rotation=20)
     axes[0].set_ylabel(_label(response, units))
     axes[0].legend(loc="best", fontsize="small")
     _title(fig, f"Main effects on {response}: {r.long_name.values}")
@@ -144,12 +144,13 @@ def interaction_figure(an: xr.Dataset, response: str, a: str, b: str) -> Figure:
     fig = Figure(figsize=(1.5 * PANEL_SIZE[0], 1.3 * PANEL_SIZE[1]), layout="constrained")
     ax = fig.subplots()
     for j in np.flatnonzero(cols):
-        shown = f"{values_b[j]:g}" if np.isfinite(values_b[j]) else f"level {j + 1}"
+        labels_b = an["level_label"].sel(term=b).values
+        shown = f"{values_b[j]:g}" if np.isfinite(values_b[j]) else str(labels_b[j])
         label = f"{b} = {shown} {units_b}".rstrip()
         ax.plot(x, means[rows, j], marker="o", label=label)
-    ax.set_xlabel(_label(a, units_a) if numeric else f"{a} (level)")
-    if not numeric:
-        ax.set_xticks(x)
+    ax.set_xlabel(_label(a, units_a) if numeric else a)
+    if not numeric:  # categorical: the level names at their (1-based) positions
+        ax.set_xticks(x, [str(v) for v in an["level_label"].sel(term=a).values[rows]])
     ax.set_ylabel(_label(str(r.long_name.values), str(r.units.values)))
     ax.legend(loc="best", fontsize="small")
     _title(fig, f"Interaction {a} × {b} on {response}")

@@ -274,15 +274,23 @@ def test_main_effects_figure_has_one_panel_per_factor(l9):
     assert grand.get_ydata()[0] == pytest.approx(l9["stress"].values.mean())
 
 
-def test_factor_without_numeric_values_uses_level_numbers(l9):
+def test_factor_without_numeric_values_shows_its_level_names(l9):
     shapes = np.array(["lin", "sin_full", "fillet"])[l9["A_level"].values]
     ds = l9.assign_coords(A=("run", shapes))
     ra = range_analysis(ds, "stress")
     assert np.isnan(ra.level_value.sel(factor="A")).all()
     assert np.isfinite(ra.level_value.sel(factor="B")).all()
-    ax = main_effects_figure(analyze(ds, ["stress"]), "stress").axes[0]
-    assert ax.get_xlabel() == "A (level)"
+    an = analyze(ds, ["stress"])
+    ax = main_effects_figure(an, "stress").axes[0]
+    assert ax.get_xlabel() == "A"
     np.testing.assert_allclose(ax.get_lines()[0].get_xdata(), [1, 2, 3])
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["lin", "sin_full", "fillet"]
+    # analysis.txt names the levels of a categorical factor and its best one
+    lines = format_tables(an, "stress").splitlines()
+    row = next(line for line in lines if line.strip().startswith("A "))  # the range table
+    assert "lin, sin_full, fillet" in row
+    best = int(an["best_level"].sel(response="stress", term="A"))
+    assert row.rstrip().endswith(f"{best + 1} ({['lin', 'sin_full', 'fillet'][best]})")
 
 
 def test_save_main_effects_writes_pngs(l9, tmp_path):

@@ -185,8 +185,9 @@ def test_interaction_figure_plots_cell_means_with_units() -> None:
         np.testing.assert_allclose(line.get_ydata(), expected, rtol=1e-12)
     text_levels = l27_dataset(pair=("C", "A"))
     ax_c = interaction_figure(analyze(text_levels, ["force"]), "force", "C", "A").axes[0]
-    assert ax_c.get_xlabel() == "C (level)"  # text levels → level numbers
+    assert ax_c.get_xlabel() == "C"  # text levels: their names at level numbers
     np.testing.assert_allclose(ax_c.get_lines()[0].get_xdata(), [1, 2, 3])
+    assert [t.get_text() for t in ax_c.get_xticklabels()] == ["lin", "sin", "cyc"]
 
 
 def test_sn_figure_plots_level_means_of_the_sn_ratio() -> None:
