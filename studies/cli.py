@@ -23,13 +23,20 @@ if TYPE_CHECKING:
     from studies.study_run import RunResult
 
 EXIT_STUDY_ERROR = 2
+OUTPUTS_HELP = (
+    "run-folder root (default: $ENGINE_STUDIES_OUTPUTS, else this checkout's outputs/ folder)"
+)
 EXIT_POINTS_NOT_RUN = 3
 EXIT_INTERRUPTED = 130  # the shell's code for a process ended by SIGINT
 
 
 def main(argv: list[str] | None = None) -> int:
+    from studies.tracking import default_outputs
+
     parser = _parser()
     args = parser.parse_args(argv)
+    if "outputs" in vars(args):  # absolute, so the registry never holds a relative folder
+        args.outputs = (args.outputs or default_outputs()).resolve()
     try:
         return int(args.func(args) or 0)
     except StudyError as exc:
@@ -62,7 +69,7 @@ def _parser() -> argparse.ArgumentParser:
     run = sub.add_parser("run", help="validate, run and record a study")
     run.add_argument("study", nargs="?", help="catalogue name or path to a TOML file")
     run.add_argument("--all", action="store_true", help="run every catalogue study")
-    run.add_argument("--outputs", type=Path, default=Path("outputs"), help="run-folder root")
+    run.add_argument("--outputs", type=Path, help=OUTPUTS_HELP)
     run.add_argument(
         "--chunk-size",
         type=positive_int,
@@ -125,12 +132,12 @@ def _parser() -> argparse.ArgumentParser:
 
     runs = sub.add_parser("runs", help="list recorded runs")
     runs.add_argument("--study")
-    runs.add_argument("--outputs", type=Path, default=Path("outputs"))
+    runs.add_argument("--outputs", type=Path, help=OUTPUTS_HELP)
     runs.set_defaults(func=_cmd_runs)
 
     show = sub.add_parser("show", help="show one run's record")
     show.add_argument("run_id")
-    show.add_argument("--outputs", type=Path, default=Path("outputs"))
+    show.add_argument("--outputs", type=Path, help=OUTPUTS_HELP)
     show.set_defaults(func=_cmd_show)
     bench = sub.add_parser("bench", help="run benchmarks (cases/s, ratios)")
     bench.add_argument("name", help="benchmark name or 'all'")
@@ -143,7 +150,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     bench.add_argument("--step", type=float, default=0.5, help="angle step [deg]")
     bench.add_argument("--repeat", type=int, default=3, help="timed repetitions (best kept)")
-    bench.add_argument("--outputs", type=Path, default=Path("outputs"))
+    bench.add_argument("--outputs", type=Path, help=OUTPUTS_HELP)
     bench.set_defaults(func=_cmd_bench)
     return p
 

@@ -34,8 +34,6 @@ CHECKPOINTS = "chunks"
 RESULTS_NAME = "results.nc"
 ORIGINAL_STUDY = CHECKPOINTS + "/study.toml"  # the text the checkpoints were computed from
 
-DEFAULT_OUTPUTS = Path("outputs")
-
 
 @dataclass(frozen=True)
 class RunResult:
@@ -47,23 +45,25 @@ class RunResult:
 
 def run_study(
     name_or_path: str | Path,
-    outputs: Path = DEFAULT_OUTPUTS,
+    outputs: Path | None = None,
     chunk_size: int = DEFAULT_CHUNK_SIZE,
     progress: bool = True,
 ) -> RunResult:
-    """Validate and run a study; write its run folder under ``outputs``."""
+    """Validate and run a study; write its run folder under ``outputs`` (default:
+    :func:`studies.tracking.default_outputs`)."""
     plan = plan_study(name_or_path)
     return run_plan(plan, outputs, chunk_size, progress)
 
 
 def run_plan(
     plan: Plan,
-    outputs: Path = DEFAULT_OUTPUTS,
+    outputs: Path | None = None,
     chunk_size: int = DEFAULT_CHUNK_SIZE,
     progress: bool = True,
     executor: Executor | None = None,
 ) -> RunResult:
     """Run a validated plan in a new run folder under ``outputs`` (chunks on ``executor``)."""
+    outputs = (outputs or tracking.default_outputs()).resolve()
     d = plan.definition
     commit, dirty = provenance.git_state()
     run_id, folder = tracking.run_folder(outputs, d.name, tracking.new_run_id(d.text))
@@ -90,8 +90,9 @@ def run_plan(
     return _execute(plan, outputs, record, progress, {}, executor)
 
 
-def resume_run(run_id: str, outputs: Path = DEFAULT_OUTPUTS, progress: bool = True) -> RunResult:
+def resume_run(run_id: str, outputs: Path | None = None, progress: bool = True) -> RunResult:
     """Finish an interrupted or failed run from its checkpointed chunks."""
+    outputs = (outputs or tracking.default_outputs()).resolve()
     row = tracking.find_run(outputs, run_id)
     if row is None:
         raise KeyError(f"no unique run matches {run_id!r} under {outputs}")

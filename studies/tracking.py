@@ -30,6 +30,7 @@ from typing import Any
 from studies.runner import DEFAULT_CHUNK_SIZE
 
 REGISTRY = "registry.sqlite"
+OUTPUTS_VARIABLE = "ENGINE_STUDIES_OUTPUTS"
 HEARTBEAT_S = 5.0  # a running run rewrites its heartbeat at most this often
 STALE_S = 600.0  # a heartbeat older than this marks a run on another host as interrupted
 COLUMNS = (
@@ -133,6 +134,19 @@ def current_status(row: dict[str, Any]) -> tuple[str, dict[str, Any] | None]:
 
 def resume_command(row: dict[str, Any], outputs: Path) -> str:
     return f"python -m studies run --resume {row['run_id']} --outputs {outputs}"
+
+
+def default_outputs() -> Path:
+    """Where runs are recorded when no ``--outputs`` is given, the same from any folder: the
+    environment variable ``ENGINE_STUDIES_OUTPUTS``, else the ``outputs/`` folder of this
+    checkout (beside ``studies/``), else ``./outputs`` (an installed package)."""
+    chosen = os.environ.get(OUTPUTS_VARIABLE)
+    if chosen:
+        return Path(chosen).expanduser().resolve()
+    checkout = Path(__file__).resolve().parents[1] / "outputs"
+    if (checkout / "README.md").exists():
+        return checkout
+    return Path("outputs").resolve()
 
 
 def now() -> str:

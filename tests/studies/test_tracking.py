@@ -248,3 +248,38 @@ def test_a_stale_heartbeat_from_another_host_reads_as_interrupted() -> None:
     assert tracking.liveness(record) == "interrupted"
     record["heartbeat"] = tracking.now()
     assert tracking.liveness(record) == "running"
+
+
+def test_the_outputs_root_is_the_same_from_any_folder(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    study = tmp_path / "resumable.toml"
+    study.write_text(STUDY)
+    root = tmp_path / "records"
+    monkeypatch.setenv("ENGINE_STUDIES_OUTPUTS", str(root))
+    (tmp_path / "here").mkdir()
+    (tmp_path / "there").mkdir()
+    monkeypatch.chdir(tmp_path / "here")
+    assert main(["run", str(study), "--no-progress"]) == 0
+    monkeypatch.chdir(tmp_path / "there")
+    capsys.readouterr()
+    assert main(["runs"]) == 0
+    (row,) = tracking.list_runs(root)
+    assert row["run_id"] in capsys.readouterr().out
+    assert Path(row["folder"]).is_absolute()
+    assert not (tmp_path / "here" / "outputs").exists()
+    # without the variable: this checkout's outputs/ folder, wherever the command runs
+    monkeypatch.delenv("ENGINE_STUDIES_OUTPUTS")
+    checkout = Path(tracking.__file__).resolve().parents[1] / "outputs"
+    assert tracking.default_outputs() == checkout
+
+
+def test_a_relative_outputs_folder_is_recorded_absolute(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    study = tmp_path / "resumable.toml"
+    study.write_text(STUDY)
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", str(study), "--no-progress", "--outputs", "rel"]) == 0
+    (row,) = tracking.list_runs(tmp_path / "rel")
+    assert Path(row["folder"]) == (tmp_path / "rel" / "resumable" / row["run_id"])
