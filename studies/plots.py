@@ -22,6 +22,7 @@ from studies.statistics import sweep_runs
 PANEL_SIZE = (3.0, 3.0)  # inches per factor panel
 DPI = 120
 TITLE_CHARS_PER_INCH = 11  # what fits at the default title size
+LOG_DECADES = 100.0  # level means spanning more than this ratio get a log axis
 MARKER_LEVELS = 40  # from this many levels on, main effects are a line without markers
 
 
@@ -62,6 +63,9 @@ def main_effects_figure(an: xr.Dataset, response: str) -> Figure:
             ax.set_xticks(x, [str(v) for v in row.level_label.values[present]], rotation=20)
     axes[0].set_ylabel(_label(response, units))
     axes[0].legend(loc="best", fontsize="small")
+    k = r.k.values[np.isfinite(r.k.values)]
+    if k.size and k.min() > 0 and k.max() > LOG_DECADES * k.min():
+        axes[0].set_yscale("log")  # shared: level means over more than two decades
     _title(fig, f"Main effects on {response}: {r.long_name.values}")
     return fig
 

@@ -303,3 +303,10 @@ def test_save_main_effects_writes_pngs(l9, tmp_path):
         data = p.read_bytes()
         assert data.startswith(b"\x89PNG\r\n\x1a\n")
         assert len(data) > 1000
+
+
+def test_main_effects_over_more_than_two_decades_get_a_log_axis(l9):
+    spread = l9.assign(error=("run", 10.0 ** l9["A_level"].values * 1e-3, {"units": "mm"}))
+    an = analyze(spread, ["error", "stress"])
+    assert main_effects_figure(an, "error").axes[0].get_yscale() == "log"  # 1e-3 … 1e-1
+    assert main_effects_figure(an, "stress").axes[0].get_yscale() == "linear"
