@@ -31,21 +31,28 @@ levels = [1000.0, 1300.0, 1600.0]
 """
 
 
+def fail_on_call(monkeypatch: pytest.MonkeyPatch, plan, call: int, error: BaseException) -> None:
+    """Make the plan's geometry stage raise ``error`` on its ``call``-th call."""
+    original = plan.scene.stages["geometry"]
+    calls = {"n": 0}
+
+    def failing(ctx):
+        calls["n"] += 1
+        if calls["n"] == call:
+            raise error
+        return original(ctx)
+
+    monkeypatch.setitem(plan.scene.stages, "geometry", failing)
+
+
 def test_failed_run_resumes_from_its_last_finished_chunk(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     plan = plan_text(STUDY)
     scene = plan.scene
     original = scene.stages["geometry"]
-    calls = {"n": 0}
-
-    def failing_on_third_chunk(ctx):
-        calls["n"] += 1
-        if calls["n"] == 4:  # 1 warm-up call + chunks 0 and 1, then chunk 2 fails
-            raise RuntimeError("simulated crash")
-        return original(ctx)
-
-    monkeypatch.setitem(scene.stages, "geometry", failing_on_third_chunk)
+    # 1 warm-up call + chunks 0 and 1, then chunk 2 fails
+    fail_on_call(monkeypatch, plan, 4, RuntimeError("simulated crash"))
     with pytest.raises(RuntimeError, match="simulated crash"):
         run_plan(plan, tmp_path, chunk_size=3, progress=False)
     (folder,) = (tmp_path / "resumable").iterdir()
@@ -83,16 +90,7 @@ def test_identical_definition_on_clean_commit_is_reused(
 def failed_run(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     """A run that failed after its first two chunks (the folder)."""
     plan = plan_text(STUDY)
-    original = plan.scene.stages["geometry"]
-    calls = {"n": 0}
-
-    def failing(ctx):
-        calls["n"] += 1
-        if calls["n"] == 4:
-            raise RuntimeError("simulated crash")
-        return original(ctx)
-
-    monkeypatch.setitem(plan.scene.stages, "geometry", failing)
+    fail_on_call(monkeypatch, plan, 4, RuntimeError("simulated crash"))
     with pytest.raises(RuntimeError):
         run_plan(plan, tmp_path, chunk_size=3, progress=False)
     (folder,) = (tmp_path / "resumable").iterdir()
@@ -165,15 +163,7 @@ def test_ctrl_c_ends_with_one_line_naming_the_run_and_the_resume_command(
     study.write_text(STUDY)
     plan = plan_text(STUDY)
     original = plan.scene.stages["geometry"]
-    calls = {"n": 0}
-
-    def interrupted(ctx):
-        calls["n"] += 1
-        if calls["n"] == 3:
-            raise KeyboardInterrupt
-        return original(ctx)
-
-    monkeypatch.setitem(plan.scene.stages, "geometry", interrupted)
+    fail_on_call(monkeypatch, plan, 3, KeyboardInterrupt())
     monkeypatch.setattr("studies.plan.plan_study", lambda _: plan)
     outputs = tmp_path / "out"
     code = main(
