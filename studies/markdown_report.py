@@ -19,12 +19,23 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import xarray as xr
 
-from studies import plots, taguchi
-from studies.analysis_text import NO_NOISE, decomposition_frame
+from studies import taguchi
 from studies.designs import orthogonal_array
+from studies.markdown_format import (
+    figure,
+    label,
+    level_text,
+    levels_of,
+    num,
+    other_figures,
+    pct,
+    table,
+    units_of,
+    value_text,
+)
+from studies.markdown_response import constant_section, optimum_levels, response_section
 from studies.statistics import sweep_runs
 
 REPORT_NAME = "report.md"
@@ -61,78 +72,6 @@ def report_text(
     return _report(ds, an, list(responses), {Path(f).name for f in figures})[0]
 
 
-# --- formatting ---------------------------------------------------------------------------------
-def _pct(value: float) -> str:
-    return f"{value:.1f}" if np.isfinite(value) else "—"
-
-
-def _num(value: Any, digits: int = 4) -> str:
-    if isinstance(value, str):
-        return value
-    if value is None or not np.isfinite(value):
-        return "—"
-    return f"{value:.{digits}g}"
-
-
-def _cell(value: Any) -> str:
-    text = _num(value) if isinstance(value, float | np.floating) else str(value)
-    return text.replace("|", "\\|").replace("\n", " ")
-
-
-def _table(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:
-    lines = ["| " + " | ".join(_cell(h) for h in header) + " |"]
-    lines.append("|" + "|".join("---" for _ in header) + "|")
-    lines += ["| " + " | ".join(_cell(v) for v in row) + " |" for row in rows]
-    return "\n".join(lines)
-
-
-def _label(name: str, units: str) -> str:
-    """``name [units]``; dimensionless ("1") and unknown units are left out."""
-    return f"{name} [{units}]" if units and units != "1" else name
-
-
-def _units(ds: xr.Dataset, name: str) -> str:
-    return str(ds[name].attrs.get("units", "")) if name in ds.variables else ""
-
-
-def _value(value: Any, units: str) -> str:
-    shown = _num(value) if isinstance(value, int | float | np.number) else str(value)
-    return f"{shown} {units}".rstrip()
-
-
-def _levels(an: xr.Dataset, term: str) -> dict[int, Any]:
-    """Level index → the term's value (a number, else its label), for the levels it has."""
-    values = an["level_value"].sel(term=term).values
-    labels = an["level_label"].sel(term=term).values
-    return {
-        i: float(v) if np.isfinite(v) else str(label)
-        for i, (v, label) in enumerate(zip(values, labels, strict=True))
-        if label != ""
-    }
-
-
-def _level_text(an: xr.Dataset, factor: str, level: int) -> str:
-    """1-based level number and the factor's value: ``2 (9 deg)``."""
-    units = str(an["term_units"].sel(term=factor).values)
-    return f"{level + 1} ({_value(_levels(an, factor)[level], units)})"
-
-
-def _figure(name: str, caption: str, figures: set[str]) -> list[str]:
-    return [f"![{caption}]({name})", ""] if name in figures else []
-
-
-def _other_figures(lines: list[str], figures: set[str]) -> list[str]:
-    """Links to the figures no section has shown (e.g. the scene's own figures)."""
-    text = "\n".join(lines)
-    rest = sorted(f for f in figures if f"]({f})" not in text)
-    if not rest:
-        return []
-    out = ["## Other figures", ""]
-    for f in rest:
-        out += _figure(f, Path(f).stem.replace("_", " "), figures)
-    return out
-
-
 # --- sections -----------------------------------------------------------------------------------
 def _report(
     ds: xr.Dataset, an: xr.Dataset, responses: list[str], figures: set[str]
@@ -150,7 +89,7 @@ def _report(
     responses = [r for r in responses if taguchi.mean_name(ds, r) in analysed]
     if ds.attrs.get("design") == "sweep":
         lines += _sweep(ds, responses, figures)
-        lines += _other_figures(lines, figures)
+        lines += other_figures(lines, figures)
         return "\n".join(lines).rstrip() + "\n", ""
     view = ds.assign({n: an[n] for n in an.data_vars if "run" in an[n].dims})
     lines += _design(view, an)
@@ -159,11 +98,11 @@ def _report(
     for r in responses:
         name = taguchi.mean_name(view, r)
         if int(an["varies"].sel(response=name)):
-            lines += _response(view, an, r, figures)
+            lines += response_section(view, an, r, figures)
             optimised.append(name)
         else:
-            lines += _constant(view, r, figures)
-    levels = _optimum_levels(an, optimised[0]) if optimised else {}
+            lines += constant_section(view, r, figures)
+    levels = optimum_levels(an, optimised[0]) if optimised else {}
     if len(optimised) > 1:
         section, levels = _tradeoff(an, view, optimised)
         lines += section
@@ -186,7 +125,7 @@ def _report(
             "```",
             "",
         ]
-    lines += _other_figures(lines, figures)
+    lines += other_figures(lines, figures)
     return "\n".join(lines).rstrip() + "\n", confirmation
 
 
@@ -207,13 +146,13 @@ def _header(ds: xr.Dataset, responses: list[str], analysed: list[str]) -> list[s
         y = ds[r]
         sense = y.attrs.get("better")
         shown.append(
-            f"{r} ({_label(str(y.attrs.get('long_name', r)), _units(ds, r))}"
+            f"{r} ({label(str(y.attrs.get('long_name', r)), units_of(ds, r))}"
             + (f", {sense} is better" if sense else "")
             + ("" if taguchi.mean_name(ds, r) in analysed else ", NaN in every run: not analysed")
             + ")"
         )
     rows.append(("responses", "; ".join(shown)))
-    return [f"# {title}", "", _table(["", ""], rows), ""]
+    return [f"# {title}", "", table(["", ""], rows), ""]
 
 
 def _design(ds: xr.Dataset, an: xr.Dataset) -> list[str]:
@@ -233,29 +172,29 @@ def _design(ds: xr.Dataset, an: xr.Dataset) -> list[str]:
     pairs = taguchi.interaction_columns(ds)
     errors = json.loads(ds.attrs.get("error_columns", "[]"))
     array_levels = _array_levels(name)
-    for label in columns or factors:
-        col = columns.get(label)
+    for entry in columns or factors:
+        col = columns.get(entry)
         col_levels = array_levels[col - 1] if col and array_levels else None
-        if label in factors:
-            values = _levels(an, label)
-            units = _units(ds, label)
+        if entry in factors:
+            values = levels_of(an, entry)
+            units = units_of(ds, entry)
             role = "factor"
             if col_levels and len(values) < col_levels:
                 dummy = ", ".join(
                     f"{j + 1} → {j % len(values) + 1}" for j in range(len(values), col_levels)
                 )
                 role = f"factor, dummy level (column level → factor level: {dummy})"
-            shown = ", ".join(_value(v, "") for v in values.values()) + (
+            shown = ", ".join(value_text(v, "") for v in values.values()) + (
                 f" {units}" if units else ""
             )
-        elif label in pairs:
-            role, shown = f"interaction {pairs[label][0]} x {pairs[label][1]}", ""
-        elif label in errors:
+        elif entry in pairs:
+            role, shown = f"interaction {pairs[entry][0]} x {pairs[entry][1]}", ""
+        elif entry in errors:
             role, shown = "error (empty column)", ""
         else:
             continue
-        rows.append([col if col else "—", col_levels or "—", label, role, shown])
-    lines += [_table(["column", "levels", "assigned", "role", "values"], rows), ""]
+        rows.append([col if col else "—", col_levels or "—", entry, role, shown])
+    lines += [table(["column", "levels", "assigned", "role", "values"], rows), ""]
     return lines
 
 
@@ -273,269 +212,22 @@ def _runs(view: xr.Dataset, an: xr.Dataset, responses: list[str]) -> list[str]:
         return [*lines, f"{n} runs: see `results.nc`.", ""]
     factors = taguchi.factor_names(view)
     means = [taguchi.mean_name(view, r) for r in responses]
-    header = ["run"] + [_label(f, _units(view, f)) for f in factors]
-    header += [_label(r, _units(view, m)) for r, m in zip(responses, means, strict=True)]
+    header = ["run"] + [label(f, units_of(view, f)) for f in factors]
+    header += [label(r, units_of(view, m)) for r, m in zip(responses, means, strict=True)]
     rows = []
     for i in range(n):
         row: list[Any] = [i + 1]
-        row += [_value(_levels(an, f)[int(view[f"{f}_level"].values[i])], "") for f in factors]
-        row += [_num(float(view[m].values[i])) for m in means]
+        row += [
+            value_text(levels_of(an, f)[int(view[f"{f}_level"].values[i])], "") for f in factors
+        ]
+        row += [num(float(view[m].values[i])) for m in means]
         rows.append(row)
     note = (
         ["Responses with replicates are shown as the mean over the replicates.", ""]
         if any(m != r for r, m in zip(responses, means, strict=True))
         else []
     )
-    return [*lines, _table(header, rows), "", *note]
-
-
-def _shown(view: xr.Dataset, response: str) -> str:
-    """The response's name, noting when its values are means over replicates."""
-    replicated = taguchi.mean_name(view, response) != response
-    return f"{response} (mean over replicates)" if replicated else response
-
-
-def _range_rows(view: xr.Dataset, an: xr.Dataset, name: str) -> tuple[list[str], list[list[Any]]]:
-    r = an.sel(response=name)
-    factors = taguchi.factor_names(view)
-    nlevels = int(np.isfinite(r.k.sel(term=factors).values).any(axis=0).sum())
-    header = ["factor", *[f"k{i + 1}" for i in range(nlevels)], "R", "rank", "best level"]
-    rows = []
-    for f in factors:
-        row = r.sel(term=f)
-        rows.append(
-            [
-                f,
-                *[_num(float(k)) for k in row.k.values[:nlevels]],
-                _num(float(row.R)),
-                int(row["rank"]),
-                _level_text(an, f, int(row.best_level)),
-            ]
-        )
-    return header, rows
-
-
-def _anova_lines(view: xr.Dataset, an: xr.Dataset, name: str, units: str) -> list[str]:
-    r = an.sel(response=name)
-    rows = [
-        [f"{source} (pooled)" if pooled else str(source), _num(float(ss)), int(dof),
-         _num(float(ms)), _num(float(f)), _num(float(p), 3), _pct(float(c))]
-        for source, ss, dof, ms, f, p, c, pooled in zip(
-            an["source"].values, r.SS.values, r.dof.values, r.MS.values, r.F.values,
-            r.P.values, r.contribution.values, r.pooled.values, strict=True,
-        )
-    ]  # fmt: skip
-    squared = f"{units}²" if units.isalpha() else f"({units})²"
-    header = ["source", _label("SS", squared if units != "1" else ""), "dof", "MS", "F", "P", "%"]
-    pooled = [str(t) for t, p in zip(an["source"].values, r.pooled.values, strict=True) if p]
-    pooling = f"Pooled into error: {', '.join(pooled)}." if pooled else "No term pooled into error."
-    errors = json.loads(view.attrs.get("error_columns", "[]"))
-    source = (
-        f"Error from the empty column(s) {', '.join(errors)}"
-        if errors
-        else "Error from the dof the terms leave"
-    )
-    note = str(r.anova_note.values)
-    return [_table(header, rows), "", f"{source}. {pooling} {note}".rstrip(), ""]
-
-
-def _decomposition_lines(an: xr.Dataset, name: str) -> list[str]:
-    if "first_order" not in an or not np.isfinite(an.first_order.sel(response=name)).any():
-        return []
-    frame = decomposition_frame(an, name)
-    rows = [
-        [source, _num(row["SS"]), _pct(row["share %"]), _num(row["S1"], 3), _num(row["ST"], 3)]
-        for source, row in frame.iterrows()
-    ]
-    return [
-        "### Variance decomposition (computer experiment)",
-        "",
-        _table(["source", "SS", "%", "S1", "ST"], rows),
-        "",
-        f"{NO_NOISE} S1 and ST are the first-order and total Sobol indices over the grid.",
-        "",
-    ]
-
-
-def _response(view: xr.Dataset, an: xr.Dataset, response: str, figures: set[str]) -> list[str]:
-    mean = taguchi.mean_name(view, response)
-    r = an.sel(response=mean)
-    units, sense = str(r.units.values), str(r.sense.values)
-    lines = [
-        f"## {response}: {_label(str(r.long_name.values), units)}",
-        "",
-        f"{sense.capitalize()} is better. k_i = mean at level i.",
-        "",
-        "### Range analysis",
-        "",
-    ]
-    header, rows = _range_rows(view, an, mean)
-    lines += [_table(header, rows), ""]
-    lines += _figure(f"main_effects_{response}.png", f"Main effects on {response}", figures)
-    lines += ["### ANOVA", "", *_anova_lines(view, an, mean, units)]
-    lines += _decomposition_lines(an, mean)
-    lines += _figure(plots.map_png(response), f"Map of {response}", figures)
-    if an.sizes["interaction"]:
-        lines += _interaction_lines(view, an, response, figures)
-    sn = taguchi.sn_name(response)
-    if sn in an["response"].values:
-        lines += _sn_lines(view, an, response, figures)
-    lines += _optimum_lines(view, an, mean, response)
-    return lines
-
-
-def _interaction_lines(
-    view: xr.Dataset, an: xr.Dataset, response: str, figures: set[str]
-) -> list[str]:
-    mean = taguchi.mean_name(view, response)
-    r = an.sel(response=mean)
-    rows = [
-        [f"{name} (pooled)" if r.interaction_pooled.values[i] else str(name),
-         _num(float(r.interaction_SS.values[i])), int(r.interaction_dof.values[i]),
-         _num(float(r.interaction_F.values[i])), _num(float(r.interaction_P.values[i]), 3),
-         _pct(float(r.interaction_contribution.values[i]))]
-        for i, name in enumerate(an["interaction"].values)
-    ]  # fmt: skip
-    lines = ["### Interactions", "", _table(["interaction", "SS", "dof", "F", "P", "%"], rows), ""]
-    units = str(r.units.values)
-    pairs = zip(an["interaction_a"].values, an["interaction_b"].values, strict=True)
-    for i, (a, b) in enumerate(pairs):
-        means = r.interaction_mean.values[i]
-        la = np.flatnonzero(np.isfinite(means).any(axis=1)).tolist()
-        lb = np.flatnonzero(np.isfinite(means).any(axis=0)).tolist()
-        va, vb = _levels(an, a), _levels(an, b)
-        ua, ub = _units(view, a), _units(view, b)
-        head = [f"{a} \\ {b}", *[_value(vb[j], ub) for j in lb]]
-        body = [[_value(va[i_a], ua), *[_num(float(means[i_a, j])) for j in lb]] for i_a in la]
-        lines += [f"{_label(f'Mean {response}', units)} by level of {a} and {b}:", ""]
-        lines += [_table(head, body), ""]
-        lines += _figure(plots.interaction_png(response, a, b), f"{a} x {b}", figures)
-    return lines
-
-
-def _constant(view: xr.Dataset, response: str, figures: set[str]) -> list[str]:
-    y = view[taguchi.mean_name(view, response)]
-    units = str(y.attrs.get("units", ""))
-    finite = y.values[np.isfinite(y.values)]
-    value = _value(float(finite[0]), units if units != "1" else "") if finite.size else "—"
-    return [
-        f"## {response}: {_label(str(y.attrs.get('long_name', response)), units)}",
-        "",
-        f"Does not vary over the runs ({value} in every run with a value): nothing to analyse.",
-        "",
-        *_figure(f"main_effects_{response}.png", f"Main effects on {response}", figures),
-    ]
-
-
-def _sn_lines(view: xr.Dataset, an: xr.Dataset, response: str, figures: set[str]) -> list[str]:
-    sn = taguchi.sn_name(response)
-    n = int(an["observations"].sel(response=sn))
-    kind = str(an["sn_kind"].sel(response=sn).values)
-    lines = [
-        "### Signal-to-noise ratio",
-        "",
-        (f"S/N ({kind} is better) in dB over {n} observation(s) per run; larger S/N is better."),
-        "",
-    ]
-    if n == 1:
-        lines[-2] += " With one observation per run the S/N is a log transform of the response."
-    header, rows = _range_rows(view, an, sn)
-    lines += [_table(header, rows), ""]
-    p = prediction(an, sn)
-    lines += [
-        f"Predicted S/N at its best levels: {_num(p.mean)} dB"
-        + (
-            f" ± {_num(p.half_width)} dB ({100 * (1 - p.alpha):g} % confidence)."
-            if np.isfinite(p.half_width)
-            else "."
-        ),
-        "",
-    ]
-    lines += _figure(plots.sn_png(response), f"S/N ratio of {response}", figures)
-    return lines
-
-
-def _optimum_levels(an: xr.Dataset, name: str) -> dict[str, int]:
-    r = an.sel(response=name)
-    return {
-        str(t): int(level)
-        for t, level, factor in zip(
-            an["term"].values, r.optimum_level.values, an["is_factor"].values, strict=True
-        )
-        if factor
-    }
-
-
-def prediction(an: xr.Dataset, name: str) -> taguchi.Prediction:
-    """The predicted optimum of ``name`` as the analysis Dataset holds it."""
-    r = an.sel(response=name)
-    terms = str(r.model_terms.values)
-    return taguchi.Prediction(
-        response=name,
-        units=str(r.units.values),
-        sense=str(r.sense.values),
-        levels=_optimum_levels(an, name),
-        terms=tuple(terms.split(",")) if terms else (),
-        mean=float(r.predicted),
-        grand_mean=float(r.grand_mean),
-        n_eff=float(r.n_eff),
-        error_ms=float(r.error_ms),
-        error_dof=int(r.error_dof),
-        alpha=float(an.attrs["alpha"]),
-        half_width=float(r.half_width),
-        confirmation_runs=int(an.attrs["confirmation_runs"]),
-        confirmation_half_width=float(r.confirmation_half_width),
-    )
-
-
-def _optimum_lines(view: xr.Dataset, an: xr.Dataset, name: str, response: str) -> list[str]:
-    p = prediction(an, name)
-    rows = [
-        [f, p.levels[f] + 1, _value(_levels(an, f)[p.levels[f]], _units(view, f))]
-        for f in taguchi.factor_names(view)
-    ]
-    units = f" {p.units}" if p.units and p.units != "1" else ""
-    level = f"{100 * (1 - p.alpha):g} %"
-    lines = ["### Predicted optimum", "", _table(["factor", "level", "value"], rows), ""]
-    lines.append(
-        f"Predicted {_shown(view, response)} at these levels: **{_num(p.mean)}{units}** "
-        f"(grand mean {_num(p.grand_mean)}{units}; model terms {', '.join(p.terms) or 'none'})."
-    )
-    if np.isfinite(p.half_width):
-        lo, hi = p.interval
-        clo, chi = p.confirmation_interval
-        lines.append(
-            f"{level} confidence interval of the mean: {_num(lo)} … {_num(hi)}{units} "
-            f"(± {_num(p.half_width)}; n_eff = {_num(p.n_eff)}, V_e = {_num(p.error_ms)} with "
-            f"{p.error_dof} dof). A confirmation run should fall in {_num(clo)} … "
-            f"{_num(chi)}{units} (± {_num(p.confirmation_half_width)}, "
-            f"{p.confirmation_runs} run)."
-        )
-    else:
-        lines.append("No interval: the error term has no degrees of freedom.")
-    if _shown(view, response) != response:
-        lines.append(
-            "Replicated responses are analysed as run means: the interval of a confirmation run "
-            "is for the mean of as many replicates."
-        )
-    lines += _observed(view, p, units)
-    return [*lines, ""]
-
-
-def _observed(view: xr.Dataset, p: taguchi.Prediction, units: str) -> list[str]:
-    """The run that already holds the predicted combination (every one does in a full
-    factorial), as a check on the additive model."""
-    hit = np.ones(view.sizes["run"], dtype=bool)
-    for f, level in p.levels.items():
-        hit &= view[f"{f}_level"].values == level
-    runs = np.flatnonzero(hit)
-    if runs.size == 0:
-        return []
-    y = view[p.response].values[runs]
-    shown = ", ".join(
-        f"{_num(float(v))}{units} (run {i + 1})" for i, v in zip(runs, y, strict=True)
-    )
-    return [f"Observed at these levels: {shown}. The prediction is the additive model's."]
+    return [*lines, table(header, rows), "", *note]
 
 
 def _tradeoff(
@@ -558,13 +250,12 @@ def _tradeoff(
     for m in names:
         r = an.sel(response=m)
         cells = [
-            f"{int(r.optimum_level.sel(term=f)) + 1} "
-            f"({_pct(float(r.contribution.sel(source=f)))} %)"
+            f"{int(r.optimum_level.sel(term=f)) + 1} ({pct(float(r.contribution.sel(source=f)))} %)"
             for f in factors
         ]
         rows.append([shown.get(m, m), str(r.sense.values), *cells])
     chosen = {f: int(an["chosen_level"].sel(term=f)) for f in factors}
-    rows.append(["**chosen level**", "", *[_level_text(an, f, chosen[f]) for f in factors]])
+    rows.append(["**chosen level**", "", *[level_text(an, f, chosen[f]) for f in factors]])
     rows.append(
         [
             "decided by",
@@ -575,20 +266,20 @@ def _tradeoff(
     rows.append(
         ["conflict", "", *["yes" if c else "no" for c in an["conflict"].sel(term=factors).values]]
     )
-    lines += [_table(header, rows), ""]
+    lines += [table(header, rows), ""]
     rows = []
     for m in names:
         r = an.sel(response=m)
         units = str(r.units.values)
         rows.append(
-            [shown.get(m, m), str(r.sense.values), _num(float(r.predicted)),
-             _num(float(r.compromise)), _num(float(r.compromise_half_width)),
+            [shown.get(m, m), str(r.sense.values), num(float(r.predicted)),
+             num(float(r.compromise)), num(float(r.compromise_half_width)),
              units if units != "1" else ""]
         )  # fmt: skip
     lines += [
         "Predicted mean of each response at its own optimum and at the chosen levels:",
         "",
-        _table(["response", "better", "own optimum", "chosen levels", "± (CI)", "units"], rows),
+        table(["response", "better", "own optimum", "chosen levels", "± (CI)", "units"], rows),
         "",
     ]
     return lines, chosen
@@ -598,12 +289,12 @@ def _sweep(ds: xr.Dataset, responses: list[str], figures: set[str]) -> list[str]
     lines = ["## Sweep", "", "One factor at a time; the others stay at their base levels.", ""]
     for f in taguchi.factor_names(ds):
         part = sweep_runs(ds, f)
-        header = [_label(f, _units(ds, f))] + [_label(r, _units(ds, r)) for r in responses]
+        header = [label(f, units_of(ds, f))] + [label(r, units_of(ds, r)) for r in responses]
         rows = [
-            [_value(part[f].values[i], ""), *[_num(float(part[r].values[i])) for r in responses]]
+            [value_text(part[f].values[i], ""), *[num(float(part[r].values[i])) for r in responses]]
             for i in range(part.sizes["run"])
         ]
-        lines += [f"### {f}", "", _table(header, rows), ""]
+        lines += [f"### {f}", "", table(header, rows), ""]
     for r in responses:
-        lines += _figure(f"sweep_{r}.png", f"Sweep: {r}", figures)
+        lines += figure(f"sweep_{r}.png", f"Sweep: {r}", figures)
     return lines

@@ -1,0 +1,82 @@
+"""Markdown formatting shared by the report's sections: numbers, tables, labels, level
+values from the analysis Dataset, figure links."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+
+def pct(value: float) -> str:
+    return f"{value:.1f}" if np.isfinite(value) else "—"
+
+
+def num(value: Any, digits: int = 4) -> str:
+    if isinstance(value, str):
+        return value
+    if value is None or not np.isfinite(value):
+        return "—"
+    return f"{value:.{digits}g}"
+
+
+def cell(value: Any) -> str:
+    text = num(value) if isinstance(value, float | np.floating) else str(value)
+    return text.replace("|", "\\|").replace("\n", " ")
+
+
+def table(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:
+    lines = ["| " + " | ".join(cell(h) for h in header) + " |"]
+    lines.append("|" + "|".join("---" for _ in header) + "|")
+    lines += ["| " + " | ".join(cell(v) for v in row) + " |" for row in rows]
+    return "\n".join(lines)
+
+
+def label(name: str, units: str) -> str:
+    """``name [units]``; dimensionless ("1") and unknown units are left out."""
+    return f"{name} [{units}]" if units and units != "1" else name
+
+
+def units_of(ds: xr.Dataset, name: str) -> str:
+    return str(ds[name].attrs.get("units", "")) if name in ds.variables else ""
+
+
+def value_text(value: Any, units: str) -> str:
+    shown = num(value) if isinstance(value, int | float | np.number) else str(value)
+    return f"{shown} {units}".rstrip()
+
+
+def levels_of(an: xr.Dataset, term: str) -> dict[int, Any]:
+    """Level index → the term's value (a number, else its label), for the levels it has."""
+    values = an["level_value"].sel(term=term).values
+    labels = an["level_label"].sel(term=term).values
+    return {
+        i: float(v) if np.isfinite(v) else str(label)
+        for i, (v, label) in enumerate(zip(values, labels, strict=True))
+        if label != ""
+    }
+
+
+def level_text(an: xr.Dataset, factor: str, level: int) -> str:
+    """1-based level number and the factor's value: ``2 (9 deg)``."""
+    units = str(an["term_units"].sel(term=factor).values)
+    return f"{level + 1} ({value_text(levels_of(an, factor)[level], units)})"
+
+
+def figure(name: str, caption: str, figures: set[str]) -> list[str]:
+    return [f"![{caption}]({name})", ""] if name in figures else []
+
+
+def other_figures(lines: list[str], figures: set[str]) -> list[str]:
+    """Links to the figures no section has shown (e.g. the scene's own figures)."""
+    text = "\n".join(lines)
+    rest = sorted(f for f in figures if f"]({f})" not in text)
+    if not rest:
+        return []
+    out = ["## Other figures", ""]
+    for f in rest:
+        out += figure(f, Path(f).stem.replace("_", " "), figures)
+    return out
