@@ -85,16 +85,16 @@ def stability_substeps(params, grid_step):
 
 
 @batch
-def stability_substeps_batch(rows, grid_step, needed, ratio):
+def stability_substeps_batch(rows, grid_steps, needed, ratio):
     """:func:`stability_substeps` of every parameter row (the plan's check of a design).
 
     rows      : 2-D array  Parameter rows (``P_*``), one per case.
-    grid_step : float      Grid step Δθ [rad].
+    grid_steps: 1-D array  Grid step Δθ of each case [rad].
     needed    : 1-D int64  Out: sub-steps per grid step of each case.
     ratio     : 1-D array  Out: ``|h λ|_max`` of the full step of each case.
     """
     for i in prange(rows.shape[0]):
-        needed[i], ratio[i] = stability_substeps(rows[i], grid_step)
+        needed[i], ratio[i] = stability_substeps(rows[i], grid_steps[i])
 
 
 @jit

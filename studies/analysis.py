@@ -108,6 +108,8 @@ def analyze(
     )  # the level codes stay in memory (4 B per run and term); factor values are read on use
     out = _frame(base, view, analysed, terms)
     grid = _grid(base) if design == "full_factorial" else None
+    if grid is not None:
+        _factorial_frame(out, grid)
     tables, optima = {}, {}
     for name in analysed:
         # a bare Variable: no coordinates to compare (and load) on assignment; view stays lazy
@@ -120,9 +122,6 @@ def analyze(
         _interactions(out, one, name, tables[name])
         if grid is not None:
             _factorial(out, one, name, grid)
-    if grid is not None:
-        out.coords["factor"] = grid[0]
-        out.coords["pair"] = [f"{a} x {b}" for i, a in enumerate(grid[0]) for b in grid[0][i + 1 :]]
     sn = {taguchi.sn_name(r) for r in names}
     optimised = [n for n in analysed if n not in sn and int(out["varies"].loc[n])]
     if len(optimised) > 1:
@@ -285,6 +284,31 @@ def _grid(base: xr.Dataset) -> tuple[list[str], tuple[int, ...], np.ndarray] | N
         return None
 
 
+def _factorial_frame(out: xr.Dataset, grid: tuple[list[str], tuple[int, ...], np.ndarray]) -> None:
+    """The full-factorial variables (NaN until a response fills them) and their coordinates."""
+    factors, counts, _ = grid
+    nr, nf, most = out.sizes["response"], len(factors), max(counts)
+    pairs = [f"{a} x {b}" for i, a in enumerate(factors) for b in factors[i + 1 :]]
+    out.update(
+        {
+            "main_SS": (("response", "factor"), np.full((nr, nf), np.nan)),
+            "first_order": (("response", "factor"), np.full((nr, nf), np.nan)),
+            "total_effect": (("response", "factor"), np.full((nr, nf), np.nan)),
+            "pair_SS": (("response", "pair"), np.full((nr, len(pairs)), np.nan)),
+            "remainder_SS": ("response", np.full(nr, np.nan)),
+            "total_SS": ("response", np.full(nr, np.nan)),
+            "map_x": ("response", np.full(nr, "", dtype=object)),
+            "map_y": ("response", np.full(nr, "", dtype=object)),
+            "map_mean": (
+                ("response", "map_level_y", "map_level_x"),
+                np.full((nr, most, most), np.nan),
+            ),
+        }
+    )
+    out.coords["factor"] = factors
+    out.coords["pair"] = pairs
+
+
 def _factorial(
     out: xr.Dataset,
     one: xr.Dataset,
@@ -294,25 +318,6 @@ def _factorial(
     """Main, two-factor and remainder SS and Sobol indices of a response that is finite in
     every run of a complete full factorial (otherwise the grid has holes: left NaN)."""
     factors, counts, order = grid
-    if "main_SS" not in out:
-        nr, nf, most = out.sizes["response"], len(factors), max(counts)
-        npairs = nf * (nf - 1) // 2
-        out.update(
-            {
-                "main_SS": (("response", "factor"), np.full((nr, nf), np.nan)),
-                "first_order": (("response", "factor"), np.full((nr, nf), np.nan)),
-                "total_effect": (("response", "factor"), np.full((nr, nf), np.nan)),
-                "pair_SS": (("response", "pair"), np.full((nr, npairs), np.nan)),
-                "remainder_SS": ("response", np.full(nr, np.nan)),
-                "total_SS": ("response", np.full(nr, np.nan)),
-                "map_x": ("response", np.full(nr, "", dtype=object)),
-                "map_y": ("response", np.full(nr, "", dtype=object)),
-                "map_mean": (
-                    ("response", "map_level_y", "map_level_x"),
-                    np.full((nr, most, most), np.nan),
-                ),
-            }
-        )
     y = one[name].values.astype(float)[order]
     if not np.isfinite(y).all():
         return

@@ -320,7 +320,7 @@ def _cmd_runs(args: argparse.Namespace) -> int:
             f"{_num(r['compile_s']):>10} {_num(r['run_s']):>8}  {r['git_commit'][:10]}{dirty}"
         )
     for r in resumable:
-        print(f"resume {r['run_id']}: {resume_command(r, args.outputs)}")
+        print(f"resume {r['run_id']}: {resume_command(r['run_id'], args.outputs)}")
     return 0
 
 
@@ -338,7 +338,7 @@ def _cmd_show(args: argparse.Namespace) -> int:
     record["status"] = status
     print(json.dumps(record, indent=2))
     if status in ("interrupted", "failed"):
-        print(f"resume it with: {resume_command(row, args.outputs)}")
+        print(f"resume it with: {resume_command(row['run_id'], args.outputs)}")
     return 0
 
 

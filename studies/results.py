@@ -24,6 +24,7 @@ import xarray as xr
 
 from studies.plan import Plan
 from studies.runner import Evaluation
+from studies.sums_of_squares import first_runs
 
 COMPRESSION_LEVEL: Final = 4
 COMPRESSION = {"zlib": True, "complevel": COMPRESSION_LEVEL}
@@ -205,8 +206,7 @@ def as_grid(ds: xr.Dataset) -> xr.Dataset:
     factors, counts, order = grid_order(ds)
     coords: dict[str, Any] = {}
     for f, n in zip(factors, counts, strict=True):
-        first = np.empty(n, dtype=np.int64)
-        first[ds[f"{f}_level"].values[order[::-1]]] = order[::-1]  # the last write wins
+        first = first_runs(ds[f"{f}_level"].values, n)
         coords[f] = (f, ds[f].values[first], dict(ds[f].attrs))
         coords[f"{f}_level"] = (f, np.arange(n, dtype=np.int32), {"units": "1"})
     data_vars = {}

@@ -3,7 +3,8 @@
 Read from a plain loop compiled like the kernels rather than from a CPU name: AVX2 gives 4
 float64 / 8 float32 lanes, AVX-512 8 / 16 (or 4 / 8 where LLVM prefers 256-bit vectors on an
 AVX-512 CPU), SSE 2 / 4. A forced ``NUMBA_CPU_NAME`` / ``NUMBA_CPU_FEATURES`` target changes it
-the same way it changes the kernels.
+the same way it changes the kernels. On a target without AVX (an SSE-only ``generic``
+x86-64) LLVM keeps loops with many selects scalar; :func:`target_features` tells which.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ import re
 
 import numba
 import numpy as np
+from numba.core.registry import cpu_target
 
 from engine_kernels._jit import FASTMATH
 
@@ -34,3 +36,10 @@ def host_lanes(dtype: type) -> int:
     reference = numba.njit(fastmath=FASTMATH)(_scaled_sum)
     reference(np.zeros(64, dtype), np.dtype(dtype).type(2.0))
     return widest_vector(reference.inspect_llvm(reference.signatures[0]), dtype)
+
+
+def target_features() -> set[str]:
+    """CPU features Numba compiles for (those of ``NUMBA_CPU_NAME``/``NUMBA_CPU_FEATURES``
+    when set, else the host's), e.g. ``{"+avx2", "+fma", ...}``."""
+    codegen = cpu_target.target_context.codegen()
+    return set(getattr(codegen, "_tm_features", "").split(","))

@@ -27,6 +27,8 @@ from scipy import stats
 from studies.sums_of_squares import (
     ROUND_OFF,
     centred,
+    first_runs,
+    level_sums,
     term_sums_of_squares,
     without_round_off,
 )
@@ -34,29 +36,31 @@ from studies.sums_of_squares import (
 SENSES = ("smaller", "larger")
 
 
-def _factor_names(ds: xr.Dataset, factors: Sequence[str] | None) -> list[str]:
-    if factors is None:
-        if "factors" not in ds.attrs:
-            msg = "the Dataset has no 'factors' attribute: pass factors=[...]"
+def _level_names(
+    ds: xr.Dataset, names: Sequence[str] | None, attribute: str, default: str | None, what: str
+) -> list[str]:
+    """Names whose ``<name>_level`` coordinates the analysis uses: ``names``, else the JSON
+    list in the global ``attribute`` (``default`` when absent; None: the attribute is required)."""
+    if names is None:
+        text = ds.attrs.get(attribute, default)
+        if text is None:
+            msg = f"the Dataset has no {attribute!r} attribute: pass {attribute}=[...]"
             raise ValueError(msg)
-        factors = json.loads(ds.attrs["factors"])
-    names = list(factors)
-    missing = [f for f in names if f"{f}_level" not in ds.coords]
+        names = json.loads(text)
+    chosen = list(names)
+    missing = [n for n in chosen if f"{n}_level" not in ds.coords]
     if missing:
-        msg = f"no level coordinate for factor(s) {missing} (expected '<factor>_level' on run)"
+        msg = f"no level coordinate for {what}(s) {missing} (expected '<{what}>_level' on run)"
         raise ValueError(msg)
-    return names
+    return chosen
+
+
+def _factor_names(ds: xr.Dataset, factors: Sequence[str] | None) -> list[str]:
+    return _level_names(ds, factors, "factors", None, "factor")
 
 
 def _error_names(ds: xr.Dataset, error: Sequence[str] | None) -> list[str]:
-    if error is None:
-        error = json.loads(ds.attrs.get("error_columns", "[]"))
-    names = list(error)
-    missing = [e for e in names if f"{e}_level" not in ds.coords]
-    if missing:
-        msg = f"no level coordinate for error column(s) {missing} (expected '<name>_level')"
-        raise ValueError(msg)
-    return names
+    return _level_names(ds, error, "error_columns", "[]", "error column")
 
 
 def has_values(ds: xr.Dataset, response: str) -> bool:
@@ -95,17 +99,12 @@ def _level_table(
     there (NaN where it has none); O(N) by ``bincount``."""
     codes = ds[f"{f}_level"].values
     n = int(codes.max()) + 1
-    complete = bool(finite.all())
-    counts = np.bincount(codes, weights=None if complete else finite, minlength=n)
-    values = y.values if complete else np.where(finite, y.values, 0.0)
-    sums = np.bincount(codes, weights=values, minlength=n)
+    counts, sums = level_sums(codes, y.values, n, finite)
     present = np.flatnonzero(counts)
     k = sums[present] / counts[present]
     value = np.full(present.size, np.nan)
     if f in ds.coords and np.issubdtype(ds[f].dtype, np.number):
-        first = np.zeros(n, dtype=np.int64)
-        first[codes[::-1]] = np.arange(codes.size)[::-1]  # the last write wins: the first run
-        value = ds[f].values[first[present]].astype(float)
+        value = ds[f].values[first_runs(codes, n)[present]].astype(float)
     return present, k, value
 
 

@@ -170,8 +170,8 @@ def _execute(
         record.write()
         tracking.register(outputs, record)
         exc.add_note(
-            f"run {record.run_id} kept its finished chunks; resume it with: python -m studies "
-            f"run --resume {record.run_id} --outputs {outputs}"
+            f"run {record.run_id} kept its finished chunks; resume it with: "
+            f"{tracking.resume_command(record.run_id, outputs)}"
         )
         raise
     shutil.rmtree(folder / CHECKPOINTS, ignore_errors=True)

@@ -37,10 +37,23 @@ def centred(y: np.ndarray) -> np.ndarray:
     return d - d.mean()
 
 
-def level_sums(codes: np.ndarray, y: np.ndarray, levels: int) -> tuple[np.ndarray, np.ndarray]:
-    """Count and sum of ``y`` at each level 0…levels-1 of ``codes``."""
-    n = np.bincount(codes, minlength=levels).astype(float)
-    return n, np.bincount(codes, weights=y, minlength=levels)
+def level_sums(
+    codes: np.ndarray, y: np.ndarray, levels: int, finite: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Count and sum of ``y`` at each level 0…levels-1 of ``codes``, over the runs where
+    ``finite`` (all when None) — by weights, without copying out the finite runs."""
+    if finite is None or finite.all():
+        n = np.bincount(codes, minlength=levels).astype(float)
+        return n, np.bincount(codes, weights=y, minlength=levels)
+    n = np.bincount(codes, weights=finite, minlength=levels)
+    return n, np.bincount(codes, weights=np.where(finite, y, 0.0), minlength=levels)
+
+
+def first_runs(codes: np.ndarray, levels: int) -> np.ndarray:
+    """The first run at each level 0…levels-1 of ``codes`` (-1 where a level has none)."""
+    first = np.full(levels, -1, dtype=np.int64)
+    first[codes[::-1]] = np.arange(codes.size)[::-1]  # repeated indices: the last write wins
+    return first
 
 
 def is_balanced(terms: Sequence[np.ndarray]) -> bool:

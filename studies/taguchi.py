@@ -45,6 +45,7 @@ import xarray as xr
 from scipy import stats
 
 from studies.statistics import SENSES, anova
+from studies.sums_of_squares import first_runs, level_sums
 
 SN_KINDS = ("smaller", "larger", "nominal")
 REPLICATE = "replicate"
@@ -218,7 +219,8 @@ def level_values(ds: xr.Dataset, factor: str) -> dict[int, Any]:
     """Level index → the factor's physical value (level number + 1 when it has none)."""
     levels = ds[f"{factor}_level"].values
     values = ds[factor].values if factor in ds.coords else levels + 1
-    return {int(lv): _plain(values[np.argmax(levels == lv)]) for lv in np.unique(levels)}
+    first = first_runs(levels, int(levels.max()) + 1)
+    return {int(lv): _plain(values[run]) for lv, run in enumerate(first) if run >= 0}
 
 
 def interaction_means(ds: xr.Dataset, response: str, a: str, b: str) -> xr.DataArray:
@@ -301,9 +303,8 @@ class _Model:
         self.pairs = interaction_columns(ds)
         y = ds[response].values.astype(float)
         self.finite = np.isfinite(y)
-        self.complete = bool(self.finite.all())
-        self.y = y if self.complete else y[self.finite]
-        self.y_all = y if self.complete else np.where(self.finite, y, 0.0)  # for level sums
+        self.y_all = y
+        self.y = y if self.finite.all() else y[self.finite]
         self.grand = float(self.y.mean())
         self.means = {t: self.level_means(t) for t in self.terms}
         dof = sum(int(number(self.table, t, "dof")) for t in self.terms)
@@ -312,9 +313,7 @@ class _Model:
     def level_means(self, name: str) -> np.ndarray:
         """Mean response at each level index of a factor or column (NaN where no value)."""
         codes = self.ds[f"{name}_level"].values
-        n = int(codes.max()) + 1
-        counts = np.bincount(codes, weights=None if self.complete else self.finite, minlength=n)
-        sums = np.bincount(codes, weights=self.y_all, minlength=n)
+        counts, sums = level_sums(codes, self.y_all, int(codes.max()) + 1, self.finite)
         with np.errstate(invalid="ignore", divide="ignore"):
             return sums / counts
 

@@ -132,8 +132,9 @@ def current_status(row: dict[str, Any]) -> tuple[str, dict[str, Any] | None]:
     return liveness(record), record
 
 
-def resume_command(row: dict[str, Any], outputs: Path) -> str:
-    return f"python -m studies run --resume {row['run_id']} --outputs {outputs}"
+def resume_command(run_id: str, outputs: Path) -> str:
+    """The command that finishes an interrupted or failed run."""
+    return f"python -m studies run --resume {run_id} --outputs {outputs}"
 
 
 def default_outputs() -> Path:

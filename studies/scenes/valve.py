@@ -169,17 +169,11 @@ def stability_problems(
     runs = len(points["cam_speed"])
     for start in range(0, runs, CHECK_BLOCK):
         part = slice(start, min(start + CHECK_BLOCK, runs))
-        rows, block_steps = valve_rows(points, part), steps[part]
+        rows = valve_rows(points, part)
+        block_steps = np.ascontiguousarray(steps[part], dtype=float)
         needed = np.empty(rows.shape[0], dtype=np.int64)
         ratio = np.empty(rows.shape[0])
-        for step in np.unique(block_steps):
-            at = block_steps == step
-            if at.all():
-                valve.stability_substeps_batch(rows, float(step), needed, ratio)
-                break
-            part_needed, part_ratio = needed[at], ratio[at]
-            valve.stability_substeps_batch(rows[at], float(step), part_needed, part_ratio)
-            needed[at], ratio[at] = part_needed, part_ratio
+        valve.stability_substeps_batch(rows, block_steps, needed, ratio)
         for i in np.flatnonzero(needed > limit):
             row, step = rows[i], block_steps[i]
             found.add(
