@@ -22,6 +22,8 @@ a full factorial) and ``level_a`` × ``level_b`` for two-way tables of means.
 * full factorials (complete, the computer-experiment view): ``main_SS``, ``pair_SS``,
   ``remainder_SS``, ``first_order`` and ``total_effect`` Sobol indices, and the two-way
   mean over the strongest factor pair (``map_mean``, factors in ``map_x``/``map_y``);
+* status codes and bit masks (counted, never averaged): ``<response>_count`` on
+  ``<response>_flag`` (the CF flag meanings), the names in the attribute ``status_responses``;
 * several responses: the trade-off (``chosen_level``, ``decided_by``, ``conflict`` per term,
   ``compromise`` and ``compromise_half_width`` per response).
 
@@ -40,9 +42,16 @@ import numpy as np
 import xarray as xr
 
 from studies import taguchi
-from studies.results import grid_order, write_netcdf
+from studies.results import NOT_EVALUATED, grid_order, is_status, write_netcdf
 from studies.sensitivity import decompose
-from studies.statistics import SENSES, anova, has_values, range_analysis, sweep_runs
+from studies.statistics import (
+    SENSES,
+    anova,
+    has_values,
+    range_analysis,
+    status_counts,
+    sweep_runs,
+)
 
 __all__ = ["SENSES", "analyze", "anova", "has_values", "range_analysis", "sweep_runs"]
 
@@ -53,12 +62,12 @@ INTERACTION_COLUMNS = ("SS", "dof", "F", "P", "contribution")
 
 def presence(ds: xr.Dataset, responses: Sequence[str]) -> tuple[list[str], int]:
     """The responses with a value in some run, and the number of runs with no value in any
-    response (NaN, or -1 "not evaluated" for pass/fail flags): points that did not run.
+    response (NaN, or -1 "not evaluated" for flags and status codes): points that did not run.
     Reads each response once."""
     present, any_value = [], np.zeros(ds.sizes["run"], dtype=bool)
     for r in responses:
         values = ds[r].values
-        has = values != -1 if "flag_values" in ds[r].attrs else np.isfinite(values.astype(float))
+        has = values != NOT_EVALUATED if values.dtype.kind == "i" else np.isfinite(values)
         has = has.reshape(values.shape[0], -1).any(axis=1)
         if has.any():
             present.append(r)
@@ -71,6 +80,7 @@ def analyzed(ds: xr.Dataset, responses: Sequence[str]) -> tuple[xr.Dataset, list
     response with a finite value, or its run mean when replicated, then its S/N ratio) and the
     number of runs without any value."""
     present, without = presence(ds, responses)
+    present = [r for r in present if not is_status(ds[r])]
     view = taguchi.with_sn(taguchi.with_means(ds, present), taguchi.sn_responses(ds, present))
     names = [taguchi.mean_name(view, r) for r in present]
     names += [taguchi.sn_name(r) for r in present if taguchi.sn_name(r) in view]
@@ -93,10 +103,14 @@ def analyze(
         "alpha": taguchi.ALPHA,
         "confirmation_runs": 1,
     }
+    status = [r for r in names if is_status(ds[r])]
+    counts = {f"{r}_count": status_counts(ds[r]) for r in status}
+    attrs["status_responses"] = json.dumps(status)
     if design == "sweep":  # tables and plots of the runs themselves: nothing to estimate
         present, without = presence(ds, names)
+        present = [r for r in present if r not in status]
         attrs |= {"points": ds.sizes["run"], "points_without_value": without}
-        return xr.Dataset(attrs=attrs | {"analysed": json.dumps(present)})
+        return xr.Dataset(counts, attrs=attrs | {"analysed": json.dumps(present)})
     view, analysed, without = analyzed(ds, names)
     attrs |= {"points": ds.sizes["run"], "points_without_value": without}
     terms = taguchi.model_terms(view)
@@ -130,6 +144,7 @@ def analyze(
     for r in names:  # run means of replicated responses, for the renderers' run tables
         if taguchi.mean_name(view, r) != r and taguchi.mean_name(view, r) in analysed:
             out[taguchi.mean_name(view, r)] = view[taguchi.mean_name(view, r)]
+    out = out.assign(counts)
     out.attrs = attrs | {"analysed": json.dumps(analysed)}
     return out
 

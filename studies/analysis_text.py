@@ -79,7 +79,7 @@ def format_tables(an: xr.Dataset, response: str) -> str:
     anova_text = anova_frame(an, response).to_string(
         formatters=dict.fromkeys(["SS", "MS", "F", "P", "contribution %"], _number), na_rep=""
     )
-    ss_unit = f" (SS in ({units})^2)" if units not in ("", "1", "-") else ""
+    ss_unit = f" (SS in ({units})^2)" if units not in ("", "1") else ""
     lines = [
         (
             f"Range analysis of {response} ({r.long_name.values}){_units_suffix(units)}; "
@@ -130,6 +130,20 @@ def decomposition_text(an: xr.Dataset, response: str) -> str:
             table,
             NO_NOISE,
         ]
+    )
+
+
+def status_line(an: xr.Dataset, response: str) -> str:
+    """How many design points carry each value of a status code (counted, never averaged)."""
+    counts = an[f"{response}_count"]
+    labels = counts[f"{response}_flag"].values
+    shown = ", ".join(
+        f"{int(n)} {label}" for label, n in zip(labels, counts.values, strict=True) if n
+    )
+    meaning = counts.attrs.get("comment", "")
+    return (
+        f"{response}{f' ({meaning})' if meaning else ''}: {shown or 'no design points'} "
+        f"— a status code, counted per design point (not averaged)"
     )
 
 

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 from studies.definition import StudyError, catalog_names, read_study
 
 if TYPE_CHECKING:
+    from studies.plan import Plan
     from studies.study_run import RunResult
 
 EXIT_STUDY_ERROR = 2
@@ -212,6 +213,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
             )
             print(f"  {Path(earlier['folder']) / 'results.nc'}")
             continue
+        _warn(plan)
         result = run_plan(
             plan,
             args.outputs,
@@ -256,7 +258,14 @@ def _cmd_check(args: argparse.Namespace) -> int:
         f"{d.name}: OK — scene {d.scene}, design {plan.design.name}, {plan.runs} runs, "
         f"stages {', '.join(plan.stages)}"
     )
+    _warn(plan)
     return 0
+
+
+def _warn(plan: Plan) -> None:
+    """Print the design points that will run but give no value (the scene's advice)."""
+    for line in plan.scene.point_warnings(plan.points, plan.settings):
+        print(f"warning: {plan.definition.name}: {line}", file=sys.stderr)
 
 
 def _cmd_list(_: argparse.Namespace) -> int:

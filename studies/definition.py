@@ -29,7 +29,7 @@ File layout (see ``studies/catalog/*.toml`` and the README)::
 
     [factors.seg2_width]
     levels = [7, 9, 11]
-    units = "deg"                    # optional, defaults to the scene's units
+    units = "deg"                    # optional, defaults to the scene's units (deg = degree)
     column = 1                       # optional orthogonal-array column (1-based)
     base = 9                         # optional base level of a sweep (default: middle level)
 """
@@ -44,7 +44,7 @@ from pathlib import Path
 from typing import Any
 
 from studies.scenes import SCENES, Scene, get_scene
-from studies.units import UNITS
+from studies.units import UNITS, canonical, compatible_units
 
 CATALOG = Path(__file__).parent / "catalog"
 TOP_LEVEL_KEYS = {
@@ -345,7 +345,7 @@ class _Parser:
             if problem:
                 self.problem(problem)
                 continue
-            out[name] = (value, units)
+            out[name] = (value, canonical(units) if isinstance(units, str) else units)
         return out
 
     def _units_ok(self, what: str, param: Any, units: Any) -> bool:
@@ -355,12 +355,10 @@ class _Parser:
             self.problem(f"{what}: unknown units {units!r} (expected {param.units!r})")
             return False
         if UNITS[units].dimension != UNITS[param.units].dimension:
-            compatible = sorted(
-                u for u, v in UNITS.items() if v.dimension == UNITS[param.units].dimension
-            )
+            compatible = sorted(compatible_units(param.units))
             self.problem(
-                f"{what}: units {units!r} are a {UNITS[units].dimension}, but {param.name} is a "
-                f"{UNITS[param.units].dimension} (use one of {', '.join(compatible)})"
+                f"{what}: units {units!r} measure {UNITS[units].dimension}, but {param.name} is "
+                f"measured in {UNITS[param.units].dimension} (use one of {', '.join(compatible)})"
             )
             return False
         return True
@@ -408,7 +406,7 @@ class _Parser:
                 base = None
             if column is not None and design in ("full_factorial", "sweep"):
                 self.problem(f"factor {name}: 'column' only applies to orthogonal-array designs")
-            factors.append(Factor(name, tuple(levels), units, column, base))
+            factors.append(Factor(name, tuple(levels), canonical(str(units)), column, base))
         return factors
 
     def _settings(self, scene: Scene, raw: dict[str, Any]) -> dict[str, Any]:

@@ -22,6 +22,7 @@ from typing import Any
 import xarray as xr
 
 from studies import taguchi
+from studies.analysis_text import status_line
 from studies.designs import orthogonal_array
 from studies.markdown_format import (
     figure,
@@ -86,6 +87,9 @@ def _report(
             "below use the others."
         )
         lines += [note, ""]
+    status = json.loads(an.attrs.get("status_responses", "[]"))
+    if status:
+        lines += [f"- {status_line(an, r)}" for r in status] + [""]
     responses = [r for r in responses if taguchi.mean_name(ds, r) in analysed]
     if ds.attrs.get("design") == "sweep":
         lines += _sweep(ds, responses, figures)

@@ -54,7 +54,9 @@ def write_analysis(
         figures += plots.save_sn_plots(an, sn, folder)
         figures += plots.save_interaction_plots(an, analysed, folder)
         figures += plots.save_maps(an, varying, folder)
-    body += [_no_value_note(ds[r]) for r in scalar if r not in analysed]
+    status = json.loads(an.attrs.get("status_responses", "[]"))
+    body += [analysis_text.status_line(an, r) for r in status]
+    body += [_no_value_note(ds[r]) for r in scalar if r not in analysed and r not in status]
     body += scene_summaries.scene_summaries(ds)
     figures += scene_plots.save_scene_figures(ds, folder)
     text_path = folder / "analysis.txt"

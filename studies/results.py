@@ -32,6 +32,8 @@ COMPRESSION = {"zlib": True, "complevel": COMPRESSION_LEVEL}
 # writing every variable of a 10⁷-run file once, in order, would fill a gigabyte of them. One
 # mebibyte holds the few chunks that sequential access touches.
 CHUNK_CACHE_BYTES = 1 << 20
+NOT_EVALUATED: Final = -1  # stored value of a flag or status code at a point that did not run
+PASS_FAIL: Final = "not_evaluated fails passes"
 
 
 def small_chunk_cache() -> None:
@@ -138,13 +140,29 @@ def response_layout(plan: Plan, name: str) -> tuple[tuple[str, ...], type, dict[
         "long_name": r.long_name,
         "better": plan.definition.sense.get(name, r.sense),
     }
-    if not r.flag:
+    if r.bits:
+        masks = {
+            "flag_masks": np.array([1 << i for i in range(len(r.bits))], dtype=np.int8),
+            "flag_meanings": " ".join(r.bits),
+            "valid_range": np.array([0, (1 << len(r.bits)) - 1], dtype=np.int8),
+            "comment": f"0: none of the bits set; {NOT_EVALUATED}: not evaluated",
+        }
+        return ("run",), np.int8, attrs_r | masks
+    meanings = ("fails", "passes") if r.flag else r.codes
+    if not meanings:
         return ("run",), np.float64, attrs_r
     flags = {
-        "flag_values": np.array([-1, 0, 1], dtype=np.int8),
-        "flag_meanings": "not_evaluated fails passes",
+        "flag_values": np.arange(NOT_EVALUATED, len(meanings), dtype=np.int8),
+        "flag_meanings": " ".join(("not_evaluated", *meanings)),
     }
     return ("run",), np.int8, attrs_r | flags
+
+
+def is_status(da: xr.DataArray) -> bool:
+    """Whether a stored response is a status code or bit mask (counted, never averaged): it
+    has CF flag attributes other than a pass/fail flag's."""
+    meanings = str(da.attrs.get("flag_meanings", ""))
+    return "flag_masks" in da.attrs or ("flag_values" in da.attrs and meanings != PASS_FAIL)
 
 
 def curve_layout(plan: Plan, name: str) -> tuple[tuple[str, ...], type, dict[str, Any]]:
@@ -156,9 +174,9 @@ def curve_layout(plan: Plan, name: str) -> tuple[tuple[str, ...], type, dict[str
 
 
 def stored_values(values: np.ndarray, dtype: type) -> np.ndarray:
-    """A response as stored: pass/fail flags as int8 with -1 where not evaluated."""
+    """A response as stored: flags and status codes as int8 with -1 where not evaluated."""
     if dtype is np.int8:
-        return np.where(np.isnan(values), -1, values).astype(np.int8)
+        return np.where(np.isnan(values), NOT_EVALUATED, values).astype(np.int8)
     return values
 
 

@@ -55,10 +55,14 @@ def _raw_value(ds: xr.Dataset, factor: str, level: int):
 
 
 def _value(ds: xr.Dataset, factor: str, level: int) -> str:
-    value = _raw_value(ds, factor, level)
+    return _shown(ds, factor, _raw_value(ds, factor, level))
+
+
+def _shown(ds: xr.Dataset, factor: str, value: object) -> str:
+    """A factor's value as a person reads it: a number with its units, or a level's name."""
     units = ds[factor].attrs.get("units", "")
     shown = f"{value:g}" if isinstance(value, (int, float, np.number)) else str(value)
-    return f"{shown} {units}" if units not in ("", "-", "1") else shown
+    return f"{shown} {units}" if units not in ("", "1") else shown
 
 
 def _runs(ds: xr.Dataset, where: dict[str, int]) -> np.ndarray:
@@ -440,7 +444,7 @@ def motor_power_figure(ds: xr.Dataset) -> Figure | None:
 # --- rocker and valve -----------------------------------------------------------------------
 def _short(ds: xr.Dataset, name: str) -> str:
     units = ds[name].attrs.get("units", "")
-    return f"{name} [{units}]" if units not in ("", "-", "1") else name
+    return f"{name} [{units}]" if units not in ("", "1") else name
 
 
 def valve_lift_figure(ds: xr.Dataset) -> Figure | None:
@@ -595,9 +599,7 @@ def cam_curves_figure(ds: xr.Dataset) -> Figure | None:
     colours = _run_colours(ds.sizes["run"])
     for ax, name in zip(axes, names, strict=True):
         for run in range(ds.sizes["run"]):
-            label = ", ".join(
-                f"{f} {ds[f].values[run]:g} {ds[f].attrs.get('units', '')}" for f in factors
-            )
+            label = ", ".join(f"{f} {_shown(ds, f, ds[f].values[run])}" for f in factors)
             ax.plot(ds["cam_angle"], ds[name].isel(run=run), color=colours[run], lw=1, label=label)
         ax.set_ylabel(f"{name} [{ds[name].attrs.get('units', '')}]")
     axes[-1].set_xlabel(f"cam angle from the nose [{ds['cam_angle'].attrs.get('units', '')}]")

@@ -44,7 +44,7 @@ def _factor_columns(ds: xr.Dataset) -> dict[str, Any]:
     columns: dict[str, Any] = {}
     for f in json.loads(ds.attrs.get("factors", "[]")):
         units = ds[f].attrs.get("units", "")
-        key = f"{f} [{units}]" if units not in ("", "-", "1") else f
+        key = f"{f} [{units}]" if units not in ("", "1") else f
         columns[key] = ds[f].values
     return columns
 
@@ -96,7 +96,7 @@ def luffing_summary(ds: xr.Dataset) -> list[str]:
                     else (f"{_sig4(np.nanmin(v))} … {_sig4(np.nanmax(v))}")
                 )
                 units = ds[name].attrs.get("units", "")
-                shown[label] = f"{span} {units}" if units not in ("", "-", "1") else span
+                shown[label] = f"{span} {units}" if units not in ("", "1") else span
             else:
                 shown[label] = "(not stored)"
         passes = int(ds[f"{c}_ok"].values.sum())

@@ -285,3 +285,31 @@ def sweep_runs(ds: xr.Dataset, factor: str) -> xr.Dataset:
     swept = ds["swept_factor"].values
     keep = (swept == factor) | (swept == "base")
     return ds.isel(run=np.flatnonzero(keep)).sortby(factor)
+
+
+def status_counts(y: xr.DataArray) -> xr.DataArray:
+    """How many observations carry each value of a status code (``flag_values``) or each bit
+    of a status mask (``flag_masks``; ``ok`` = no bit set), on the dimension ``<name>_flag``
+    labelled with the CF flag meanings. A point counts once per bit it has set."""
+    values = np.asarray(y.values).astype(np.int64).ravel()
+    meanings = str(y.attrs["flag_meanings"]).split()
+    if "flag_masks" in y.attrs:
+        seen = values[values >= 0]
+        masks = np.asarray(y.attrs["flag_masks"], dtype=np.int64)
+        counts = [int((seen == 0).sum()), *(int(((seen & m) != 0).sum()) for m in masks)]
+        labels, counts = ["ok", *meanings, "not_evaluated"], [*counts, int((values < 0).sum())]
+    else:
+        codes = np.asarray(y.attrs["flag_values"], dtype=np.int64)
+        labels = meanings
+        counts = list(np.bincount(values - codes[0], minlength=codes.size)[: codes.size])
+    dim = f"{y.name}_flag"
+    return xr.DataArray(
+        np.asarray(counts, dtype=np.int64),
+        dims=dim,
+        coords={dim: labels},
+        attrs={
+            "units": "1",
+            "long_name": f"design points by {y.name}",
+            "comment": str(y.attrs.get("long_name", "")),
+        },
+    )

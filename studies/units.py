@@ -16,14 +16,13 @@ class Unit(NamedTuple):
     to_si: float
 
 
-UNITS: dict[str, Unit] = {
+CANONICAL: dict[str, Unit] = {
     "1": Unit("dimensionless", 1.0),
-    "-": Unit("dimensionless", 1.0),
     "m": Unit("length", 1.0),
     "mm": Unit("length", 1e-3),
     "um": Unit("length", 1e-6),
     "rad": Unit("angle", 1.0),
-    "deg": Unit("angle", math.pi / 180.0),
+    "degree": Unit("angle", math.pi / 180.0),
     "rad/s": Unit("angular speed", 1.0),
     "rpm": Unit("angular speed", 2.0 * math.pi / 60.0),
     "rad/s^2": Unit("angular acceleration", 1.0),
@@ -65,12 +64,20 @@ UNITS: dict[str, Unit] = {
     "m/rad^3": Unit("length per angle^3", 1.0),
     "mm/rad^3": Unit("length per angle^3", 1e-3),
 }
+# Short forms engineers write, accepted in study files and stored under their UDUNITS names.
+ALIASES: dict[str, str] = {"deg": "degree", "-": "1"}
+UNITS: dict[str, Unit] = CANONICAL | {a: CANONICAL[c] for a, c in ALIASES.items()}
+
+
+def canonical(unit: str) -> str:
+    """The UDUNITS name of an accepted unit (``deg`` → ``degree``, ``-`` → ``1``)."""
+    return ALIASES.get(unit, unit)
 
 
 def compatible_units(unit: str) -> list[str]:
     """Every accepted unit with the same dimension as ``unit``."""
     dim = UNITS[unit].dimension
-    return [name for name, u in UNITS.items() if u.dimension == dim and name != "-"]
+    return [name for name, u in CANONICAL.items() if u.dimension == dim]
 
 
 def conversion_factor(from_unit: str, to_unit: str) -> float:

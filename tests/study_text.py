@@ -1,15 +1,28 @@
 """Helpers of the scene tests: the text of a small study (one template; each test module sets
-its defaults), evaluating it, and recording which stages of a scene run."""
+its defaults), the README's own example study, evaluating a study, and recording which stages
+of a scene run."""
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterator
 from contextlib import contextmanager
+from pathlib import Path
 from typing import Any
 
 from studies.plan import plan_text
 from studies.runner import evaluate
 from studies.scenes import SceneOutput
+
+README = Path(__file__).resolve().parents[1] / "README.md"
+
+
+def readme_study() -> str:
+    """The TOML block of the README's "Writing a study" section, exactly as written."""
+    section = README.read_text(encoding="utf-8").split("## Writing a study", 1)[1]
+    match = re.search(r"```toml\n(.*?)```", section, re.DOTALL)
+    assert match, "the README's 'Writing a study' section has no TOML example"
+    return match.group(1)
 
 
 def scene_study(

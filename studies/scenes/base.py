@@ -106,6 +106,9 @@ class Response:
 
     ``sense`` says which direction is better for range analysis ("smaller" or "larger");
     ``flag`` responses are 0/1 design-criterion verdicts stored beside their margins.
+    A status code has the meaning of each value 0, 1, … in ``codes``, a status bit mask the
+    meaning of each bit 1, 2, 4, … in ``bits`` (CF flag words: lower case, no spaces); both are
+    stored as integers with CF flag attributes and counted, never averaged.
     """
 
     name: str
@@ -114,6 +117,8 @@ class Response:
     needs: tuple[str, ...]
     sense: str = "smaller"
     flag: bool = False
+    codes: tuple[str, ...] = ()
+    bits: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -206,6 +211,11 @@ class Scene(ABC):
     # --- to be provided by each scene ---------------------------------------------------
     def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
         """Cross-parameter physical checks over all design points (SI values); problems."""
+        return []
+
+    def point_warnings(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+        """Design points that will run but give no value (e.g. a concave cam), with advice;
+        ``check`` and ``run`` print them. None by default."""
         return []
 
     def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray:

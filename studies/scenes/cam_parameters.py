@@ -35,7 +35,7 @@ def _segment_parameters() -> tuple[Parameter, ...]:
         out += [
             Parameter(
                 f"seg{n}_width",
-                "deg",
+                "degree",
                 _SEG_WIDTHS[k],
                 f"width of acceleration segment {n}",
                 0.0,
@@ -45,7 +45,7 @@ def _segment_parameters() -> tuple[Parameter, ...]:
             ),
             Parameter(
                 f"seg{n}_shape",
-                "-",
+                "1",
                 _SEG_SHAPES[k],
                 f"shape of segment {n}",
                 choices=SHAPES,
@@ -74,7 +74,7 @@ def _segment_parameters() -> tuple[Parameter, ...]:
 
 
 PARAMETERS: tuple[Parameter, ...] = (
-    Parameter("law", "-", "six_segment", "lift law of the flat-faced tappet", choices=LAWS),
+    Parameter("law", "1", "six_segment", "lift law of the flat-faced tappet", choices=LAWS),
     Parameter(
         "cam_speed",
         "rpm",
@@ -100,7 +100,7 @@ PARAMETERS: tuple[Parameter, ...] = (
     ),
     Parameter(
         "rise_angle",
-        "deg",
+        "degree",
         70.0,
         "rise duration β of a standard law; working half-event of the six-segment profile",
         0.0,
@@ -119,7 +119,7 @@ PARAMETERS: tuple[Parameter, ...] = (
     ),
     Parameter(
         "ramp_width",
-        "deg",
+        "degree",
         15.0,
         "ramp width (constant acceleration, then velocity)",
         0.0,
@@ -130,14 +130,14 @@ PARAMETERS: tuple[Parameter, ...] = (
     *_segment_parameters(),
     Parameter(
         "polydyne_coefficients",
-        "-",
+        "1",
         [0.0, 0.0, 0.0, 10.0, -15.0, 6.0],
         "polydyne f(x) = Σ c_k x^k, x = rise fraction (default: the 3-4-5 law)",
         vector=True,
     ),
     Parameter(
         "lift_table",
-        "-",
+        "1",
         "",
         "CSV of measured (cam angle [deg], lift [mm]) for law = 'table'",
         text=True,
@@ -210,7 +210,7 @@ PARAMETERS: tuple[Parameter, ...] = (
     ),
     Parameter(
         "nose_window",
-        "deg",
+        "degree",
         30.0,
         "half-width of the nose window for N and film",
         0.0,
@@ -270,7 +270,7 @@ PARAMETERS: tuple[Parameter, ...] = (
 SETTINGS: tuple[Parameter, ...] = (
     Parameter(
         "angle_step",
-        "deg",
+        "degree",
         0.1,
         "cam-angle grid step (−180 … 180 deg, nose at 0)",
         0.001,
@@ -396,4 +396,4 @@ CURVES: tuple[Curve, ...] = (
     Curve("film_thickness", "um", "Dowson–Higginson minimum film thickness", LOAD),
 )
 
-CAM_ANGLE = CurveAxis("cam_angle", "deg", "cam angle from the nose (camshaft)")
+CAM_ANGLE = CurveAxis("cam_angle", "degree", "cam angle from the nose (camshaft)")

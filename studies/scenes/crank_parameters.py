@@ -72,7 +72,7 @@ PARAMETERS: tuple[Parameter, ...] = (
         1e5,
         source="SPEC §5 (≈ 1 atm)",
     ),
-    Parameter("layout", "-", "v", "cylinder layout", choices=LAYOUTS, source=SRC),
+    Parameter("layout", "1", "v", "cylinder layout", choices=LAYOUTS, source=SRC),
     Parameter(
         "cylinders", "1", 12.0, "number of cylinders z (a whole number)", 1.0, 64.0, source=SRC
     ),
@@ -96,7 +96,7 @@ PARAMETERS: tuple[Parameter, ...] = (
     ),
     Parameter(
         "bank_angle",
-        "deg",
+        "degree",
         90.0,
         "angle γ between the banks of a V engine",
         0.0,
@@ -106,7 +106,7 @@ PARAMETERS: tuple[Parameter, ...] = (
     ),
     Parameter(
         "firing_order",
-        "-",
+        "1",
         FIRING_ORDER_12V150,
         "cylinder numbers in firing order (every cylinder 1…z exactly once)",
         vector=True,
@@ -114,7 +114,7 @@ PARAMETERS: tuple[Parameter, ...] = (
     ),
     Parameter(
         "firing",
-        "-",
+        "1",
         "even",
         "firing angles: 'even' = 720°/z in firing order; 'shared_crankpins' = V engine with "
         "two rods per throw (even only when γ = 720°/z); 'given' = firing_angles",
@@ -123,21 +123,21 @@ PARAMETERS: tuple[Parameter, ...] = (
     ),
     Parameter(
         "firing_angles",
-        "deg",
+        "degree",
         [],
         "crank angle (0–720°) at which cylinder 1, 2, …, z fires (firing = 'given')",
         vector=True,
     ),
     Parameter(
         "pressure_model",
-        "-",
+        "1",
         "cycle",
         "cylinder pressure: parametric single-zone 'cycle' or a measured 'table'",
         choices=PRESSURE_MODELS,
     ),
     Parameter(
         "pressure_table",
-        "-",
+        "1",
         "",
         "CSV of crank angle [deg] (firing TDC at 0) and pressure [MPa] for "
         "pressure_model = 'table' (path relative to the working directory)",
@@ -178,7 +178,7 @@ PARAMETERS: tuple[Parameter, ...] = (
     ),
     Parameter(
         "combustion_start",
-        "deg",
+        "degree",
         -15.0,
         "start of heat release after firing TDC (negative = before TDC)",
         -180.0,
@@ -187,7 +187,7 @@ PARAMETERS: tuple[Parameter, ...] = (
     ),
     Parameter(
         "combustion_duration",
-        "deg",
+        "degree",
         50.0,
         "heat-release duration",
         0.0,
@@ -208,7 +208,7 @@ PARAMETERS: tuple[Parameter, ...] = (
     Parameter("wiebe_form", "1", 1.0, "Wiebe form factor m", 0.0, 10.0, source=ASSUMED),
     Parameter(
         "heat_input",
-        "-",
+        "1",
         "max_pressure",
         "heat input of the cycle: from the target 'max_pressure' or from 'cycle_heat'",
         choices=HEAT_INPUTS,
@@ -237,7 +237,7 @@ PARAMETERS: tuple[Parameter, ...] = (
 SETTINGS: tuple[Parameter, ...] = (
     Parameter(
         "model",
-        "-",
+        "1",
         "exact",
         "piston kinematics: 'exact' [K1] or two-term "
         "'approximate' [K2]–[K4] (inertia forces, torque, kinematic curves)",
@@ -245,7 +245,7 @@ SETTINGS: tuple[Parameter, ...] = (
     ),
     Parameter(
         "angle_step",
-        "deg",
+        "degree",
         1.0,
         "crank-angle grid step over the 720° cycle (must divide 720°)",
         0.0,
@@ -278,12 +278,14 @@ def _order_responses() -> tuple[Response, ...]:
 RESPONSES: tuple[Response, ...] = (
     Response("mean_piston_speed", "m/s", "mean piston speed cm = S n/30", KIN),
     Response("max_piston_velocity", "m/s", "maximum piston velocity", KIN),
-    Response("crank_angle_max_velocity", "deg", "crank angle of the maximum piston velocity", KIN),
+    Response(
+        "crank_angle_max_velocity", "degree", "crank angle of the maximum piston velocity", KIN
+    ),
     Response("piston_acceleration_tdc", "m/s^2", "piston acceleration at TDC", KIN),
     Response(
         "min_piston_acceleration", "m/s^2", "most negative piston acceleration", KIN, "larger"
     ),
-    Response("max_rod_angle", "deg", "largest rod angle β = asin λ", KIN),
+    Response("max_rod_angle", "degree", "largest rod angle β = asin λ", KIN),
     Response("max_rod_angular_velocity", "rad/s", "largest rod angular velocity λω", KIN),
     Response("max_rod_angular_acceleration", "rad/s^2", "largest |rod angular acceleration|", KIN),
     Response(
@@ -313,7 +315,10 @@ RESPONSES: tuple[Response, ...] = (
     ),
     Response("peak_pressure", "MPa", "peak cylinder pressure (on the grid)", PRESSURE),
     Response(
-        "peak_pressure_angle", "deg", "crank angle of the peak pressure after firing TDC", PRESSURE
+        "peak_pressure_angle",
+        "degree",
+        "crank angle of the peak pressure after firing TDC",
+        PRESSURE,
     ),
     Response("compression_pressure", "MPa", "compression pressure p_a ε^k (cycle only)", PRESSURE),
     Response("heat_released", "kJ", "heat released in the closed cycle (cycle only)", PRESSURE),
@@ -389,7 +394,7 @@ CURVES: tuple[Curve, ...] = (
     Curve("piston_displacement", "mm", "piston displacement from TDC", KIN),
     Curve("piston_velocity", "m/s", "piston velocity", KIN),
     Curve("piston_acceleration", "m/s^2", "piston acceleration", KIN),
-    Curve("rod_angle", "deg", "connecting-rod angle β", KIN),
+    Curve("rod_angle", "degree", "connecting-rod angle β", KIN),
     Curve("rod_angular_velocity", "rad/s", "rod angular velocity", KIN),
     Curve("rod_angular_acceleration", "rad/s^2", "rod angular acceleration", KIN),
     Curve("cylinder_pressure", "MPa", "cylinder pressure", PRESSURE),
@@ -405,5 +410,5 @@ CURVES: tuple[Curve, ...] = (
 )
 
 CRANK_ANGLE = CurveAxis(
-    "crank_angle", "deg", "crank angle of cylinder 1 from gas-exchange TDC (firing TDC at 360°)"
+    "crank_angle", "degree", "crank angle of cylinder 1 from gas-exchange TDC (firing TDC at 360°)"
 )

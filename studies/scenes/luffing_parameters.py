@@ -198,7 +198,7 @@ PARAMETERS: tuple[Parameter, ...] = (
     ),
     Parameter(
         "bearing_type",
-        "-",
+        "1",
         "ball",
         "bearing type (life exponent 3 ball, 10/3 roller)",
         choices=BEARINGS,

@@ -55,7 +55,7 @@ PARAMETERS: tuple[Parameter, ...] = (
     Parameter("thickness", "mm", 0.3, "thickness h of the reed", 0.0, 100.0, True, source=SRC),
     Parameter(
         "material",
-        "-",
+        "1",
         "spring_steel",
         "reed material (E, ρ from the scene's table; 'custom' uses youngs_modulus and density)",
         choices=(*MATERIALS, "custom"),
@@ -96,7 +96,7 @@ PARAMETERS: tuple[Parameter, ...] = (
     ),
     Parameter(
         "cycle",
-        "-",
+        "1",
         "four_stroke",
         "engine cycle: the reed opens once per cycle",
         choices=tuple(OPENINGS),

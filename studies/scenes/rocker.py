@@ -27,10 +27,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from engine_kernels import cam_batch as cb
-from engine_kernels import cam_profile, lift_laws, rocker
+from engine_kernels import cam_profile, rocker
 from studies.scenes.base import CurveAxis, Scene, SceneOutput
-from studies.scenes.cam import LAW_CODES, SHAPE_CODES, polydyne_problems
+from studies.scenes.cam import SHAPE_CODES, polydyne_problems
 from studies.scenes.checks import PointProblems
 from studies.scenes.rocker_parameters import (
     CAM_ANGLE,
@@ -39,9 +38,18 @@ from studies.scenes.rocker_parameters import (
     RESPONSES,
     SETTINGS,
 )
+from studies.scenes.rocker_tappet import (
+    HALF_TURN_DEG,
+    TappetTable,
+    concave_chains,
+    geometry_row,
+    grid_deg,
+    nose_tappet_lift,
+    step_deg,
+    tappet_table,
+)
 
 MM = 1e3
-HALF_TURN_DEG = 180.0
 GRID_UNIT_DEG = 2.0
 """Every angle step must divide this, so grids of different steps share their nodes."""
 MAX_EVENT_HALF_DEG = 150.0
@@ -78,33 +86,12 @@ class BoundedCache:
 
 
 @dataclass(frozen=True)
-class TappetTable:
-    """Flat-tappet law of one chain on the tappet-angle grid ``phi`` [rad]."""
-
-    phi: np.ndarray
-    curves: np.ndarray  # (3, m): h [m], h' [m/rad], h'' [m/rad²]
-    nose_lift: float  # [m]
-    min_radius: float  # min r0 + h + h'' [m]
-
-
-@dataclass(frozen=True)
 class ChainCurves:
     """The chain [R1]–[R6] of one parameter set on a cam-angle grid (``ROW_*`` rows, SI)."""
 
     theta_deg: np.ndarray
     curves: np.ndarray
     status: int
-
-
-def grid_deg(start: float, spacing: float, stop: float) -> np.ndarray:
-    """Angles start, start + spacing, … stop [deg] (stop − start a multiple of spacing)."""
-    count = round((stop - start) / spacing)
-    return start + spacing * np.arange(count + 1)
-
-
-def step_deg(step_rad: float) -> float:
-    """A grid step from settings [rad] in degrees, rounded so grids compare exactly."""
-    return round(math.degrees(step_rad), 9)
 
 
 def chain_keys(points: dict[str, np.ndarray]) -> dict[tuple, np.ndarray]:
@@ -133,47 +120,6 @@ def chain_keys(points: dict[str, np.ndarray]) -> dict[tuple, np.ndarray]:
     }
 
 
-def geometry_row(points: dict[str, np.ndarray], i: int) -> np.ndarray:
-    """Rocker geometry of design point ``i`` indexed by ``engine_kernels.rocker.G_*`` [m]."""
-    return np.array([float(points[name][i]) for name in rocker.ROCKER_GEOMETRY_NAMES])
-
-
-def nose_tappet_lift(points: dict[str, np.ndarray], i: int) -> float:
-    """Tappet lift at the nose that gives the target valve lift [m] (NaN if unreachable)."""
-    return rocker.tappet_lift_for_valve_lift(
-        float(points["valve_lift"][i]), geometry_row(points, i)
-    )
-
-
-def tappet_parameters(
-    points: dict[str, np.ndarray], i: int, nose: float
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """One row of ``cam_kinematics_batch`` inputs (params, shapes, coefficients) for point i."""
-    params = np.zeros((1, cb.N_PARAMS))
-    law = str(points["law"][i])
-    six = law == "six_segment"
-    params[0, cb.P_LAW] = LAW_CODES[law]
-    params[0, cb.P_CAM_SPEED] = 1.0
-    params[0, cb.P_BASE_RADIUS] = points["base_radius"][i]
-    params[0, cb.P_LIFT] = nose - (points["ramp_height"][i] if six else 0.0)
-    params[0, cb.P_RISE_ANGLE] = points["rise_angle"][i]
-    if six:
-        params[0, cb.P_RAMP_HEIGHT] = points["ramp_height"][i]
-        params[0, cb.P_RAMP_WIDTH] = points["ramp_width"][i]
-        params[0, cb.P_RAMP_VELOCITY] = points["ramp_velocity"][i]
-    for k in range(cam_profile.N_SEGMENTS):
-        params[0, cb.P_SEG_WIDTH0 + k] = points[f"seg{k + 1}_width"][i]
-        params[0, cb.P_SEG_ACCEL0 + k] = points[f"seg{k + 1}_accel"][i]
-        params[0, cb.P_SEG_AMP0 + k] = points[f"seg{k + 1}_amplitude"][i]
-    shapes = np.array(
-        [[SHAPE_CODES[points[f"seg{k}_shape"][i]] for k in range(1, 7)]], dtype=np.int64
-    )
-    coeffs = np.zeros((1, lift_laws.NCOEF))
-    given = np.asarray(points["polydyne_coefficients"][i], dtype=float)[: lift_laws.NCOEF]
-    coeffs[0, : given.size] = given
-    return params, shapes, coeffs
-
-
 class RockerScene(Scene):
     name = "rocker"
     description = "OHC cam with variable-ratio rocker: valve lift, force ratio (kinematics)"
@@ -198,6 +144,10 @@ class RockerScene(Scene):
     def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
         problem = angle_step_problem(settings["angle_step"], "setting angle_step")
         return ([problem] if problem else []) + self.chain_point_problems(points)
+
+    def point_warnings(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+        """The chains whose cam is concave: their points will not run (a result, not an error)."""
+        return concave_chains(points, chain_keys(points))
 
     def chain_point_problems(self, points: dict[str, np.ndarray]) -> list[str]:
         """Input errors of the cam laws and rocker geometries, grouped by design points."""
@@ -250,7 +200,7 @@ class RockerScene(Scene):
         spacing = step_deg(ctx["settings"]["tappet_step"])
         i = int(ctx["groups"][key][0])
         return self.tappet_cache.get(
-            (key, spacing), lambda: _tappet_table(ctx["points"], i, spacing)
+            (key, spacing), lambda: tappet_table(ctx["points"], i, spacing)
         )
 
     def chain(
@@ -292,19 +242,6 @@ class RockerScene(Scene):
                 values = ctx["chain"][key].curves[row] * scale
             out[idx] = values
         return out
-
-
-def _tappet_table(points: dict[str, np.ndarray], i: int, spacing: float) -> TappetTable:
-    phi_deg = grid_deg(-HALF_TURN_DEG, spacing, HALF_TURN_DEG)
-    phi = np.radians(phi_deg)
-    nose = nose_tappet_lift(points, i)
-    params, shapes, coeffs = tappet_parameters(points, i, nose)
-    curves = np.empty((1, 4, phi.size))
-    diag = np.empty((1, cam_profile.N_DIAG))
-    cb.cam_kinematics_batch(params, shapes, coeffs, phi, curves, diag)
-    law = np.ascontiguousarray(curves[0, :3])
-    radius = float(np.min(points["base_radius"][i] + law[0] + law[2]))
-    return TappetTable(phi, law, nose, radius)
 
 
 def _chain_curves(

@@ -25,7 +25,7 @@ _SEGMENTS = tuple(p for p in CAM_PARAMETERS if p.name.startswith("seg"))
 CAM_LAW_PARAMETERS: tuple[Parameter, ...] = (
     Parameter(
         "law",
-        "-",
+        "1",
         "six_segment",
         "flat-tappet lift law of the cam (scaled to the target valve lift)",
         choices=ROCKER_LAWS,
@@ -43,7 +43,7 @@ CAM_LAW_PARAMETERS: tuple[Parameter, ...] = (
     ),
     Parameter(
         "rise_angle",
-        "deg",
+        "degree",
         70.0,
         "rise duration β of a standard law; working half-event of the six-segment profile",
         0.0,
@@ -60,7 +60,7 @@ CAM_LAW_PARAMETERS: tuple[Parameter, ...] = (
         5.0,
         source=SYNTHETIC,
     ),
-    Parameter("ramp_width", "deg", 0.0, "six-segment ramp width", 0.0, 90.0, source=SYNTHETIC),
+    Parameter("ramp_width", "degree", 0.0, "six-segment ramp width", 0.0, 90.0, source=SYNTHETIC),
     Parameter(
         "ramp_velocity",
         "mm/rad",
@@ -73,7 +73,7 @@ CAM_LAW_PARAMETERS: tuple[Parameter, ...] = (
     *_SEGMENTS,
     Parameter(
         "polydyne_coefficients",
-        "-",
+        "1",
         CONVEX_POLYDYNE,
         "polydyne f(x) = Σ c_k x^k, x = rise fraction (default: h = H (1 − u²)³ (1 + 2u²), "
         "convex over ±80° at 6.30 mm)",
@@ -124,7 +124,7 @@ GEOMETRY_PARAMETERS: tuple[Parameter, ...] = (
     Parameter("lash", "mm", 0.05, "valve lash Δ", 0.0, 5.0, source=SPEC3),
     Parameter(
         "pad_side",
-        "-",
+        "1",
         "ahead",
         "pad centre A ahead of or behind the line Oc–O in the rotation sense [R4]",
         choices=PAD_SIDES,
@@ -136,7 +136,7 @@ PARAMETERS = CAM_LAW_PARAMETERS + GEOMETRY_PARAMETERS
 
 TAPPET_STEP = Parameter(
     "tappet_step",
-    "deg",
+    "degree",
     0.1,
     "tappet-angle grid of the lift law fed to the chain [R1]–[R6] (resampled by cubic "
     "Hermite pieces, error O(step⁴))",
@@ -147,7 +147,7 @@ TAPPET_STEP = Parameter(
 SETTINGS: tuple[Parameter, ...] = (
     Parameter(
         "angle_step",
-        "deg",
+        "degree",
         0.1,
         "cam-angle grid step of responses and curves (−180 … 180 deg, nose at 0); must "
         "divide 2 deg",
@@ -194,11 +194,11 @@ RESPONSES: tuple[Response, ...] = (
         "larger",
     ),
     Response(
-        "valve_opening_angle", "deg", "cam angle where the valve opens (lash taken up)", ROCKER
+        "valve_opening_angle", "degree", "cam angle where the valve opens (lash taken up)", ROCKER
     ),
-    Response("valve_closing_angle", "deg", "cam angle where the valve closes", ROCKER),
+    Response("valve_closing_angle", "degree", "cam angle where the valve closes", ROCKER),
     Response(
-        "valve_open_duration", "deg", "cam angle over which the valve is open", ROCKER, "larger"
+        "valve_open_duration", "degree", "cam angle over which the valve is open", ROCKER, "larger"
     ),
     Response("lift_ratio", "1", "max valve lift / max tappet lift", ROCKER),
     Response(
@@ -206,12 +206,13 @@ RESPONSES: tuple[Response, ...] = (
     ),
     Response("max_force_ratio", "1", "largest force ratio i while the valve is open", ROCKER),
     Response("min_force_ratio", "1", "smallest force ratio i while the valve is open", ROCKER),
-    Response("rocker_swing", "deg", "rocker angle range max W − min W", ROCKER),
+    Response("rocker_swing", "degree", "rocker angle range max W − min W", ROCKER),
     Response(
         "chain_status",
         "1",
-        "chain status flags: 0 ok, +1 cam not convex, +2 φr not increasing, +4 out of reach",
+        "kinematic chain status bits (0: valid)",
         ROCKER,
+        bits=("cam_not_convex", "cam_rotation_not_increasing", "out_of_reach"),
     ),
     Response("chain_ok", "1", "kinematic chain valid (status 0)", ROCKER, "larger", flag=True),
 )
@@ -222,8 +223,8 @@ CURVES: tuple[Curve, ...] = (
     Curve("valve_velocity", "mm/rad", "theoretical valve velocity Y' per cam angle", ROCKER),
     Curve("valve_acceleration", "mm/rad^2", "theoretical valve acceleration Y''", ROCKER),
     Curve("force_ratio", "1", "force ratio i = valve force / cam force", ROCKER),
-    Curve("rocker_angle", "deg", "rocker angle W between OA and OOc", ROCKER),
-    Curve("tappet_angle", "deg", "tappet (lift-table) angle φ in contact", ROCKER),
+    Curve("rocker_angle", "degree", "rocker angle W between OA and OOc", ROCKER),
+    Curve("tappet_angle", "degree", "tappet (lift-table) angle φ in contact", ROCKER),
 )
 
-CAM_ANGLE = CurveAxis("cam_angle", "deg", "cam angle from the nose (camshaft, rotation sense)")
+CAM_ANGLE = CurveAxis("cam_angle", "degree", "cam angle from the nose (camshaft, rotation sense)")

@@ -53,7 +53,7 @@ SETTINGS: tuple[Parameter, ...] = (
     *WINDOW_SETTINGS,
     Parameter(
         "reference_method",
-        "-",
+        "1",
         "DOP853",
         "scipy solve_ivp method of the reference (event restarts at every mode switch)",
         choices=REFERENCE_METHODS,

@@ -111,7 +111,7 @@ PARAMETERS = ROCKER_PARAMETERS + DYNAMICS_PARAMETERS
 
 INTEGRATOR = Parameter(
     "integrator",
-    "-",
+    "1",
     "lanes",
     "RK4 variant: lanes (SIMD blocks), lanes_f32 (the same in single precision), rk4 (one "
     "case per iteration), rk4_switch_aware",
@@ -119,7 +119,7 @@ INTEGRATOR = Parameter(
 )
 ANGLE_STEP = Parameter(
     "angle_step",
-    "deg",
+    "degree",
     0.5,
     "RK4 step in cam angle (excitation every half step; must divide 2 deg)",
     0.001,
@@ -129,7 +129,7 @@ ANGLE_STEP = Parameter(
 WINDOW_SETTINGS: tuple[Parameter, ...] = (
     Parameter(
         "closing_window",
-        "deg",
+        "degree",
         30.0,
         "integration continues this far past valve closure (bounces, settling)",
         0.0,
@@ -199,8 +199,8 @@ DYNAMIC_RESPONSES: tuple[Response, ...] = (
         "larger",
         flag=True,
     ),
-    Response("jump_start", "deg", "cam angle where separation first starts (NaN: none)", DYN),
-    Response("jump_duration", "deg", "cam angle over which the valve is separated", DYN),
+    Response("jump_start", "degree", "cam angle where separation first starts (NaN: none)", DYN),
+    Response("jump_duration", "degree", "cam angle over which the valve is separated", DYN),
     Response("jump_max_gap", "mm", "largest gap y − Y while separated", DYN),
     Response(
         "bounce_count",
@@ -218,9 +218,9 @@ DYNAMIC_RESPONSES: tuple[Response, ...] = (
     Response(
         "status",
         "1",
-        "run status: 0 ok, 1 sub-step limit, 2 unstable, 3 non-finite, 4 invalid input, "
-        f"{STATUS_NOT_RUN} not run (kinematic chain invalid)",
+        "run status of the dynamics (not_run: the kinematic chain is invalid)",
         DYN,
+        codes=(*valve.VALVE_STATUS_NAMES, "not_run"),
     ),
     Response("run_ok", "1", "dynamics ran and finished with status ok", DYN, "larger", flag=True),
     Response(
@@ -237,7 +237,7 @@ DYNAMIC_RESPONSES: tuple[Response, ...] = (
         "monotone convergence of order ≥ 1)",
         DYN,
     ),
-    Response("angle_step_used", "deg", "RK4 step used (picked per point with a tolerance)", DYN),
+    Response("angle_step_used", "degree", "RK4 step used (picked per point with a tolerance)", DYN),
     Response(
         "tolerance_met",
         "1",
@@ -256,9 +256,10 @@ DYNAMIC_RESPONSES: tuple[Response, ...] = (
     Response(
         "jump_speed_status",
         "1",
-        "jump speed search: 0 found, 1 none in the range, 2 already at the lowest speed, "
-        f"3 a run failed, {JUMP_NOT_RUN} not run (kinematic chain invalid)",
+        "jump speed search status (at_lower_bound: already separated at the lowest speed; "
+        "not_run: the kinematic chain is invalid)",
         JUMP,
+        codes=(*valve.JUMP_STATUS_NAMES, "not_run"),
     ),
 )
 RESPONSES = ROCKER_RESPONSES + DYNAMIC_RESPONSES

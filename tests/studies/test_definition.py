@@ -51,12 +51,12 @@ MISTAKES = [
     (
         "wrong units",
         lambda t: t.replace('units = "deg"', 'units = "mm"'),
-        ["units 'mm' are a length", "seg2_width is a angle"],
+        ["units 'mm' measure length", "seg2_width is measured in angle"],
     ),
     (
         "unknown units",
-        lambda t: t.replace('units = "deg"', 'units = "degree"'),
-        ["unknown units 'degree'"],
+        lambda t: t.replace('units = "deg"', 'units = "degrees"'),
+        ["unknown units 'degrees'"],
     ),
     (
         "empty levels",
@@ -127,7 +127,7 @@ MISTAKES = [
     (
         "setting out of range",
         lambda t: t + "\n[settings]\nangle_step = 0.0\n",
-        ["angle_step = 0 deg is physically impossible"],
+        ["angle_step = 0 degree is physically impossible"],
     ),
 ]
 

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import json
+import math
 import re
 from pathlib import Path
 
@@ -11,18 +13,11 @@ import pytest
 import xarray as xr
 
 from studies.cli import main
+from studies.plan import plan_study
 from studies.scenes import SCENES, get_scene
+from studies.scenes.rocker_tappet import nose_tappet_lift
 from studies.units import UNITS, conversion_factor
-
-README = Path(__file__).resolve().parents[2] / "README.md"
-
-
-def readme_study() -> str:
-    """The TOML block of the README's "Writing a study" section, exactly as written."""
-    section = README.read_text(encoding="utf-8").split("## Writing a study", 1)[1]
-    match = re.search(r"```toml\n(.*?)```", section, re.DOTALL)
-    assert match, "the README's 'Writing a study' section has no TOML example"
-    return match.group(1)
+from study_text import readme_study
 
 
 def test_readme_example_runs_to_the_end(tmp_path: Path) -> None:
@@ -138,3 +133,59 @@ def test_points_that_did_not_run_are_reported_and_strict_fails(
     args = ["run", str(study), "--outputs", str(outputs), "--no-progress", "--strict", "--force"]
     assert main(args) == 3
     assert "--strict" in capsys.readouterr().err
+
+
+# Closed-form rise laws f(s) and f''(s) on s ∈ [0, 1] (Norton, double-dwell functions),
+# written here independently of engine_kernels.lift_laws.
+RISE_LAWS = {
+    "cycloidal": (
+        lambda s: s - np.sin(2 * np.pi * s) / (2 * np.pi),
+        lambda s: 2 * np.pi * np.sin(2 * np.pi * s),
+    ),
+    "harmonic": (
+        lambda s: 0.5 * (1 - np.cos(np.pi * s)),
+        lambda s: 0.5 * np.pi**2 * np.cos(np.pi * s),
+    ),
+    "poly345": (
+        lambda s: 10 * s**3 - 15 * s**4 + 6 * s**5,
+        lambda s: 60 * s - 180 * s**2 + 120 * s**3,
+    ),
+}
+
+
+def convex_rise_angle(law: str, lift: float, base_radius: float) -> float:
+    """Smallest rise angle β [deg] with r0 + L f + L f''/β² > 0 over the rise: β² must exceed
+    max(−L f''/(r0 + L f)) (f'' < 0 only where the cam could be concave)."""
+    f, f2 = RISE_LAWS[law]
+    s = np.linspace(0.0, 1.0, 200_001)
+    return math.degrees(math.sqrt(np.max(-lift * f2(s) / (base_radius + lift * f(s)))))
+
+
+def test_check_names_each_concave_law_and_the_rise_angle_that_makes_it_convex(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # Was: at the valve scene's default rise angle (70°) every standard law is concave, check
+    # said OK, and the points ran without a value.
+    laws = ["six_segment", *RISE_LAWS]
+    study = tmp_path / "laws.toml"
+    study.write_text(
+        'name = "laws"\nscene = "valve"\nresponses = ["max_lift"]\n'
+        f"[factors.law]\nlevels = {json.dumps(laws)}\n",
+        encoding="utf-8",
+    )
+    assert main(["check", str(study)]) == 0
+    err = capsys.readouterr().err
+    plan = plan_study(str(study))
+    lift = nose_tappet_lift(plan.points, 0)
+    base_radius = float(plan.points["base_radius"][0])
+    for i, law in enumerate(laws[1:], start=1):
+        expected = convex_rise_angle(law, lift, base_radius)
+        assert expected > 70.0, law  # concave at the default: the warning must be there
+        found = re.search(
+            rf"design point {i}: law = '{law}' gives a concave cam at rise_angle = 70 degree"
+            r".*convex from rise_angle = ([\d.]+) degree",
+            err,
+        )
+        assert found, f"{law}: no warning in\n{err}"
+        assert float(found.group(1)) == pytest.approx(expected, abs=0.2)
+    assert "six_segment" not in err  # convex: no warning

@@ -47,7 +47,7 @@ def test_isac_results_layout(isac) -> None:
     with xr.open_dataset(result.folder / "results.nc") as ds:
         assert ds.sizes["run"] == 9
         for f, units in [
-            ("seg2_width", "deg"),
+            ("seg2_width", "degree"),
             ("seg6_amplitude", "mm/rad^2"),
             ("seg2_amplitude", "mm/rad^2"),
         ]:
@@ -113,7 +113,7 @@ def test_curves_only_when_asked(tmp_path: Path) -> None:
     ).dataset
     assert with_curves["lift"].dims == ("run", "cam_angle")
     assert with_curves["lift"].attrs["units"] == "mm"
-    assert with_curves["cam_angle"].attrs["units"] == "deg"
+    assert with_curves["cam_angle"].attrs["units"] == "degree"
 
 
 def test_full_factorial_as_grid(tmp_path: Path) -> None:

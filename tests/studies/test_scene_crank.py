@@ -90,7 +90,7 @@ def test_v12_torque_runs_with_curves_figures_and_energy_balance(tmp_path: Path) 
     assert ds["engine_torque"].dims == ("run", "crank_angle")
     assert ds["engine_torque"].attrs["units"] == "N*m"
     assert ds["cylinder_pressure"].attrs["units"] == "MPa"
-    assert ds["crank_angle"].attrs["units"] == "deg"
+    assert ds["crank_angle"].attrs["units"] == "degree"
     assert ds["mean_power"].attrs["units"] == "kW"
     assert "assumption" in ds["stroke"].attrs["long_name"]
     assert "NOT in the source" in ds.attrs["study_toml"]

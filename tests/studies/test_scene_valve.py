@@ -11,8 +11,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import xarray as xr
 
-from engine_kernels import rocker
+from engine_kernels import rocker, valve, valve_model
 from studies import valve_accuracy as acc
 from studies.bench import run_benchmark
 from studies.definition import StudyError
@@ -261,6 +262,66 @@ def test_status_is_stored_to_tell_no_jump_from_not_run(tmp_path: Path) -> None:
     assert "cam not convex: r0 + h + h'' <= 0 somewhere, the chain is invalid: 1 (runs 0)" in text
     kinematic = plan_text(study('["max_valve_lift"]'))
     assert kinematic.responses == ("max_valve_lift", "chain_status")  # no dynamics for status
+
+
+def test_status_codes_are_integers_with_cf_flags_and_are_counted_not_averaged(
+    tmp_path: Path,
+) -> None:
+    # Two concave 3-4-5 cams (±60°, ±65°, SPEC §3) and two convex ones (±85°, ±90°): the
+    # chain is invalid at the first two, so their dynamics and jump search do not run.
+    text = study(
+        '["status", "jump_speed_status", "chain_status", "max_lift"]',
+        parameters='law = "poly345"\ncam_speed = 3000.0',
+        factors="[factors.rise_angle]\nlevels = [60.0, 65.0, 85.0, 90.0]",
+    )
+    folder = run_plan(plan_text(text), tmp_path, progress=False).folder
+    ds = xr.open_dataset(folder / "results.nc")
+    for name, codes in (
+        ("status", (*valve_model.VALVE_STATUS_NAMES, "not_run")),
+        ("jump_speed_status", (*valve.JUMP_STATUS_NAMES, "not_run")),
+    ):
+        assert ds[name].dtype == np.int8
+        np.testing.assert_array_equal(ds[name].attrs["flag_values"], np.arange(-1, len(codes)))
+        assert ds[name].attrs["flag_meanings"].split() == ["not_evaluated", *codes]
+    assert ds["status"].values.tolist() == [STATUS_NOT_RUN, STATUS_NOT_RUN, 0, 0]
+    chain = ds["chain_status"]
+    assert chain.dtype == np.int8
+    bits = [rocker.ROCKER_CONCAVE_CAM, rocker.ROCKER_NOT_MONOTONE, rocker.ROCKER_OUT_OF_REACH]
+    np.testing.assert_array_equal(chain.attrs["flag_masks"], bits)
+    assert chain.attrs["flag_meanings"].split()[0] == "cam_not_convex"
+    assert chain.values.tolist() == [rocker.ROCKER_CONCAVE_CAM] * 2 + [0, 0]
+    an = xr.open_dataset(folder / "analysis.nc")
+    assert json.loads(an.attrs["status_responses"]) == [
+        "status",
+        "jump_speed_status",
+        "chain_status",
+    ]
+    assert "status" not in an["response"].values  # no range analysis or ANOVA of a code
+    counts = an["status_count"].to_series()
+    assert counts.to_dict() == {
+        "not_evaluated": 0,
+        "ok": 2,
+        "substep_limit": 0,
+        "unstable": 0,
+        "nonfinite": 0,
+        "invalid_input": 0,
+        "not_run": 2,
+    }
+    chain_counts = an["chain_status_count"].to_series()
+    assert chain_counts.to_dict() == {
+        "ok": 2,
+        "cam_not_convex": 2,
+        "cam_rotation_not_increasing": 0,
+        "out_of_reach": 0,
+        "not_evaluated": 0,
+    }
+    assert not list(folder.glob("*status*.png"))
+    text = (folder / "analysis.txt").read_text(encoding="utf-8")
+    assert "status (run status of the dynamics" in text
+    assert ": 2 ok, 2 not_run — a status code" in text
+    assert "- chain_status (kinematic chain status bits (0: valid)): 2 ok, 2 cam_not_convex" in (
+        folder / "report.md"
+    ).read_text(encoding="utf-8")
 
 
 @pytest.mark.parametrize(
