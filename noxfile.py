@@ -6,9 +6,18 @@ nox -s study -- isac_l9 [opts]    run one catalogue study (or a TOML path)
 nox -s studies                    run every shipped study
 nox -s baseline                   refresh the regression baseline under tests/
 nox -s bench                      benchmarks (figures printed and written to outputs/bench)
+
+``study``, ``studies``, ``bench`` and ``baseline`` share one environment (``.nox/run``); each
+environment installs the package (editable) once and again only when ``pyproject.toml``
+changes, so a second session starts in seconds.
 """
 
 from __future__ import annotations
+
+import hashlib
+import os
+import sys
+from pathlib import Path
 
 import nox
 
@@ -17,50 +26,75 @@ nox.options.reuse_existing_virtualenvs = True
 nox.options.sessions = ["tests", "lint"]
 
 PYTHON = None  # the interpreter nox itself runs on
+HERE = Path(__file__).parent
+SHARED = HERE / ".nox" / "run"  # the environment the user-facing sessions share
+
+
+def _install_once(session: nox.Session, python: Path, target: str) -> None:
+    """``pip install -e target`` into the environment of ``python`` unless it was installed
+    from this very ``pyproject.toml`` already (a stamp beside the environment records it)."""
+    digest = hashlib.sha256((HERE / "pyproject.toml").read_bytes()).hexdigest()
+    stamp = python.parent.parent / f"installed-{target.strip('.[]') or 'core'}.sha256"
+    if stamp.exists() and stamp.read_text(encoding="utf-8") == digest:
+        return
+    session.run(str(python), "-m", "pip", "install", "--quiet", "-e", target, external=True)
+    stamp.write_text(digest, encoding="utf-8")
+
+
+def _own_python(session: nox.Session) -> Path:
+    return Path(session.virtualenv.location) / ("Scripts" if os.name == "nt" else "bin") / "python"
+
+
+def _shared_python(session: nox.Session) -> str:
+    """The interpreter of the shared environment, made and installed on first use."""
+    python = SHARED / ("Scripts" if os.name == "nt" else "bin") / "python"
+    if not python.exists():
+        session.run(sys.executable, "-m", "venv", str(SHARED), external=True)
+    _install_once(session, python, ".")
+    return str(python)
 
 
 @nox.session(python=PYTHON)
 def tests(session: nox.Session) -> None:
     """Run the test-suite."""
-    session.install("-e", ".[test]")
+    _install_once(session, _own_python(session), ".[test]")
     session.run("pytest", *session.posargs)
 
 
 @nox.session(python=PYTHON)
 def lint(session: nox.Session) -> None:
     """ruff (lint + format check), mypy, and the import contract of engine_kernels."""
-    session.install("-e", ".[dev]")
+    _install_once(session, _own_python(session), ".[dev]")
     session.run("ruff", "check", ".")
     session.run("ruff", "format", "--check", ".")
     session.run("mypy")
     session.run("lint-imports")
 
 
-@nox.session(python=PYTHON)
+@nox.session(venv_backend="none")
 def study(session: nox.Session) -> None:
     """Run one study: ``nox -s study -- NAME_OR_PATH [--chunk-size N] [--outputs DIR]``."""
     if not session.posargs:
         session.error("name a study: nox -s study -- isac_l9  (python -m studies list shows all)")
-    session.install("-e", ".")
-    session.run("python", "-m", "studies", "run", *session.posargs)
+    session.run(_shared_python(session), "-m", "studies", "run", *session.posargs, external=True)
 
 
-@nox.session(python=PYTHON)
+@nox.session(venv_backend="none")
 def studies(session: nox.Session) -> None:
     """Run every study in studies/catalog."""
-    session.install("-e", ".")
-    session.run("python", "-m", "studies", "run", "--all", *session.posargs)
+    python = _shared_python(session)
+    session.run(python, "-m", "studies", "run", "--all", *session.posargs, external=True)
 
 
-@nox.session(python=PYTHON)
+@nox.session(venv_backend="none")
 def baseline(session: nox.Session) -> None:
     """Refresh the regression baseline netCDF from a fresh isac_l9 run (review the diff!)."""
-    session.install("-e", ".")
-    session.run("python", "tests/studies/refresh_baseline.py", *session.posargs)
+    python = _shared_python(session)
+    session.run(python, "tests/studies/refresh_baseline.py", *session.posargs, external=True)
 
 
-@nox.session(python=PYTHON)
+@nox.session(venv_backend="none")
 def bench(session: nox.Session) -> None:
     """Benchmarks: print figures and write JSON under outputs/bench/."""
-    session.install("-e", ".")
-    session.run("python", "-m", "studies", "bench", "all", *session.posargs)
+    python = _shared_python(session)
+    session.run(python, "-m", "studies", "bench", "all", *session.posargs, external=True)

@@ -11,7 +11,8 @@ columns), ``level`` (0-based), ``source`` (the ANOVA rows: terms, ``error``, ``t
 ``interaction`` (assigned factor pairs of an orthogonal array), ``pair`` (every factor pair of
 a full factorial) and ``level_a`` × ``level_b`` for two-way tables of means.
 
-* range analysis: ``k``, ``R``, ``rank``, ``best_level`` (over the terms), ``grand_mean``;
+* range analysis: ``k``, ``R``, ``rank``, ``best_level`` (over the terms), ``grand_mean``
+  (``pass_fail`` marks 0/1 checks, whose means are shares passing);
 * ANOVA: ``SS``, ``dof``, ``MS``, ``F``, ``P``, ``contribution`` [%], ``pooled`` on
   (response, source), ``anova_note``;
 * predicted optimum: ``optimum_level`` (per term; -1 for interaction columns), ``predicted``,
@@ -42,7 +43,7 @@ import numpy as np
 import xarray as xr
 
 from studies import taguchi
-from studies.results import NOT_EVALUATED, grid_order, is_status, write_netcdf
+from studies.results import NOT_EVALUATED, PASS_FAIL, grid_order, is_status, write_netcdf
 from studies.sensitivity import decompose
 from studies.statistics import (
     SENSES,
@@ -181,6 +182,10 @@ def _frame(base: xr.Dataset, view: xr.Dataset, names: list[str], terms: list[str
         "long_name": ("response", [str(view[n].attrs.get("long_name", n)) for n in names]),
         "sense": ("response", [str(view[n].attrs.get("better", "smaller")) for n in names]),
         "sn_kind": ("response", [str(view[n].attrs.get("sn_kind", "")) for n in names]),
+        "pass_fail": (
+            "response",
+            [int(view[n].attrs.get("flag_meanings") == PASS_FAIL) for n in names],
+        ),
         "observations": ("response", [int(view[n].attrs.get("observations", 0)) for n in names]),
         "grand_mean": full(("response",)),
         "k": full(("response", "term", "level")),

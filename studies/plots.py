@@ -17,12 +17,13 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from studies import taguchi
+from studies.figure_style import LOG_DECADES, axis_label, map_scale, text_colour
 from studies.statistics import sweep_runs
 
 PANEL_SIZE = (3.0, 3.0)  # inches per factor panel
 DPI = 120
 TITLE_CHARS_PER_INCH = 11  # what fits at the default title size
-LOG_DECADES = 100.0  # level means spanning more than this ratio get a log axis
+MAP_TEXT_CELLS = 150  # maps with at most this many cells show their values
 MARKER_LEVELS = 40  # from this many levels on, main effects are a line without markers
 
 
@@ -33,7 +34,7 @@ def _title(fig: Figure, text: str) -> None:
 
 
 def _label(name: str, units: str) -> str:
-    return f"{name} [{units}]" if units else name
+    return axis_label(name, units)
 
 
 def main_effects_figure(an: xr.Dataset, response: str) -> Figure:
@@ -41,7 +42,8 @@ def main_effects_figure(an: xr.Dataset, response: str) -> Figure:
     analysis Dataset (:func:`studies.analysis.analyze`).
 
     The dashed line is the grand mean of the response. Factors without numeric values are
-    plotted against their 1-based level number; 40+ levels are drawn as a line without markers.
+    plotted against their 1-based level number, named, as markers without lines; 40+ levels
+    are drawn as a line without markers; pass/fail checks on a 0…1 share-passing axis.
     """
     r = an.sel(response=response)
     names = [str(t) for t in an["term"].values if int(an["is_factor"].sel(term=t))]
@@ -55,7 +57,8 @@ def main_effects_figure(an: xr.Dataset, response: str) -> Figure:
         present = np.isfinite(k)
         numeric = bool(np.isfinite(values[present]).all())
         x = values[present] if numeric else row.level.values[present] + 1
-        ax.plot(x, k[present], marker="o" if present.sum() < MARKER_LEVELS else None)
+        marker = "o" if present.sum() < MARKER_LEVELS else None
+        ax.plot(x, k[present], marker=marker, linestyle="-" if numeric else "none")
         ax.axhline(float(r.grand_mean), linestyle="--", color="0.5", label="grand mean")
         unit = str(row.term_units.values)
         ax.set_xlabel(_label(f, unit) if numeric else f)
@@ -64,7 +67,10 @@ def main_effects_figure(an: xr.Dataset, response: str) -> Figure:
     axes[0].set_ylabel(_label(response, units))
     axes[0].legend(loc="best", fontsize="small")
     k = r.k.values[np.isfinite(r.k.values)]
-    if k.size and k.min() > 0 and k.max() > LOG_DECADES * k.min():
+    if int(r.pass_fail):  # a pass/fail check: its level means are shares passing
+        axes[0].set_ylim(-0.03, 1.03)
+        axes[0].set_ylabel(f"{response}: share passing")
+    elif k.size and k.min() > 0 and k.max() > LOG_DECADES * k.min():
         axes[0].set_yscale("log")  # shared: level means over more than two decades
     _title(fig, f"Main effects on {response}: {r.long_name.values}")
     return fig
@@ -192,28 +198,59 @@ def map_png(response: str) -> str:
 
 
 def map_figure(an: xr.Dataset, response: str) -> Figure | None:
-    """Heat map of ``response`` (mean over the other factors) over the factor pair with the
-    largest total-effect indices of a full factorial; None when the analysis has no map."""
+    """Heat map of ``response`` over the factor pair with the largest total-effect indices of
+    a full factorial (mean over the other factors, if any); None when the analysis has no map.
+
+    One equal cell per level pair, ticks named by the levels, the value written in each cell
+    (up to ``MAP_TEXT_CELLS``); the colour scale is log, diverging or 0…1 as the values call
+    for (:func:`studies.figure_style.map_scale`)."""
     if "map_mean" not in an:
         return None
     r = an.sel(response=response)
     fx, fy = str(r.map_x.values), str(r.map_y.values)
     if not fx:
         return None
-    x = an["level_value"].sel(term=fx).values
-    y = an["level_value"].sel(term=fy).values
-    nx, ny = int(np.isfinite(x).sum()), int(np.isfinite(y).sum())
+    labels_x = _level_labels(an, fx)
+    labels_y = _level_labels(an, fy)
+    nx, ny = len(labels_x), len(labels_y)
     if nx < 2 or ny < 2:
         return None
     grid = r.map_mean.values[:ny, :nx]
-    fig = Figure(figsize=(5.2, 4.0), layout="constrained")
+    share = bool(int(r.pass_fail))
+    norm, cmap = map_scale(grid, share)
+    fig = Figure(figsize=(max(5.2, 0.5 * nx + 2.6), max(4.0, 0.3 * ny + 2.2)), layout="constrained")
     ax = fig.subplots()
-    mesh = ax.pcolormesh(x[:nx], y[:ny], grid, shading="nearest", cmap="viridis")
-    fig.colorbar(mesh, ax=ax, label=_label(response, str(r.units.values)))
-    ax.set_xlabel(_label(fx, str(an["term_units"].sel(term=fx).values)))
-    ax.set_ylabel(_label(fy, str(an["term_units"].sel(term=fy).values)))
-    ax.set_title(f"{response}: mean over the other factors", fontsize="medium")
+    mesh = ax.pcolormesh(
+        np.arange(nx), np.arange(ny), grid, shading="nearest", cmap=cmap, norm=norm
+    )
+    units = str(r.units.values)
+    fig.colorbar(mesh, ax=ax, label="share passing" if share else axis_label(response, units))
+    if nx * ny <= MAP_TEXT_CELLS:
+        for (row, col), value in np.ndenumerate(grid):
+            if np.isfinite(value):
+                colour = text_colour(mesh.cmap(mesh.norm(value)))
+                ax.text(
+                    col, row, f"{value:.3g}", ha="center", va="center", fontsize=7, color=colour
+                )
+    ax.set_xticks(np.arange(nx), labels_x, rotation=30 if nx > 6 else 0)
+    ax.set_yticks(np.arange(ny), labels_y)
+    ax.set_xlabel(axis_label(fx, str(an["term_units"].sel(term=fx).values)))
+    ax.set_ylabel(axis_label(fy, str(an["term_units"].sel(term=fy).values)))
+    others = an.sizes.get("factor", 0) > 2
+    what = "mean over the other factors" if others else "value per design point"
+    ax.set_title(f"{response}: {what}", fontsize="medium")
     return fig
+
+
+def _level_labels(an: xr.Dataset, term: str) -> list[str]:
+    """The names of a term's levels (its values as text), for tick labels."""
+    values = an["level_value"].sel(term=term).values
+    labels = an["level_label"].sel(term=term).values
+    return [
+        f"{v:.4g}" if np.isfinite(v) else str(label)
+        for v, label in zip(values, labels, strict=True)
+        if str(label)
+    ]
 
 
 def save_maps(an: xr.Dataset, responses: Sequence[str], folder: Path) -> list[Path]:

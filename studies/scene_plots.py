@@ -28,9 +28,12 @@ from pathlib import Path
 
 import numpy as np
 import xarray as xr
+from matplotlib import colormaps
+from matplotlib.colors import BoundaryNorm, ListedColormap, to_rgba
 from matplotlib.figure import Figure
 
 from studies.campbell import campbell_figure
+from studies.figure_style import axis_label, text_colour
 
 DPI = 120
 PANEL = (3.6, 2.8)  # inches per panel
@@ -128,7 +131,7 @@ def _lines(ds: xr.Dataset, factor: str | None) -> list[tuple[str, dict[str, int]
 
 def _label(da: xr.DataArray, name: str) -> str:
     units = da.attrs.get("units", "")
-    return f"{da.attrs.get('long_name', name)} [{units}]" if units else name
+    return axis_label(da.attrs.get("long_name", name), units) if units else name
 
 
 # --- crank ----------------------------------------------------------------------------------
@@ -152,13 +155,15 @@ def torque_curve_figure(ds: xr.Dataset) -> Figure | None:
         ax.set_xticks(np.arange(0.0, CRANK_CYCLE_DEG + 1, 180.0))
         ax.grid(alpha=0.3)
     for ax in axes[-1]:
-        ax.set_xlabel("crank angle [deg]")
+        ax.set_xlabel(axis_label("crank angle", ds["crank_angle"].attrs.get("units", "")))
     for ax in axes[:, 0]:
         ax.set_ylabel(_label(ds[name], name))
     if speed:
         axes[0, 0].legend(title="engine speed", fontsize="x-small", title_fontsize="x-small")
     fig.suptitle(
-        f"{ds[name].attrs.get('long_name', name)} over the cycle (dashed: mean){layout.held_note()}"
+        f"{ds[name].attrs.get('long_name', name)} over the cycle\n(dashed: mean)"
+        f"{layout.held_note()}",
+        fontsize="medium",
     )
     return fig
 
@@ -188,12 +193,12 @@ def torque_harmonics_figure(ds: xr.Dataset, max_order: float = 12.0) -> Figure |
                     label=label or None,
                 )
         ax.set_title(layout.title(where), fontsize="small")
-        ax.set_xticks(np.arange(0.0, max_order + 0.5, 1.5))
+        ax.set_xticks(np.arange(0.0, max_order + 0.5, 1.0))
         ax.grid(alpha=0.3, axis="y")
     for ax in axes[-1]:
         ax.set_xlabel("engine order (per crank revolution)")
     for ax in axes[:, 0]:
-        ax.set_ylabel(f"amplitude [{ds['engine_torque'].attrs.get('units', '')}]")
+        ax.set_ylabel(axis_label("amplitude", ds["engine_torque"].attrs.get("units", "")))
     if speed:
         axes[0, 0].legend(title="engine speed", fontsize="x-small", title_fontsize="x-small")
     fig.suptitle(f"Harmonic orders of the engine torque{layout.held_note()}")
@@ -213,13 +218,15 @@ def approximation_error_figure(ds: xr.Dataset) -> Figure | None:
     fig = Figure(figsize=(PANEL[0] * cols, PANEL[1] * rows + 0.6), layout="constrained")
     axes = fig.subplots(rows, cols, squeeze=False).ravel()
     for ax, name in zip(axes, names, strict=False):
+        lines = []
         for k, (label, cond) in enumerate(_lines(ds, speed)):
             runs = _runs(ds, held | cond)
             order = np.argsort(ds["rod_ratio"].values[runs])
             runs = runs[order]
+            lines.append(ds[name].values[runs])
             ax.plot(
                 ds["rod_ratio"].values[runs],
-                ds[name].values[runs],
+                lines[-1],
                 marker="o",
                 color=f"C{k}",
                 label=label or None,
@@ -227,12 +234,13 @@ def approximation_error_figure(ds: xr.Dataset) -> Figure | None:
         ax.set_yscale("log")
         ax.set_xlabel("λ = r/l")
         what = str(name).removeprefix("approx_error_").replace("_", " ")
-        ax.set_title(f"{what} error", fontsize="small")
+        same = len(lines) > 1 and all(np.allclose(y, lines[0], rtol=1e-9) for y in lines)
+        ax.set_title(f"{what} error{' (speed-independent)' if same else ''}", fontsize="small")
         relative = str(name).endswith("_relative")
         ax.set_ylabel(
             ds[name].attrs.get("long_name", "")
             if relative
-            else f"max |exact − two-term| [{ds[name].attrs.get('units', '')}]",
+            else axis_label("max |exact − two-term|", ds[name].attrs.get("units", "")),
             fontsize="x-small" if relative else "small",
         )
         ax.grid(alpha=0.3, which="both")
@@ -300,21 +308,17 @@ def frequency_map_figure(ds: xr.Dataset) -> Figure | None:
             )
         for (r, c), value in np.ndenumerate(f1):
             if np.isfinite(value):
+                colour = text_colour(mesh.cmap(mesh.norm(value)))
                 ax.text(
-                    x[c],
-                    y[r],
-                    f"{value:.4g}",
-                    ha="center",
-                    va="center",
-                    fontsize="xx-small",
-                    color="white",
+                    x[c], y[r], f"{value:.4g}", ha="center", va="center", fontsize=6, color=colour
                 )
         complete = min(f1.shape) > 1 and np.isfinite(f1).all()
         crossed = sorted({b for b in band if complete and f1.min() < b < f1.max()})
         if crossed:
             edges_drawn = True
             contours = ax.contour(x, y, f1, levels=crossed, colors="red", linewidths=1.2)
-            ax.clabel(contours, fmt="%g Hz", fontsize="xx-small")
+            for label in ax.clabel(contours, fmt="%g Hz", fontsize="xx-small"):
+                label.set_bbox({"facecolor": "white", "edgecolor": "none", "pad": 1.0})
         ax.set_title(layout.title(where), fontsize="small")
     for ax in axes[-1]:
         ax.set_xlabel("length [mm]")
@@ -361,6 +365,7 @@ def pass_fail_map_figure(ds: xr.Dataset) -> Figure | None:
     fig, axes = layout.figure((3.8, 3.2))
     xs = [str(_raw_value(ds, x, lv)) for lv in _levels(ds, x)]
     ys = [str(_raw_value(ds, y, lv)) for lv in _levels(ds, y)]
+    cmap, norm = _failure_colours(len(flags))
     mesh = None
     for i, j, where in layout.panels():
         ax = axes[i, j]
@@ -376,12 +381,12 @@ def pass_fail_map_figure(ds: xr.Dataset) -> Figure | None:
             np.arange(len(ys)),
             failing,
             shading="nearest",
-            cmap="RdYlGn_r",
-            vmin=0,
-            vmax=len(flags),
+            cmap=cmap,
+            norm=norm,
         )
         for (r, c), text in np.ndenumerate(notes):
-            ax.text(c, r, text, ha="center", va="center", fontsize="xx-small")
+            colour = text_colour(mesh.cmap(mesh.norm(failing[r, c])))
+            ax.text(c, r, text, ha="center", va="center", fontsize=6, color=colour)
         ax.set_xticks(np.arange(len(xs)), xs)
         ax.set_yticks(np.arange(len(ys)), ys)
         ax.set_title(layout.title(where), fontsize="small")
@@ -390,7 +395,8 @@ def pass_fail_map_figure(ds: xr.Dataset) -> Figure | None:
     for ax in axes[:, 0]:
         ax.set_ylabel(_label(ds[y], y))
     if mesh is not None:
-        fig.colorbar(mesh, ax=axes, label="number of failing checks", shrink=0.8)
+        bar = fig.colorbar(mesh, ax=axes, label="number of failing checks", shrink=0.8)
+        bar.set_ticks(np.arange(len(flags) + 1))
     fig.suptitle(
         f"Design checks that fail at each design point\n(checked: {', '.join(flags)})"
         f"{layout.held_note()}",
@@ -437,14 +443,13 @@ def motor_power_figure(ds: xr.Dataset) -> Figure | None:
         ax.set_ylabel(_label(ds["motor_power"], "motor_power"), fontsize="small")
     if line:
         axes[0, 0].legend(title=line, fontsize="x-small", title_fontsize="x-small")
-    fig.suptitle(f"Required motor power{layout.held_note()}")
+    fig.suptitle(f"Required motor power (dotted: the rated motor chosen){layout.held_note()}")
     return fig
 
 
 # --- rocker and valve -----------------------------------------------------------------------
 def _short(ds: xr.Dataset, name: str) -> str:
-    units = ds[name].attrs.get("units", "")
-    return f"{name} [{units}]" if units not in ("", "1") else name
+    return axis_label(name, ds[name].attrs.get("units", ""))
 
 
 def valve_lift_figure(ds: xr.Dataset) -> Figure | None:
@@ -526,8 +531,8 @@ def jump_speed_map_figure(ds: xr.Dataset) -> Figure | None:
                 f"{value:.0f}" if finite_cell else "none",
                 ha="center",
                 va="center",
-                fontsize="xx-small",
-                color="white" if finite_cell else "black",
+                fontsize=6,
+                color=text_colour(mesh.cmap(mesh.norm(value))) if finite_cell else "black",
             )
         ax.set_title(layout.title(where), fontsize="small")
     for ax in axes[-1]:
@@ -556,19 +561,22 @@ def error_vs_cost_figure(ds: xr.Dataset) -> Figure | None:
     fig, axes = layout.figure((3.8, 3.0))
     for i, j, where in layout.panels():
         ax = axes[i, j]
+        points = []
         for k, (label, cond) in enumerate(_lines(ds, "integrator")):
             runs = _runs(ds, where | cond)
             runs = runs[np.argsort(-ds["angle_step"].values[runs])]
             cost, error = ds["cost_per_case"].values[runs], ds["reference_error"].values[runs]
             ax.loglog(cost, error, marker="o", color=f"C{k}", label=label)
-            for run, cx, ey in zip(runs, cost, error, strict=True):
-                ax.annotate(
-                    f"{ds['angle_step'].values[run]:g}°",
-                    (cx, ey),
-                    fontsize="xx-small",
-                    xytext=(3, 3),
-                    textcoords="offset points",
-                )
+            steps = ds["angle_step"].values[runs]
+            points += list(zip(cost, error, steps, strict=True))
+        for cx, ey, step in _apart(points):
+            ax.annotate(
+                f"{step:g}°",
+                (cx, ey),
+                fontsize="xx-small",
+                xytext=(3, 3),
+                textcoords="offset points",
+            )
         ax.set_title(layout.title(where), fontsize="small")
         ax.grid(alpha=0.3, which="both")
     for ax in axes[-1]:
@@ -577,7 +585,7 @@ def error_vs_cost_figure(ds: xr.Dataset) -> Figure | None:
         ax.set_ylabel(f"{_short(ds, 'reference_error')}: max |y − y_ref|")
     axes[0, 0].legend(title="integrator", fontsize="x-small", title_fontsize="x-small")
     fig.suptitle(
-        "Error against the scipy reference vs cost per case (labels: RK4 step)"
+        "Error against the scipy reference vs cost per case (labels: RK4 step, where apart)"
         f"{layout.held_note()}",
         fontsize="medium",
     )
@@ -597,20 +605,50 @@ def cam_curves_figure(ds: xr.Dataset) -> Figure | None:
     fig = Figure(figsize=(6.0, 2.4 * len(names)), layout="constrained")
     axes = fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
     colours = _run_colours(ds.sizes["run"])
+    # Colours and legend in the order of the factor values (the first factor varying slowest).
+    order = np.lexsort([ds[f].values for f in reversed(factors)]) if factors else None
+    runs = order if order is not None else np.arange(ds.sizes["run"])
     for ax, name in zip(axes, names, strict=True):
-        for run in range(ds.sizes["run"]):
+        for shade, run in enumerate(runs):
             label = ", ".join(f"{f} {_shown(ds, f, ds[f].values[run])}" for f in factors)
-            ax.plot(ds["cam_angle"], ds[name].isel(run=run), color=colours[run], lw=1, label=label)
-        ax.set_ylabel(f"{name} [{ds[name].attrs.get('units', '')}]")
-    axes[-1].set_xlabel(f"cam angle from the nose [{ds['cam_angle'].attrs.get('units', '')}]")
+            ax.plot(
+                ds["cam_angle"], ds[name].isel(run=run), color=colours[shade], lw=1, label=label
+            )
+        ax.set_ylabel(axis_label(name, ds[name].attrs.get("units", "")))
+    axes[-1].set_xlabel(
+        axis_label("cam angle from the nose", ds["cam_angle"].attrs.get("units", ""))
+    )
     if ds.sizes["run"] <= MAX_LEGEND_RUNS:
         axes[0].legend(fontsize="x-small", loc="upper right")
     fig.suptitle("Cam curves per design point", fontsize="medium")
     return fig
 
 
+def _apart(points: list[tuple[float, float, float]], box: tuple[float, float] = (0.14, 0.07)):
+    """The points (x, y, label) whose labels do not overlap on log axes: a label is kept only
+    if no kept one lies within ``box`` (fractions of the panel's log10 span in x and y; a
+    label is wider than it is tall)."""
+    finite = [p for p in points if p[0] > 0 and p[1] > 0 and np.isfinite(p[:2]).all()]
+    if not finite:
+        return []
+    logs = np.log10(np.array([p[:2] for p in finite]))
+    scaled = logs / np.maximum(np.ptp(logs, axis=0), 1e-12) / np.asarray(box)
+    kept: list[int] = []
+    for i, xy in enumerate(scaled):
+        if all(np.abs(xy - scaled[j]).max() >= 1.0 for j in kept):
+            kept.append(i)
+    return [finite[i] for i in kept]
+
+
+def _failure_colours(checks: int) -> tuple[ListedColormap, BoundaryNorm]:
+    """Green for "every check passes" only; any failing check from orange (one) to dark red
+    (all), one colour per count."""
+    reds = colormaps["YlOrRd"](np.linspace(0.35, 1.0, max(checks, 1)))
+    colours = np.vstack([to_rgba("tab:green"), reds])
+    return ListedColormap(colours), BoundaryNorm(np.arange(-0.5, checks + 1.0), checks + 1)
+
+
 def _run_colours(n: int) -> list[tuple[float, float, float, float]]:
-    from matplotlib import colormaps  # noqa: PLC0415  (only when a figure is drawn)
 
     cmap = colormaps["viridis"]
     return [cmap(i / max(n - 1, 1)) for i in range(n)]

@@ -12,6 +12,7 @@ from studies.definition import StudyError
 from studies.plan import plan_text
 from studies.runner import evaluate
 from studies.scenes import rocker as rocker_scene
+from studies.scenes import rocker_tappet
 from studies.scenes.rocker import RockerScene
 from studies.scenes.rocker_parameters import CONVEX_POLYDYNE
 from study_text import recorded_stages, scene_study
@@ -110,13 +111,13 @@ def test_kinematic_responses_run_only_the_needed_stages() -> None:
 
 def test_points_sharing_a_chain_compute_it_once(monkeypatch: pytest.MonkeyPatch) -> None:
     counted: list[int] = []
-    kernel = rocker_scene.cb.cam_kinematics_batch
+    kernel = rocker_tappet.cb.cam_kinematics_batch
 
     def counting(*args):
         counted.append(1)
         return kernel(*args)
 
-    monkeypatch.setattr(rocker_scene.cb, "cam_kinematics_batch", counting)
+    monkeypatch.setattr(rocker_tappet.cb, "cam_kinematics_batch", counting)
     plan = plan_text(
         study(
             '["max_valve_lift"]',
