@@ -3,6 +3,8 @@ its colour, and the colour scale a map's values call for."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from matplotlib.colors import LogNorm, Normalize, TwoSlopeNorm
 
@@ -27,9 +29,9 @@ def axis_label(name: str, units: str) -> str:
     return f"{name} [{pretty_units(units)}]" if units not in ("", "1") else name
 
 
-def text_colour(rgba: tuple[float, ...]) -> str:
+def text_colour(rgba: Sequence[float] | np.ndarray) -> str:
     """Black on light cells, white on dark ones (relative luminance, ITU-R BT.601)."""
-    r, g, b = rgba[:3]
+    r, g, b = (float(c) for c in rgba[:3])
     return "black" if 0.299 * r + 0.587 * g + 0.114 * b > 0.5 else "white"
 
 

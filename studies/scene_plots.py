@@ -396,7 +396,7 @@ def pass_fail_map_figure(ds: xr.Dataset) -> Figure | None:
         ax.set_ylabel(_label(ds[y], y))
     if mesh is not None:
         bar = fig.colorbar(mesh, ax=axes, label="number of failing checks", shrink=0.8)
-        bar.set_ticks(np.arange(len(flags) + 1))
+        bar.set_ticks(list(range(len(flags) + 1)))
     fig.suptitle(
         f"Design checks that fail at each design point\n(checked: {', '.join(flags)})"
         f"{layout.held_note()}",
