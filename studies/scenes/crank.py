@@ -202,9 +202,6 @@ class CrankScene(Scene):
 
     def _check_layout(self, points: dict[str, np.ndarray], found: PointProblems) -> None:
         for i, z in enumerate(points["cylinders"]):
-            if z != round(z):
-                found.add(i, f"cylinders = {z:g} must be a whole number")
-                continue
             problem = firing_order_problem(points["firing_order"][i], z)
             if problem:
                 found.add(i, problem)
