@@ -121,6 +121,7 @@ _CURVE_SOURCE: dict[str, tuple[str, int, float]] = {
 
 class CamScene(Scene):
     name = "cam"
+    seconds_per_point = 1e-3
     description = "flat-faced tappet cam: lift law, curvature, lubrication, contact stress"
     parameters = PARAMETERS
     settings = SETTINGS

@@ -164,6 +164,7 @@ class CrankScene(Scene):
     """Slider-crank and multi-cylinder engine (SPEC §5)."""
 
     name = "crank"
+    seconds_per_point = 2e-3
     description = (
         "slider-crank kinematics (exact and two-term), gas and inertia forces, torque, "
         "multi-cylinder torque harmonics, free forces and moments (SPEC §5)"

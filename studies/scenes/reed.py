@@ -251,6 +251,7 @@ class ReedScene(Scene):
     """Clamped–free reed valve excited by the engine (SPEC §6)."""
 
     name = "reed"
+    seconds_per_point = 3e-4
     description = (
         "reed-valve natural frequencies, mode shapes and margins to the engine's "
         "excitation band (SPEC §6)"

@@ -176,6 +176,7 @@ def tappet_parameters(
 
 class RockerScene(Scene):
     name = "rocker"
+    seconds_per_point = 2e-2
     description = "OHC cam with variable-ratio rocker: valve lift, force ratio (kinematics)"
     parameters = PARAMETERS
     settings = SETTINGS
