@@ -199,11 +199,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
     executor = dask_executor(args.scheduler) if args.scheduler else None
     incomplete = 0
     for plan in plans:
-        text = plan.definition.text
+        key = tracking.definition_hash(plan.definition.text, plan.definition.input_files())
         earlier = (
-            None
-            if args.force or dirty
-            else tracking.finished_identical(args.outputs, tracking.definition_hash(text), commit)
+            None if args.force or dirty else tracking.finished_identical(args.outputs, key, commit)
         )
         if earlier is not None:
             print(

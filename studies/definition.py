@@ -108,6 +108,15 @@ class StudyDefinition:
     interactions: tuple[tuple[str, str], ...] = ()
     pool: tuple[str, ...] | None = None
 
+    def input_files(self) -> tuple[Path, ...]:
+        """The files the study reads (its text parameters, e.g. ``lift_table``), in order."""
+        scene = get_scene(self.scene)
+        return tuple(
+            Path(value)
+            for name, (value, _) in self.parameters.items()
+            if (p := scene.parameter(name)) is not None and p.kind == "text" and value
+        )
+
 
 def find_study(name_or_path: str | Path) -> Path:
     """A study file by catalogue name (``isac_l9``) or by path."""

@@ -23,6 +23,7 @@ import xarray as xr
 
 from studies import provenance, tracking
 from studies.analysis import ANALYSIS_NAME
+from studies.definition import parse_study
 from studies.plan import Plan, plan_study
 from studies.report import write_analysis
 from studies.results import open_results
@@ -80,7 +81,7 @@ def run_plan(
         started=tracking.now(),
         git_commit=commit,
         git_dirty=dirty,
-        definition_sha256=tracking.definition_hash(d.text),
+        definition_sha256=tracking.definition_hash(d.text, d.input_files()),
         folder=str(folder),
         versions=provenance.versions(),
         host=provenance.host(),
@@ -182,12 +183,21 @@ def _execute(
 
 
 def _check_unchanged(study: Path, sha256: str) -> None:
-    """Refuse to resume a run whose study file changed since it started (its checkpoints
-    would be mixed with points of another definition)."""
+    """Refuse to resume a run whose study file, or a file the study reads, changed since it
+    started (its checkpoints would be mixed with points of another definition)."""
     text = study.read_text(encoding="utf-8")
-    if tracking.definition_hash(text) == sha256:
+    definition, _ = parse_study(text, str(study))
+    inputs = definition.input_files() if definition is not None else ()
+    if tracking.definition_hash(text, inputs) == sha256:
         return
     original = _recorded_text(study.parent)
+    if original == text:
+        msg = (
+            f"a file that {study} reads ({', '.join(map(str, inputs))}) changed after the run "
+            "started. Resuming would mix design points of two inputs; run the study anew: "
+            f"python -m studies run {study}"
+        )
+        raise ValueError(msg)
     changed = [
         line
         for line in difflib.unified_diff(original.splitlines(), text.splitlines(), lineterm="", n=0)
