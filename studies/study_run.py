@@ -14,6 +14,9 @@ import difflib
 import json
 import os
 import shutil
+import sqlite3
+import zipfile
+import zlib
 from concurrent.futures import Executor
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -168,8 +171,11 @@ def _execute(
         if writer is not None:
             writer.abandon()
         record.status, record.finished, record.error = "failed", tracking.now(), repr(exc)
-        record.write()
-        tracking.register(outputs, record)
+        try:
+            record.write()
+            tracking.register(outputs, record)
+        except (OSError, sqlite3.Error) as unrecorded:  # e.g. the disk is still full
+            exc.add_note(f"its run.json still says running ({unrecorded})")
         exc.add_note(
             f"run {record.run_id} kept its finished chunks; resume it with: "
             f"{tracking.resume_command(record.run_id, outputs)}"
@@ -228,8 +234,20 @@ def _save_chunk(folder: Path, index: int, out: SceneOutput) -> None:
     tmp.replace(path)  # a chunk file is either complete or absent
 
 
+class DamagedCheckpoint(OSError):
+    """A checkpoint chunk file that cannot be decoded (cut short, overwritten, bad disk)."""
+
+
 def _load_chunk(path: Path) -> SceneOutput:
-    with np.load(path) as data:
-        scalars = {k.split(":", 1)[1]: data[k] for k in data.files if k.startswith("scalar:")}
-        curves = {k.split(":", 1)[1]: data[k] for k in data.files if k.startswith("curve:")}
+    """A checkpointed chunk (OSError if unreadable, :class:`DamagedCheckpoint` if damaged)."""
+    try:
+        with path.open("rb") as file, np.load(file) as data:  # file: closed even if damaged
+            scalars = {k.split(":", 1)[1]: data[k] for k in data.files if k.startswith("scalar:")}
+            curves = {k.split(":", 1)[1]: data[k] for k in data.files if k.startswith("curve:")}
+    except (ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error) as exc:
+        msg = (
+            f"checkpoint {path} is damaged ({type(exc).__name__}: {exc}); delete it and resume: "
+            "its design points are computed again"
+        )
+        raise DamagedCheckpoint(msg) from None
     return SceneOutput(scalars, curves)

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from run_faults import fail_on_call
 
 from studies import tracking
 from studies.cli import main
@@ -30,20 +31,6 @@ levels = [16.0, 18.0, 20.0, 22.0]
 [factors.cam_speed]
 levels = [1000.0, 1300.0, 1600.0]
 """
-
-
-def fail_on_call(monkeypatch: pytest.MonkeyPatch, plan, call: int, error: BaseException) -> None:
-    """Make the plan's geometry stage raise ``error`` on its ``call``-th call."""
-    original = plan.scene.stages["geometry"]
-    calls = {"n": 0}
-
-    def failing(ctx):
-        calls["n"] += 1
-        if calls["n"] == call:
-            raise error
-        return original(ctx)
-
-    monkeypatch.setitem(plan.scene.stages, "geometry", failing)
 
 
 def test_failed_run_resumes_from_its_last_finished_chunk(
