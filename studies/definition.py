@@ -368,7 +368,10 @@ class _Parser:
 
     def _units_ok(self, what: str, param: Any, units: Any) -> bool:
         if param.kind != "number":
-            return True
+            if units == param.units:
+                return True
+            self.problem(f"{what}: units = {short(units)} do not apply to a {param.kind} parameter")
+            return False
         if not isinstance(units, str) or units not in UNITS:
             self.problem(f"{what}: unknown units {short(units)} (expected {param.units!r})")
             return False

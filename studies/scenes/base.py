@@ -97,6 +97,11 @@ class Parameter:
             return f"{self.name} = {not_a_number(value)} (expected {self.allowed()})"
         if self.integer and value != int(value):
             return f"{self.name} = {value!r} is not a whole number (expected {self.allowed()})"
+        si = value * UNITS[units or self.units].to_si
+        if not math.isfinite(si) or (si == 0.0 and value != 0):
+            given = f"{value:g} {units or self.units}"
+            limit = "too close to 0 (it is 0 in SI units)" if si == 0 else "too large for SI units"
+            return f"{self.name} = {given} is {limit}: expected {self.allowed()}"
         shown = value
         if units is not None and units != self.units:
             shown = value * UNITS[units].to_si / UNITS[self.units].to_si
