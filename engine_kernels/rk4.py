@@ -20,6 +20,7 @@ from engine_kernels._jit import jit
 RK4_STABILITY_BOUND = 2.6
 RK4_IMAGINARY_AXIS_LIMIT = 2.0 * math.sqrt(2.0)
 RK4_REAL_AXIS_LIMIT = 2.785293563405282
+MAX_SUBSTEPS = 2**62  # the count stable_substeps returns when no integer would do (int64)
 
 
 @jit
@@ -63,6 +64,8 @@ def stable_substeps(step, spectral_radius, bound):
     ratio = step * spectral_radius / bound
     if ratio <= 1.0:
         return 1
+    if not ratio < MAX_SUBSTEPS:  # a near-zero speed or a NaN: more than any limit allows
+        return MAX_SUBSTEPS
     return math.ceil(ratio)
 
 

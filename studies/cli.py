@@ -28,6 +28,7 @@ OUTPUTS_HELP = (
     "run-folder root (default: $ENGINE_STUDIES_OUTPUTS, else this checkout's outputs/ folder)"
 )
 EXIT_POINTS_NOT_RUN = 3
+EXIT_OUTPUT_ERROR = 4  # a file could not be written or read (full disk, permissions, damage)
 EXIT_INTERRUPTED = 130  # the shell's code for a process ended by SIGINT
 
 
@@ -53,6 +54,11 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into `head` and the like
         sys.stderr.close()
         return 0
+    except OSError as exc:  # full disk, read-only or unreadable files: one line, how to go on
+        what = f"{exc.strerror}: {exc.filename}" if exc.strerror and exc.filename else str(exc)
+        notes = "; ".join(getattr(exc, "__notes__", [])) or "nothing was recorded"
+        print(f"error: {what}; {notes}", file=sys.stderr)
+        return EXIT_OUTPUT_ERROR
     except KeyboardInterrupt as exc:  # Ctrl-C: one line, and how to go on
         notes = "; ".join(getattr(exc, "__notes__", [])) or "nothing was recorded"
         print(f"\ninterrupted: {notes}", file=sys.stderr)
@@ -200,11 +206,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
     executor = dask_executor(args.scheduler) if args.scheduler else None
     incomplete = 0
     for plan in plans:
-        text = plan.definition.text
+        key = tracking.definition_hash(plan.definition.text, plan.definition.input_files())
         earlier = (
-            None
-            if args.force or dirty
-            else tracking.finished_identical(args.outputs, tracking.definition_hash(text), commit)
+            None if args.force or dirty else tracking.finished_identical(args.outputs, key, commit)
         )
         if earlier is not None:
             print(

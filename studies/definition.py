@@ -44,6 +44,7 @@ from pathlib import Path
 from typing import Any
 
 from studies.scenes import SCENES, Scene, get_scene
+from studies.scenes.base import is_finite_number, short
 from studies.units import UNITS, canonical, compatible_units
 
 CATALOG = Path(__file__).parent / "catalog"
@@ -61,7 +62,8 @@ TOP_LEVEL_KEYS = {
 }
 DESIGN_KEYS = {"type", "error_columns", "interactions", "pool"}
 FACTOR_KEYS = {"levels", "units", "column", "base"}
-NAME_PATTERN = re.compile(r"^[A-Za-z0-9_-]+$")
+NAME_PATTERN = re.compile(r"[A-Za-z0-9_-]+")  # whole names only: used with fullmatch
+MAX_NAME_LENGTH = 64  # the name is a folder name; file systems allow 255 bytes
 
 
 class StudyError(ValueError):
@@ -105,6 +107,15 @@ class StudyDefinition:
     source: str = "<string>"
     interactions: tuple[tuple[str, str], ...] = ()
     pool: tuple[str, ...] | None = None
+
+    def input_files(self) -> tuple[Path, ...]:
+        """The files the study reads (its text parameters, e.g. ``lift_table``), in order."""
+        scene = get_scene(self.scene)
+        return tuple(
+            Path(value)
+            for name, (value, _) in self.parameters.items()
+            if (p := scene.parameter(name)) is not None and p.kind == "text" and value
+        )
 
 
 def find_study(name_or_path: str | Path) -> Path:
@@ -158,8 +169,13 @@ class _Parser:
         for key in sorted(set(d) - TOP_LEVEL_KEYS):
             self.problem(f"unknown top-level key {key!r}{_suggest(key, TOP_LEVEL_KEYS)}")
         name = self._string("name", required=True)
-        if name and not NAME_PATTERN.match(name):
-            self.problem(f"name = {name!r} may only contain letters, digits, '_' and '-'")
+        if name and not NAME_PATTERN.fullmatch(name):
+            self.problem(f"name = {short(name)} may only contain letters, digits, '_' and '-'")
+        elif name and len(name) > MAX_NAME_LENGTH:
+            self.problem(
+                f"name = {short(name)} has {len(name)} characters: at most {MAX_NAME_LENGTH} "
+                "(it names the run folder)"
+            )
         scene_name = self._string("scene", required=True)
         scene = None
         if scene_name:
@@ -215,7 +231,7 @@ class _Parser:
                 self.problem(f"missing required key {key!r}")
             return None
         if not isinstance(value, str) or not value.strip():
-            self.problem(f"{key} = {value!r} must be a non-empty string")
+            self.problem(f"{key} = {short(value)} must be a non-empty string")
             return None
         return value
 
@@ -225,7 +241,7 @@ class _Parser:
             self.problem(f"missing required key {key!r} (a list of names)")
             return []
         if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
-            self.problem(f"{key} = {value!r} must be a list of names")
+            self.problem(f"{key} = {short(value)} must be a list of names")
             return []
         if required and not value:
             self.problem(f"{key} is empty: name at least one")
@@ -236,7 +252,7 @@ class _Parser:
     def _table(self, key: str) -> dict[str, Any]:
         value = self.data.get(key, {})
         if not isinstance(value, dict):
-            self.problem(f"[{key}] must be a table, got {value!r}")
+            self.problem(f"[{key}] must be a table, got {short(value)}")
             return {}
         return value
 
@@ -245,19 +261,19 @@ class _Parser:
         if isinstance(design, str):
             design = {"type": design}
         if not isinstance(design, dict):
-            self.problem(f"design = {design!r} must be a string or a [design] table")
+            self.problem(f"design = {short(design)} must be a string or a [design] table")
             return "full_factorial", []
         for key in sorted(set(design) - DESIGN_KEYS):
             self.problem(f"unknown key {key!r} in [design]{_suggest(key, DESIGN_KEYS)}")
         kind = design.get("type", "full_factorial")
         if not isinstance(kind, str):
-            self.problem(f"design type = {kind!r} must be a string")
+            self.problem(f"design type = {short(kind)} must be a string")
             kind = "full_factorial"
         errors = design.get("error_columns", [])
         if not isinstance(errors, list) or not all(
-            isinstance(e, str) and NAME_PATTERN.match(e) for e in errors
+            isinstance(e, str) and NAME_PATTERN.fullmatch(e) for e in errors
         ):
-            self.problem(f"[design] error_columns = {errors!r} must be a list of simple names")
+            self.problem(f"[design] error_columns = {short(errors)} must be a list of simple names")
             errors = []
         return kind, errors
 
@@ -269,7 +285,7 @@ class _Parser:
             for p in pairs
         ):
             self.problem(
-                f"[design] interactions = {pairs!r} must be a list of factor pairs, "
+                f"[design] interactions = {short(pairs)} must be a list of factor pairs, "
                 'e.g. [["seg2_width", "seg2_amplitude"]]'
             )
             return []
@@ -291,7 +307,9 @@ class _Parser:
             return None
         names = table["pool"]
         if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
-            self.problem(f'[design] pool = {names!r} must be a list of factor names, e.g. ["D"]')
+            self.problem(
+                f'[design] pool = {short(names)} must be a list of factor names, e.g. ["D"]'
+            )
             return None
         if design == "sweep":
             self.problem("[design] pool applies to the ANOVA, which a sweep does not have")
@@ -318,7 +336,7 @@ class _Parser:
             if r not in responses:
                 self.problem(f"[sense] names {r!r}, which is not in responses")
             if s not in ("smaller", "larger"):
-                self.problem(f"[sense] {r} = {s!r} must be 'smaller' or 'larger'")
+                self.problem(f"[sense] {r} = {short(s)} must be 'smaller' or 'larger'")
 
     def _parameters(self, scene: Scene, raw: dict[str, Any]) -> dict[str, tuple[Any, str]]:
         out: dict[str, tuple[Any, str]] = {}
@@ -350,9 +368,12 @@ class _Parser:
 
     def _units_ok(self, what: str, param: Any, units: Any) -> bool:
         if param.kind != "number":
-            return True
+            if isinstance(units, str) and canonical(units) == param.units:
+                return True
+            self.problem(f"{what}: units = {short(units)} do not apply to a {param.kind} parameter")
+            return False
         if not isinstance(units, str) or units not in UNITS:
-            self.problem(f"{what}: unknown units {units!r} (expected {param.units!r})")
+            self.problem(f"{what}: unknown units {short(units)} (expected {param.units!r})")
             return False
         if UNITS[units].dimension != UNITS[param.units].dimension:
             compatible = sorted(compatible_units(param.units))
@@ -375,7 +396,7 @@ class _Parser:
                 )
                 continue
             if not isinstance(spec, dict):
-                self.problem(f"factor {name} must be a table with 'levels' (got {spec!r})")
+                self.problem(f"factor {name} must be a table with 'levels' (got {short(spec)})")
                 continue
             for key in sorted(set(spec) - FACTOR_KEYS):
                 self.problem(f"unknown key {key!r} in factor {name}{_suggest(key, FACTOR_KEYS)}")
@@ -397,12 +418,20 @@ class _Parser:
                     if problem:
                         self.problem(f"factor {name}: {problem}")
             column = spec.get("column")
-            if column is not None and (not isinstance(column, int) or column < 1):
-                self.problem(f"factor {name}: column = {column!r} must be an integer ≥ 1")
+            if column is not None and not (is_finite_number(column) and isinstance(column, int)):
+                self.problem(
+                    f"factor {name}: column = {short(column)} must be a whole number ≥ 1 "
+                    "(an array column)"
+                )
+                column = None
+            elif column is not None and column < 1:
+                self.problem(f"factor {name}: column = {column} must be a whole number ≥ 1")
                 column = None
             base = spec.get("base")
-            if base is not None and base not in levels:
-                self.problem(f"factor {name}: base = {base!r} must be one of its levels {levels}")
+            if base is not None and (isinstance(base, bool) or base not in levels):
+                self.problem(
+                    f"factor {name}: base = {short(base)} must be one of its levels {short(levels)}"
+                )
                 base = None
             if column is not None and design in ("full_factorial", "sweep"):
                 self.problem(f"factor {name}: 'column' only applies to orthogonal-array designs")

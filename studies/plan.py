@@ -96,13 +96,16 @@ def _plan(definition: StudyDefinition | None, problems: list[str], source: str) 
     return Plan(definition, scene, design, points, settings, tuple(stages), tuple(stored))
 
 
-def full_factorial_size_problem(counts: dict[str, int], responses: int) -> str:
+def full_factorial_size_problem(
+    counts: dict[str, int], responses: int, seconds_per_point: float = 1e-3
+) -> str:
     """Why a full factorial of ``counts`` will not fit this machine's memory, or "".
 
     Checked from the level counts alone, before anything is allocated. The estimate per design
     point (``BYTES_PER_FACTOR`` per factor for its levels, values and analysis, plus
     ``BYTES_PER_RESPONSE`` per response) is about twice what the 10⁷-point valve study of
-    ``bench study`` measured; ``ENGINE_STUDIES_MAX_POINTS`` overrides the limit.
+    ``bench study`` measured; ``ENGINE_STUDIES_MAX_POINTS`` overrides the limit. The message
+    also estimates the compute time from the scene's ``seconds_per_point``.
     """
     runs = math.prod(counts.values())
     per_point = BYTES_PER_FACTOR * len(counts) + BYTES_PER_RESPONSE * (responses + 2)
@@ -114,12 +117,24 @@ def full_factorial_size_problem(counts: dict[str, int], responses: int) -> str:
     shape = " x ".join(f"{n} {name}" for name, n in counts.items())
     return (
         f"full factorial of {shape} = {runs:.4g} design points needs about "
-        f"{runs * per_point / 1e9:.3g} GB to plan, run and analyse; this machine allows "
-        f"{limit:.4g} points ({available / 1e9:.3g} GB of memory available"
+        f"{runs * per_point / 1e9:.3g} GB to plan, run and analyse and about "
+        f"{duration(runs * seconds_per_point)} to compute ({seconds_per_point:g} s per point); "
+        f"this machine allows {limit:.4g} points ({available / 1e9:.3g} GB of memory available"
         + (f", {MAX_POINTS_VARIABLE}={override}" if override else "")
         + '). Use fewer levels, an orthogonal array (type = "auto"), or raise the limit '
         f"with the environment variable {MAX_POINTS_VARIABLE}"
     )
+
+
+DURATION_UNITS = (("years", 365.25 * 86400.0), ("days", 86400.0), ("h", 3600.0), ("min", 60.0))
+
+
+def duration(seconds: float) -> str:
+    """A duration in the largest unit it reaches, to 3 significant digits ("2.3 h")."""
+    for name, size in DURATION_UNITS:
+        if seconds >= size:
+            return f"{seconds / size:.3g} {name}"
+    return f"{seconds:.3g} s"
 
 
 def max_points(text: str) -> int:
@@ -176,7 +191,9 @@ def _name_clashes(
 def _design(d: StudyDefinition) -> designs.Design:
     counts = {f.name: len(f.levels) for f in d.factors}
     if d.design == "full_factorial":
-        size_problem = full_factorial_size_problem(counts, len(d.responses))
+        size_problem = full_factorial_size_problem(
+            counts, len(d.responses), get_scene(d.scene).seconds_per_point
+        )
         if size_problem:
             raise designs.DesignError([size_problem])
         return designs.full_factorial(counts)

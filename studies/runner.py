@@ -27,6 +27,7 @@ from studies.plan import Plan
 from studies.scenes import Scene, SceneOutput, get_scene
 
 DEFAULT_CHUNK_SIZE = 2048
+SCHEDULER_TIMEOUT_S = 5.0  # connecting to a --scheduler address; Dask's default is 30 s
 
 
 @dataclass
@@ -167,5 +168,16 @@ def dask_executor(scheduler: str) -> Executor:
     except ImportError:
         msg = "--scheduler needs dask.distributed: pip install 'engine-studies[cluster]'"
         raise ValueError(msg) from None
-    client = Client() if scheduler == "local" else Client(scheduler)
+    if scheduler == "local":
+        return Client().get_executor()
+    try:
+        client = Client(scheduler, timeout=SCHEDULER_TIMEOUT_S)
+    except Exception as exc:  # noqa: BLE001  unreachable, malformed, or not a Dask scheduler
+        detail = str(exc).splitlines()[0] if str(exc) else "no detail"
+        msg = (
+            f"--scheduler {scheduler}: could not connect to a Dask scheduler within "
+            f"{SCHEDULER_TIMEOUT_S:g} s ({type(exc).__name__}: {detail[:200]}); "
+            "check the address (e.g. tcp://host:8786) or use --scheduler local"
+        )
+        raise ValueError(msg) from None
     return client.get_executor()

@@ -14,6 +14,9 @@ import difflib
 import json
 import os
 import shutil
+import sqlite3
+import zipfile
+import zlib
 from concurrent.futures import Executor
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -23,6 +26,7 @@ import xarray as xr
 
 from studies import provenance, tracking
 from studies.analysis import ANALYSIS_NAME
+from studies.definition import parse_study
 from studies.plan import Plan, plan_study
 from studies.report import write_analysis
 from studies.results import open_results
@@ -80,7 +84,7 @@ def run_plan(
         started=tracking.now(),
         git_commit=commit,
         git_dirty=dirty,
-        definition_sha256=tracking.definition_hash(d.text),
+        definition_sha256=tracking.definition_hash(d.text, d.input_files()),
         folder=str(folder),
         versions=provenance.versions(),
         host=provenance.host(),
@@ -167,8 +171,11 @@ def _execute(
         if writer is not None:
             writer.abandon()
         record.status, record.finished, record.error = "failed", tracking.now(), repr(exc)
-        record.write()
-        tracking.register(outputs, record)
+        try:
+            record.write()
+            tracking.register(outputs, record)
+        except (OSError, sqlite3.Error) as unrecorded:  # e.g. the disk is still full
+            exc.add_note(f"its run.json still says running ({unrecorded})")
         exc.add_note(
             f"run {record.run_id} kept its finished chunks; resume it with: "
             f"{tracking.resume_command(record.run_id, outputs)}"
@@ -182,12 +189,21 @@ def _execute(
 
 
 def _check_unchanged(study: Path, sha256: str) -> None:
-    """Refuse to resume a run whose study file changed since it started (its checkpoints
-    would be mixed with points of another definition)."""
+    """Refuse to resume a run whose study file, or a file the study reads, changed since it
+    started (its checkpoints would be mixed with points of another definition)."""
     text = study.read_text(encoding="utf-8")
-    if tracking.definition_hash(text) == sha256:
+    definition, _ = parse_study(text, str(study))
+    inputs = definition.input_files() if definition is not None else ()
+    if tracking.definition_hash(text, inputs) == sha256:
         return
     original = _recorded_text(study.parent)
+    if original == text:
+        msg = (
+            f"a file that {study} reads ({', '.join(map(str, inputs))}) changed after the run "
+            "started. Resuming would mix design points of two inputs; run the study anew: "
+            f"python -m studies run {study}"
+        )
+        raise ValueError(msg)
     changed = [
         line
         for line in difflib.unified_diff(original.splitlines(), text.splitlines(), lineterm="", n=0)
@@ -218,8 +234,20 @@ def _save_chunk(folder: Path, index: int, out: SceneOutput) -> None:
     tmp.replace(path)  # a chunk file is either complete or absent
 
 
+class DamagedCheckpoint(OSError):
+    """A checkpoint chunk file that cannot be decoded (cut short, overwritten, bad disk)."""
+
+
 def _load_chunk(path: Path) -> SceneOutput:
-    with np.load(path) as data:
-        scalars = {k.split(":", 1)[1]: data[k] for k in data.files if k.startswith("scalar:")}
-        curves = {k.split(":", 1)[1]: data[k] for k in data.files if k.startswith("curve:")}
+    """A checkpointed chunk (OSError if unreadable, :class:`DamagedCheckpoint` if damaged)."""
+    try:
+        with path.open("rb") as file, np.load(file) as data:  # file: closed even if damaged
+            scalars = {k.split(":", 1)[1]: data[k] for k in data.files if k.startswith("scalar:")}
+            curves = {k.split(":", 1)[1]: data[k] for k in data.files if k.startswith("curve:")}
+    except (ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error) as exc:
+        msg = (
+            f"checkpoint {path} is damaged ({type(exc).__name__}: {exc}); delete it and resume: "
+            "its design points are computed again"
+        )
+        raise DamagedCheckpoint(msg) from None
     return SceneOutput(scalars, curves)

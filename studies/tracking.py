@@ -157,8 +157,18 @@ def now() -> str:
 RUN_ID_ATTEMPTS = 1000  # runs of one definition started in the same millisecond
 
 
-def definition_hash(text: str) -> str:
-    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+def definition_hash(text: str, inputs: tuple[Path, ...] = ()) -> str:
+    """The SHA-256 of a study's text and of the contents of every file it reads (``inputs``,
+    e.g. a lift table): the cache key, so a changed table is never served from a stale run.
+    With no input files it is the hash of the text alone."""
+    digest = hashlib.sha256(text.encode("utf-8"))
+    for path in inputs:
+        digest.update(b"\0" + str(path).encode("utf-8") + b"\0")
+        try:
+            digest.update(path.read_bytes())
+        except OSError as exc:  # planning reports the unreadable file; the key just differs
+            digest.update(f"unreadable: {exc.strerror}".encode())
+    return digest.hexdigest()
 
 
 def new_run_id(text: str) -> str:

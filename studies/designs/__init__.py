@@ -118,7 +118,13 @@ def orthogonal(
     ``error_names`` in order, then ``e<column>``.
     """
     pairs = [tuple(p) for p in interactions]
-    problems = _pair_problems(pairs, level_counts)
+    problems = [
+        f"factor {name} has {n} level: an orthogonal array varies every factor over at least "
+        "2 levels (fix a single value in [parameters])"
+        for name, n in level_counts.items()
+        if n < 2
+    ]
+    problems += _pair_problems(pairs, level_counts)
     if problems:
         raise DesignError(problems)
     try:

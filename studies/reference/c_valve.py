@@ -4,8 +4,11 @@ The issue sets the speed target as "a C -O3 kernel of this form"; rather than tr
 from another machine, ``python -m studies bench valve`` builds this C kernel with the
 machine's compiler and times it on the same inputs in the same run. Built with ``$CC``
 (default ``cc``), ``-O3 -march=native`` with FMA contraction (as the Numba kernels) and
-OpenMP, once per source and flags, into the temporary directory. Without a C compiler the
-bench skips the comparison and says so.
+OpenMP, once per source and flags, into a private cache folder of the user
+(``$XDG_CACHE_HOME/engine_studies``, default ``~/.cache/engine_studies``, mode 0700): a library
+is loaded only from a folder this user owns and nobody else can write, never from a predictable
+name in a shared temporary folder. Without a C compiler the bench skips the comparison and
+says so.
 """
 
 from __future__ import annotations
@@ -14,8 +17,8 @@ import ctypes
 import hashlib
 import os
 import shutil
+import stat
 import subprocess
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -41,6 +44,28 @@ class CompileFailed(RuntimeError):
     """The compiler is there but rejected the C reference (or its flags, e.g. -fopenmp)."""
 
 
+class UnsafeCacheFolder(CompileFailed):
+    """The cache folder is not private to this user: a library there could be replaced."""
+
+
+def cache_folder() -> Path:
+    """This user's private folder for built libraries (created with mode 0700).
+
+    Refused (``UnsafeCacheFolder``) when it belongs to another user or others may write it.
+    """
+    root = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    folder = Path(root) / "engine_studies"
+    folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+    info = folder.lstat()
+    if not stat.S_ISDIR(info.st_mode) or info.st_uid != os.getuid():
+        msg = f"{folder} is not a folder of this user (uid {os.getuid()}): not loading from it"
+        raise UnsafeCacheFolder(msg)
+    if info.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+        msg = f"{folder} is writable by other users (mode {info.st_mode & 0o777:o}): chmod 700 it"
+        raise UnsafeCacheFolder(msg)
+    return folder
+
+
 def build(dtype: np.dtype) -> ctypes.CDLL:
     """Compile (or reuse) the C kernel with lanes of ``dtype`` (float64 or float32)."""
     compiler = os.environ.get("CC", "cc")
@@ -48,7 +73,7 @@ def build(dtype: np.dtype) -> ctypes.CDLL:
         raise CompilerMissing(f"C compiler {compiler!r} not found (set CC)")
     command = [compiler, *FLAGS, f"-DREAL={REAL[np.dtype(dtype)]}"]
     key = hashlib.sha256(SOURCE.read_bytes() + " ".join(command).encode()).hexdigest()[:16]
-    library = Path(tempfile.gettempdir()) / f"engine_kernels_valve_c_{key}.so"
+    library = cache_folder() / f"valve_c_{key}.so"
     if not library.exists():
         partial = library.with_suffix(f".{os.getpid()}.tmp")
         result = subprocess.run(

@@ -121,6 +121,7 @@ _CURVE_SOURCE: dict[str, tuple[str, int, float]] = {
 
 class CamScene(Scene):
     name = "cam"
+    seconds_per_point = 1e-3
     description = "flat-faced tappet cam: lift law, curvature, lubrication, contact stress"
     parameters = PARAMETERS
     settings = SETTINGS
@@ -156,7 +157,7 @@ class CamScene(Scene):
             if not cam_profile.segment_widths(widths, shapes, p["rise_angle"][i], adjusted):
                 out.append(
                     f"segment widths {np.round(deg(widths), 3).tolist()} deg cannot be fitted to "
-                    f"the {deg(p['rise_angle'][i]):g} deg half-event: the fillet and segment 6 "
+                    f"the rise_angle = {deg(p['rise_angle'][i]):g} deg half-event: the fillet and segment 6 "
                     f"would need widths {np.round(deg(adjusted), 3).tolist()} deg (must be ≥ 0)"
                 )
             out += _ramp_problems(p["ramp_height"][i], p["ramp_width"][i], p["ramp_velocity"][i])
@@ -283,13 +284,15 @@ def _ramp_problems(height: float, width: float, velocity: float) -> list[str]:
     deg = np.rad2deg
     if velocity <= 0.0 or width <= 0.0:
         return [f"a ramp of height {height * MM:g} mm needs ramp_width > 0 and ramp_velocity > 0"]
-    lo, hi = height / velocity, 2.0 * height / velocity
+    with np.errstate(over="ignore"):  # a tiny ramp_velocity: the bounds are inf, still refused
+        lo, hi = height / velocity, 2.0 * height / velocity
+        lo_deg, hi_deg = deg(lo), deg(hi)
     if not lo <= width <= hi:
         return [
             (
                 f"ramp_width = {deg(width):g} deg cannot carry a {height * MM:g} mm ramp ending at "
                 f"{velocity * MM:g} mm/rad: constant acceleration then constant velocity needs "
-                f"{deg(lo):.3g} ≤ ramp_width ≤ {deg(hi):.3g} deg"
+                f"{lo_deg:.3g} ≤ ramp_width ≤ {hi_deg:.3g} deg"
             )
         ]
     return []

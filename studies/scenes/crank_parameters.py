@@ -74,7 +74,14 @@ PARAMETERS: tuple[Parameter, ...] = (
     ),
     Parameter("layout", "1", "v", "cylinder layout", choices=LAYOUTS, source=SRC),
     Parameter(
-        "cylinders", "1", 12.0, "number of cylinders z (a whole number)", 1.0, 64.0, source=SRC
+        "cylinders",
+        "1",
+        12.0,
+        "number of cylinders z (a whole number)",
+        1.0,
+        64.0,
+        source=SRC,
+        integer=True,
     ),
     Parameter(
         "cylinder_pitch",

@@ -39,6 +39,7 @@ class LuffingScene(Scene):
     """Tower-crane test-rig trolley drive (SPEC §7)."""
 
     name = "luffing"
+    seconds_per_point = 3e-4
     description = (
         "tower-crane test-rig trolley drive: motor, belt, coupling, key, bearing and "
         "guide-tube checks as value, limit and pass (SPEC §7)"

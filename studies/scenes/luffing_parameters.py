@@ -63,7 +63,9 @@ PARAMETERS: tuple[Parameter, ...] = (
     ),
     Parameter("service_factor", "1", 1.2, "belt service factor KA", 0.0, 10.0, True, source=SRC),
     Parameter("belt_pitch", "mm", 12.7, "timing-belt pitch p", 0.0, 1000.0, True, source=SRC),
-    Parameter("pulley_teeth", "1", 20.0, "pulley teeth Z", 0.0, 1000.0, True, source=SRC),
+    Parameter(
+        "pulley_teeth", "1", 20.0, "pulley teeth Z", 0.0, 1000.0, True, source=SRC, integer=True
+    ),
     Parameter(
         "belt_ratio",
         "1",

@@ -122,6 +122,7 @@ def chain_keys(points: dict[str, np.ndarray]) -> dict[tuple, np.ndarray]:
 
 class RockerScene(Scene):
     name = "rocker"
+    seconds_per_point = 2e-2
     description = "OHC cam with variable-ratio rocker: valve lift, force ratio (kinematics)"
     parameters = PARAMETERS
     settings = SETTINGS

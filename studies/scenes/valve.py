@@ -190,6 +190,7 @@ def stability_problems(
 
 class ValveScene(RockerScene):
     name = "valve"
+    seconds_per_point = 1e-3
     description = "valve-train dynamics through the rocker: jump, bounce, seating, jump speed"
     parameters = PARAMETERS
     settings = SETTINGS

@@ -84,6 +84,7 @@ RESPONSES: tuple[Response, ...] = (
 
 class ValveAccuracyScene(ValveScene):
     name = "valve_accuracy"
+    seconds_per_point = 0.2
     description = "valve dynamics vs integrator and step: error against scipy, cost per case"
     parameters = (*PARAMETERS, INTEGRATOR, ANGLE_STEP)
     settings = SETTINGS

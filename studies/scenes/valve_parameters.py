@@ -142,6 +142,7 @@ WINDOW_SETTINGS: tuple[Parameter, ...] = (
         "largest number of RK4 sub-steps per step the stability guard may use",
         1.0,
         1e5,
+        integer=True,
     ),
     Parameter(
         "jump_speed_low", "rpm", 500.0, "jump speed search: lowest camshaft speed", 0.0, 1e5, True

@@ -11,6 +11,8 @@ to round-off and counts and statuses exactly. Skipped where no C compiler is ins
 from __future__ import annotations
 
 import math
+import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -87,3 +89,31 @@ def test_missing_compiler_is_reported(monkeypatch):
     monkeypatch.setenv("CC", "no-such-compiler-here")
     with pytest.raises(c_valve.CompilerMissing, match="no-such-compiler-here"):
         c_valve.build(np.dtype(np.float64))
+
+
+def test_the_library_is_built_in_a_private_cache_folder(monkeypatch, tmp_path):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    try:
+        lib = c_valve.build(np.dtype(np.float64))
+    except c_valve.CompilerMissing as error:
+        pytest.skip(str(error))
+    folder = tmp_path / "cache" / "engine_studies"
+    assert Path(lib._name).parent == folder
+    assert folder.stat().st_mode & 0o777 == 0o700
+    assert folder.stat().st_uid == os.getuid()
+
+
+def test_a_cache_folder_others_can_write_is_refused(monkeypatch, tmp_path):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    (tmp_path / "engine_studies").mkdir(mode=0o777)
+    (tmp_path / "engine_studies").chmod(0o777)  # mkdir's mode is cut by the umask
+    with pytest.raises(c_valve.UnsafeCacheFolder, match=r"writable by other users \(mode 777\)"):
+        c_valve.cache_folder()
+
+
+def test_a_cache_folder_that_is_a_link_is_refused(monkeypatch, tmp_path):
+    (tmp_path / "elsewhere").mkdir(mode=0o700)
+    (tmp_path / "engine_studies").symlink_to(tmp_path / "elsewhere")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    with pytest.raises(c_valve.UnsafeCacheFolder, match="is not a folder of this user"):
+        c_valve.cache_folder()

@@ -105,3 +105,25 @@ def test_a_task_carries_only_its_chunk(serial) -> None:
     evaluate(large, chunk_size=4, progress=False, executor=big)
     assert len(big.sizes) == 75
     assert max(big.sizes) <= 1.2 * max(small.sizes)  # tasks do not grow with the study
+
+
+def test_an_unreachable_scheduler_is_one_line_and_writes_nothing(
+    tmp_path, monkeypatch, capsys
+) -> None:
+    pytest.importorskip("dask.distributed")
+    from studies import runner
+    from studies.cli import main
+
+    monkeypatch.setattr(runner, "SCHEDULER_TIMEOUT_S", 0.5)
+    study = tmp_path / "executors.toml"
+    study.write_text(STUDY)
+    outputs = tmp_path / "out"
+    address = "tcp://127.0.0.1:1"  # port 1: nothing listens there
+    code = main(["run", str(study), "--outputs", str(outputs), "--scheduler", address])
+    assert code == 2
+    err = capsys.readouterr().err.strip()
+    assert "Traceback" not in err
+    assert len(err.splitlines()) == 1
+    assert err.startswith(f"error: --scheduler {address}: could not connect to a Dask scheduler")
+    assert "within 0.5 s" in err
+    assert not outputs.exists()

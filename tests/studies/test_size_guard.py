@@ -1,8 +1,9 @@
 """A design too large for the machine is refused at planning, from its level counts alone,
-with the size and the memory estimate; a 10⁷-point study passes."""
+with the size and the memory and time estimates; a 10⁷-point study passes."""
 
 from __future__ import annotations
 
+import time
 import tracemalloc
 
 import pytest
@@ -27,14 +28,19 @@ def test_a_trillion_point_design_is_refused_before_anything_is_allocated(
     monkeypatch.setattr(planning, "available_memory", lambda: 24 * GB)
     text = huge_study(1000)  # four factors of 1000 levels: 10¹² points
     tracemalloc.start()
+    start = time.perf_counter()
     with pytest.raises(StudyError) as refused:
         plan_text(text)
+    seconds = time.perf_counter() - start
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
     assert peak < 50e6  # nothing the size of the design was allocated
+    assert seconds < 5  # about 0.05 s here; generous for a loaded machine under tracemalloc
     message = str(refused.value)
     assert "= 1e+12 design points" in message
     assert "GB to plan, run and analyse" in message
+    # 10¹² points x the valve scene's 1e-3 s per point = 1e9 s = 31.7 years of 365.25 days
+    assert "about 31.7 years to compute (0.001 s per point)" in message
     assert "24 GB of memory available" in message
     assert "orthogonal array" in message
     assert "ENGINE_STUDIES_MAX_POINTS" in message
@@ -62,3 +68,11 @@ def test_a_bad_limit_names_the_variable(monkeypatch: pytest.MonkeyPatch) -> None
     monkeypatch.setenv("ENGINE_STUDIES_MAX_POINTS", "lots")
     with pytest.raises(ValueError, match="ENGINE_STUDIES_MAX_POINTS='lots' must be a number"):
         full_factorial_size_problem({"a": 2}, responses=1)
+
+
+@pytest.mark.parametrize(
+    ("seconds", "shown"),
+    [(59.0, "59 s"), (90.0, "1.5 min"), (7200.0, "2 h"), (3 * 86400.0, "3 days")],
+)
+def test_durations_are_shown_in_the_largest_unit_reached(seconds: float, shown: str) -> None:
+    assert planning.duration(seconds) == shown

@@ -13,10 +13,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from run_faults import fail_on_call
 
 from studies import tracking
 from studies.cli import main
 from studies.plan import plan_text
+from studies.results import open_results
 from studies.study_run import resume_run, run_plan
 
 STUDY = """
@@ -29,20 +31,6 @@ levels = [16.0, 18.0, 20.0, 22.0]
 [factors.cam_speed]
 levels = [1000.0, 1300.0, 1600.0]
 """
-
-
-def fail_on_call(monkeypatch: pytest.MonkeyPatch, plan, call: int, error: BaseException) -> None:
-    """Make the plan's geometry stage raise ``error`` on its ``call``-th call."""
-    original = plan.scene.stages["geometry"]
-    calls = {"n": 0}
-
-    def failing(ctx):
-        calls["n"] += 1
-        if calls["n"] == call:
-            raise error
-        return original(ctx)
-
-    monkeypatch.setitem(plan.scene.stages, "geometry", failing)
 
 
 def test_failed_run_resumes_from_its_last_finished_chunk(
@@ -273,3 +261,60 @@ def test_a_relative_outputs_folder_is_recorded_absolute(
     assert main(["run", str(study), "--no-progress", "--outputs", "rel"]) == 0
     (row,) = tracking.list_runs(tmp_path / "rel")
     assert Path(row["folder"]) == (tmp_path / "rel" / "resumable" / row["run_id"])
+
+
+def lift_table(path: Path, peak_mm: float) -> Path:
+    """A CSV lift table: a cosine bump of ``peak_mm`` over ±75 deg at 1 deg steps."""
+    deg = np.arange(-75.0, 76.0)
+    lift = peak_mm * (1 + np.cos(np.pi * deg / 75.0)) / 2
+    np.savetxt(path, np.c_[deg, lift], delimiter=",", header="cam angle deg,lift mm")
+    return path
+
+
+def test_the_cache_key_covers_the_contents_of_a_lift_table(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.setattr("studies.provenance.git_state", lambda: ("c0ffee" * 6 + "cafe", False))
+    table = lift_table(tmp_path / "lift.csv", peak_mm=10.0)
+    study = tmp_path / "table.toml"
+    study.write_text(
+        f'name = "table"\nscene = "cam"\nresponses = ["max_lift"]\n[settings]\n'
+        f'table_smoothing = 0.0\n[parameters]\nlaw = "table"\nlift_table = "{table}"\n'
+        "rise_angle = 75.0\n[factors.base_radius]\nlevels = [15.0, 20.0]\n"
+    )
+    outputs = tmp_path / "outputs"
+    args = ["run", str(study), "--outputs", str(outputs), "--no-progress"]
+    assert main(args) == 0
+    lift_table(table, peak_mm=5.0)  # the same file name, halved lifts
+    assert main(args) == 0
+    assert "reusing run" not in capsys.readouterr().out
+    newest, first = tracking.list_runs(outputs)
+    assert newest["definition_sha256"] != first["definition_sha256"]
+    for row, peak in ((first, 10.0), (newest, 5.0)):  # the spline interpolates the table peak
+        result = open_results(Path(row["folder"]) / "results.nc")
+        np.testing.assert_allclose(result["max_lift"].values, peak, rtol=1e-9)
+    assert main(args) == 0  # unchanged since: reused
+    assert "reusing run" in capsys.readouterr().out
+
+
+def test_resume_refuses_a_lift_table_changed_after_the_run_started(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    table = lift_table(tmp_path / "lift.csv", peak_mm=10.0)
+    text = (
+        f'name = "table"\nscene = "cam"\nresponses = ["max_lift", "min_radius_of_curvature"]\n'
+        f'[parameters]\nlaw = "table"\nlift_table = "{table}"\nrise_angle = 75.0\n'
+        "[factors.base_radius]\n"
+        "levels = [14.0, 15.0, 16.0, 17.0, 18.0, 19.0]\n"
+    )
+    plan = plan_text(text)
+    fail_on_call(monkeypatch, plan, 3, RuntimeError("simulated crash"))
+    with pytest.raises(RuntimeError):
+        run_plan(plan, tmp_path, chunk_size=2, progress=False)
+    (folder,) = (tmp_path / "table").iterdir()
+    lift_table(table, peak_mm=5.0)
+    run_id = json.loads((folder / "run.json").read_text())["run_id"]
+    with pytest.raises(ValueError, match=f"a file that .* reads \\({table}\\) changed after"):
+        resume_run(run_id, tmp_path, progress=False)
+    lift_table(table, peak_mm=10.0)  # the original contents: resumable again
+    assert resume_run(run_id, tmp_path, progress=False).record.status == "finished"

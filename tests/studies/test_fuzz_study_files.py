@@ -1,0 +1,296 @@
+"""Fuzzing study files (issue 18, "What to build" 4): hypothesis writes study files, valid and
+broken (types, ranges, units, names, design sizes), for four scenes, and ``check`` answers each
+with either "OK" (exit 0) or exit 2 and a list of problems, one line each, every line naming a
+key of the file — never a traceback, never an error that is not a study problem.
+
+500 examples per scene by default (about 4 s a scene on 2 cores); ``HYPOTHESIS_PROFILE=long``
+runs 5000.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import math
+import os
+import re
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import pytest
+from hypothesis import HealthCheck, event, given, settings
+from hypothesis import strategies as st
+
+from studies.cli import main
+from studies.scenes import get_scene
+from studies.units import UNITS
+
+settings.register_profile(
+    "fuzz-ci",
+    max_examples=500,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow],
+)
+settings.register_profile(
+    "fuzz-long", max_examples=5000, deadline=None, suppress_health_check=[HealthCheck.too_slow]
+)
+FUZZ = settings.get_profile(
+    "fuzz-long" if os.environ.get("HYPOTHESIS_PROFILE") == "long" else "fuzz-ci"
+)
+SCENES = ("cam", "valve", "luffing", "reed")
+MAX_POINTS = 1000  # the size guard's limit here: larger designs are refused, fast
+BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
+
+# --- TOML text of a generated document ---------------------------------------------------
+
+
+def toml_value(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float) and not math.isfinite(value):
+        return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
+    if isinstance(value, (int, float)):
+        return repr(value)
+    if isinstance(value, str):
+        return toml_string(value)
+    if isinstance(value, list):
+        return "[" + ", ".join(toml_value(v) for v in value) + "]"
+    return "{" + ", ".join(f"{toml_key(k)} = {toml_value(v)}" for k, v in value.items()) + "}"
+
+
+def toml_key(key: str) -> str:
+    return key if BARE_KEY.fullmatch(key) else toml_string(key)
+
+
+def toml_string(text: str) -> str:
+    """A TOML basic string: JSON's escapes, plus DEL, which TOML also wants escaped."""
+    return json.dumps(text, ensure_ascii=False).replace("\x7f", "\\u007f")
+
+
+def toml_text(doc: dict[str, Any]) -> str:
+    """Top-level scalars first, then one ``[table]`` per dict, factors as ``[factors.X]``."""
+    lines = [f"{toml_key(k)} = {toml_value(v)}" for k, v in doc.items() if not isinstance(v, dict)]
+    for key, table in doc.items():
+        if not isinstance(table, dict):
+            continue
+        if key == "factors" and all(isinstance(v, dict) for v in table.values()):
+            for name, spec in table.items():
+                lines.append(f"[factors.{toml_key(name)}]")
+                lines += [f"{toml_key(k)} = {toml_value(v)}" for k, v in spec.items()]
+            continue
+        lines.append(f"[{toml_key(key)}]")
+        lines += [f"{toml_key(k)} = {toml_value(v)}" for k, v in table.items()]
+    return "\n".join(lines) + "\n"
+
+
+# --- documents -------------------------------------------------------------------------------
+
+HOSTILE_NUMBERS = st.sampled_from(
+    [0, -1, 0.0, -0.0, 1e-300, 1e300, math.nan, math.inf, -math.inf, 2**63, -(2**64), 10**400]
+)
+ANY_VALUE = st.one_of(
+    HOSTILE_NUMBERS,
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.integers(min_value=-(2**70), max_value=2**70),
+    st.booleans(),
+    st.text(max_size=8),
+    st.lists(st.floats(allow_nan=True), max_size=3),
+    st.just({"value": 1.0, "units": "furlong"}),
+)
+UNIT_NAMES = st.one_of(st.sampled_from(sorted(UNITS)), st.text(max_size=5), st.integers())
+NAMES = st.one_of(
+    st.from_regex(r"[A-Za-z0-9_-]{1,20}", fullmatch=True),
+    st.text(max_size=80),
+    st.just("a" * 300),
+    st.just("../../etc"),
+    st.integers(),
+)
+
+
+def allowed(param: Any) -> st.SearchStrategy[Any]:
+    """A value ``param`` allows, in its own units."""
+    if param.kind == "choice":
+        return st.sampled_from(param.choices)
+    lo = param.minimum if param.minimum is not None else -1e3
+    hi = param.maximum if param.maximum is not None else lo + 1e3
+    if param.integer:
+        return st.integers(math.ceil(lo) + 1, math.floor(min(hi, lo + 50)))
+    return st.floats(lo, hi, exclude_min=param.exclusive_minimum, allow_subnormal=False)
+
+
+def hostile(param: Any) -> st.SearchStrategy[Any]:
+    """A value ``param`` refuses: out of range, of another type, not finite, not whole."""
+    if param.kind == "text":
+        return st.one_of(HOSTILE_NUMBERS, st.booleans(), st.just(["a"]))
+    if param.kind == "vector":
+        return st.one_of(
+            st.just([]), st.just([1.0, math.nan]), HOSTILE_NUMBERS, st.text(max_size=3)
+        )
+    if param.kind == "choice":
+        return st.one_of(st.just("no_such_choice"), HOSTILE_NUMBERS, st.booleans())
+    outside = [HOSTILE_NUMBERS.filter(lambda v: param.check(v) is not None), st.booleans()]
+    if param.maximum is not None:
+        outside.append(st.floats(param.maximum, param.maximum * 2 + 1, exclude_min=True))
+    if param.integer:
+        outside.append(st.just(2.5))
+    return st.one_of(*outside, st.text(max_size=3), st.just([1.0]))
+
+
+@st.composite
+def valid_document(draw: st.DrawFn, scene_name: str) -> dict[str, Any]:
+    """A study a user could mean: every name known, every value allowed (the scene's
+    cross-parameter checks may still refuse a combination)."""
+    scene = get_scene(scene_name)
+    variable = [p for p in scene.parameters if p.kind in ("number", "choice")]
+    chosen = draw(st.lists(st.sampled_from(variable), min_size=1, max_size=4, unique=True))
+    factors, fixed = chosen[: max(1, len(chosen) - 1)], chosen[max(1, len(chosen) - 1) :]
+    responses = [r.name for r in scene.responses]
+    some = st.lists(st.sampled_from(scene.settings), max_size=2, unique=True)
+    settings_ = draw(some) if scene.settings else []
+    return {
+        "name": draw(st.from_regex(r"[A-Za-z0-9_-]{1,20}", fullmatch=True)),
+        "scene": scene_name,
+        "responses": draw(
+            st.lists(st.sampled_from(responses), min_size=1, max_size=3, unique=True)
+        ),
+        "design": draw(st.sampled_from(["full_factorial", "sweep", "auto"])),
+        "parameters": {p.name: draw(allowed(p)) for p in fixed},
+        "factors": {
+            p.name: {"levels": draw(st.lists(allowed(p), min_size=1, max_size=3, unique=True))}
+            for p in factors
+        },
+        "settings": {p.name: draw(allowed(p)) for p in settings_} if settings_ else {},
+    }
+
+
+@st.composite
+def broken(draw: st.DrawFn, doc: dict[str, Any], scene_name: str) -> str:
+    """Break ``doc`` in one way (in place); return the key a message must name."""
+    scene = get_scene(scene_name)
+    factor = draw(st.sampled_from(sorted(doc["factors"])))
+    spec, param = doc["factors"][factor], scene.parameter(factor)
+    kind = draw(st.integers(0, 10))
+    if kind == 0:
+        doc["name"] = draw(
+            NAMES.filter(
+                lambda n: not (isinstance(n, str) and BARE_KEY.fullmatch(n) and len(n) <= 64)
+            )
+        )
+        return "name"
+    if kind == 1:
+        doc["responses"] = draw(st.one_of(st.just(["no_such_response"]), ANY_VALUE))
+        return "responses" if doc["responses"] != ["no_such_response"] else "no_such_response"
+    if kind == 2:
+        doc["design"] = draw(st.one_of(st.sampled_from(["L99", "box_behnken"]), ANY_VALUE))
+        return "design"
+    if kind == 3:
+        target = draw(
+            st.sampled_from([p for p in scene.parameters if p.name not in doc["factors"]])
+        )
+        doc["parameters"][target.name] = draw(hostile(target))
+        return target.name
+    if kind == 4:
+        target = draw(
+            st.sampled_from(
+                [p for p in scene.parameters if p.kind == "number" and p.name not in doc["factors"]]
+            )
+        )
+        wrong = "kg" if target.units != "kg" else "m"
+        units = draw(st.one_of(st.just("furlong"), st.just(wrong), st.integers()))
+        doc["parameters"][target.name] = {"value": draw(allowed(target)), "units": units}
+        return target.name
+    if kind == 5:
+        spec["levels"] = draw(
+            st.one_of(ANY_VALUE, st.lists(hostile(param), min_size=1, max_size=3))
+        )
+        return factor
+    if kind == 6:
+        spec["units"] = draw(
+            st.one_of(
+                st.just("furlong"), st.integers(), st.just("kg" if param.units != "kg" else "m")
+            )
+        )
+        return factor
+    if kind == 7:
+        spec["column"] = draw(st.one_of(st.integers(-(2**70), 0), st.booleans(), st.just(1.5)))
+        return factor
+    if kind == 8:
+        spec["base"] = draw(st.one_of(st.just("not_a_level"), st.booleans(), st.just(-1e300)))
+        return factor
+    if kind == 9 and scene.settings:
+        target = draw(st.sampled_from(scene.settings))
+        doc["settings"][target.name] = draw(hostile(target))
+        return target.name
+    # design sizes: two factors of 40 to 2000 levels, more points than MAX_POINTS
+    numbers = [
+        p for p in scene.parameters if p.kind == "number" and p.name not in doc["parameters"]
+    ]
+    doc["factors"] = {
+        p.name: {"levels": [float(i + 1) for i in range(draw(st.integers(40, 2000)))]}
+        for p in draw(st.lists(st.sampled_from(numbers), min_size=2, max_size=2, unique=True))
+    }
+    doc["design"] = "full_factorial"
+    return "design points"
+
+
+@st.composite
+def study_document(draw: st.DrawFn, scene_name: str) -> tuple[dict[str, Any], list[str]]:
+    """A valid study, broken in 0, 1 or 2 ways; the keys a message must name."""
+    doc = draw(valid_document(scene_name))
+    offending = [draw(broken(doc, scene_name)) for _ in range(draw(st.integers(0, 2)))]
+    return doc, offending
+
+
+# --- the property ----------------------------------------------------------------------------
+
+
+def keys_of(value: Any) -> set[str]:
+    """Every key (at any depth) of a document, and every string value (names of things)."""
+    if isinstance(value, dict):
+        return set(value) | {k for v in value.values() for k in keys_of(v)}
+    if isinstance(value, list):
+        return {k for v in value for k in keys_of(v)}
+    return {value} if isinstance(value, str) and value else set()
+
+
+def check(text: str, folder: Path) -> tuple[int, str, str]:
+    study = folder / "fuzz.toml"
+    study.write_text(text, encoding="utf-8")
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(["check", str(study)])
+    return code, out.getvalue(), err.getvalue()
+
+
+@pytest.mark.parametrize("scene", SCENES)
+def test_check_answers_every_study_file_with_ok_or_readable_problems(
+    scene: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("ENGINE_STUDIES_MAX_POINTS", str(MAX_POINTS))
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+
+        @FUZZ
+        @given(study=study_document(scene))
+        def property_(study: tuple[dict[str, Any], list[str]]) -> None:
+            doc, offending = study
+            code, out, err = check(toml_text(doc), folder)
+            event(f"exit {code}")
+            assert "Traceback" not in err
+            if code == 0:
+                assert ": OK — scene " in out
+                return
+            assert code == 2, err
+            assert err.startswith(f"error: study {folder / 'fuzz.toml'} has "), err
+            problems = [line[4:] for line in err.splitlines() if line.startswith("  - ")]
+            assert problems, err
+            named = keys_of(doc) | {"design point", "factor", "design", "[factors]"}
+            for line in problems:
+                assert any(str(k) in line for k in named), line
+            if offending and not any(p.startswith("design point") for p in problems):
+                # a broken file stops before the per-point checks: its problems name the key
+                assert any(key in line for key in offending for line in problems), err
+
+        property_()

@@ -1,0 +1,177 @@
+"""Disk and permission failures (issue 18, item 5): a read-only outputs folder, a disk that fills
+while chunks are written, an unreadable or damaged checkpoint. Each ends with one line on
+stderr (what failed, on which file, how to go on), exit code 4 and no traceback; once the cause
+is gone the run resumes to results identical to an uninterrupted run."""
+
+from __future__ import annotations
+
+import errno
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+from run_faults import failing_on_call
+
+from studies import study_run, tracking
+from studies.cli import EXIT_OUTPUT_ERROR, main
+from studies.results import open_results
+
+STUDY = """
+name = "disk"
+scene = "cam"
+responses = ["max_jerk", "min_radius_of_curvature"]
+[factors.base_radius]
+levels = [16.0, 18.0, 20.0, 22.0]
+[factors.cam_speed]
+levels = [1000.0, 1300.0, 1600.0]
+"""
+RESPONSES = ("max_jerk", "min_radius_of_curvature")
+
+
+def skip_unless_modes_are_enforced(tmp_path: Path) -> None:
+    """Skip where permission bits do not bind this process (root with CAP_DAC_OVERRIDE)."""
+    probe = tmp_path / "probe"
+    probe.mkdir(mode=0o500)
+    probe.chmod(0o500)
+    try:
+        (probe / "written").touch()
+    except PermissionError:
+        return
+    finally:
+        probe.chmod(0o700)
+    pytest.skip("permission bits do not bind this process (root): run as a user to test")
+
+
+@pytest.fixture
+def study(tmp_path: Path) -> Path:
+    path = tmp_path / "disk.toml"
+    path.write_text(STUDY)
+    return path
+
+
+def run(study: Path, outputs: Path, *extra: str) -> int:
+    return main(["run", str(study), "--outputs", str(outputs), "--no-progress", *extra])
+
+
+def resume(run_id: str, outputs: Path) -> int:
+    return main(["run", "--resume", run_id, "--outputs", str(outputs), "--no-progress"])
+
+
+def one_line_error(capsys: pytest.CaptureFixture[str]) -> str:
+    err = capsys.readouterr().err.strip()
+    assert "Traceback" not in err
+    assert len(err.splitlines()) == 1
+    return err
+
+
+def assert_identical_to_an_uninterrupted_run(outputs: Path, study: Path, tmp_path: Path) -> None:
+    (row,) = tracking.list_runs(outputs)
+    assert row["status"] == "finished"
+    assert run(study, tmp_path / "fresh", "--force") == 0
+    (fresh,) = tracking.list_runs(tmp_path / "fresh")
+    resumed = open_results(Path(row["folder"]) / "results.nc")
+    expected = open_results(Path(fresh["folder"]) / "results.nc")
+    for name in RESPONSES:
+        np.testing.assert_array_equal(resumed[name].values, expected[name].values)
+
+
+def test_a_read_only_outputs_folder_is_one_line_and_a_rerun_works(
+    tmp_path: Path, study: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    skip_unless_modes_are_enforced(tmp_path)
+    outputs = tmp_path / "outputs"
+    outputs.mkdir(mode=0o555)
+    outputs.chmod(0o555)
+    assert run(study, outputs) == EXIT_OUTPUT_ERROR
+    err = one_line_error(capsys)
+    assert err == f"error: Permission denied: {outputs / 'disk'}; nothing was recorded"
+    assert list(outputs.iterdir()) == []
+    outputs.chmod(0o755)
+    assert run(study, outputs) == 0
+
+
+@pytest.mark.parametrize("code", [errno.ENOSPC, errno.EROFS])
+def test_a_disk_that_fills_during_chunk_writes_leaves_a_resumable_run(
+    tmp_path: Path,
+    study: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    code: int,
+) -> None:
+    outputs = tmp_path / "outputs"
+    save = study_run._save_chunk
+    full = OSError(code, os.strerror(code), "chunks/000002.npz")
+    monkeypatch.setattr(study_run, "_save_chunk", failing_on_call(save, 3, full))
+    assert run(study, outputs, "--chunk-size", "3") == EXIT_OUTPUT_ERROR
+    err = one_line_error(capsys)
+    (row,) = tracking.list_runs(outputs)
+    assert err.startswith(f"error: {os.strerror(code)}: chunks/000002.npz; run {row['run_id']}")
+    assert err.endswith(tracking.resume_command(row["run_id"], outputs))
+    folder = Path(row["folder"])
+    assert row["status"] == "failed"
+    assert sorted(p.name for p in (folder / "chunks").glob("*.npz")) == [
+        "000000.npz",
+        "000001.npz",
+    ]
+    assert not (folder / "results.nc").exists()
+    monkeypatch.setattr(study_run, "_save_chunk", save)  # space freed
+    assert resume(row["run_id"], outputs) == 0
+    record = json.loads((folder / "run.json").read_text())
+    assert record["timings"]["points_computed"] == 6  # chunks 2 and 3 only
+    assert_identical_to_an_uninterrupted_run(outputs, study, tmp_path)
+
+
+def failed_run(outputs: Path, study: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """A run that stopped after checkpointing chunks 0 and 1 of 4 (its folder)."""
+    save = study_run._save_chunk
+    full = OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+    with monkeypatch.context() as patch:
+        patch.setattr(study_run, "_save_chunk", failing_on_call(save, 3, full))
+        assert run(study, outputs, "--chunk-size", "3") == EXIT_OUTPUT_ERROR
+    (row,) = tracking.list_runs(outputs)
+    return Path(row["folder"])
+
+
+def test_a_damaged_checkpoint_is_named_and_the_run_resumes_once_it_is_deleted(
+    tmp_path: Path,
+    study: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    outputs = tmp_path / "outputs"
+    folder = failed_run(outputs, study, monkeypatch)
+    capsys.readouterr()
+    damaged = folder / "chunks" / "000001.npz"
+    damaged.write_bytes(damaged.read_bytes()[:100])  # cut short, as by a failing disk
+    run_id = folder.name
+    assert resume(run_id, outputs) == EXIT_OUTPUT_ERROR
+    err = one_line_error(capsys)
+    assert err.startswith(f"error: checkpoint {damaged} is damaged (BadZipFile: ")
+    assert "delete it and resume: its design points are computed again" in err
+    assert not (folder / "results.nc").exists()
+    damaged.unlink()
+    assert resume(run_id, outputs) == 0
+    record = json.loads((folder / "run.json").read_text())
+    assert record["timings"]["points_computed"] == 9  # chunks 1, 2 and 3
+    assert_identical_to_an_uninterrupted_run(outputs, study, tmp_path)
+
+
+def test_an_unreadable_checkpoint_is_named_and_the_run_resumes_once_readable(
+    tmp_path: Path,
+    study: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    skip_unless_modes_are_enforced(tmp_path)
+    outputs = tmp_path / "outputs"
+    folder = failed_run(outputs, study, monkeypatch)
+    capsys.readouterr()
+    locked = folder / "chunks" / "000000.npz"
+    locked.chmod(0)
+    assert resume(folder.name, outputs) == EXIT_OUTPUT_ERROR
+    assert one_line_error(capsys).startswith(f"error: Permission denied: {locked}; run ")
+    locked.chmod(0o644)
+    assert resume(folder.name, outputs) == 0
+    assert_identical_to_an_uninterrupted_run(outputs, study, tmp_path)
