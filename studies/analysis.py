@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from studies import taguchi
+from studies import prediction, taguchi, tradeoff
 from studies.results import NOT_EVALUATED, PASS_FAIL, grid_order, is_status, write_netcdf
 from studies.sensitivity import decompose
 from studies.statistics import (
@@ -262,8 +262,8 @@ def _anova(out: xr.Dataset, table: Any, name: str) -> None:
     out["anova_note"].loc[at] = table.attrs["note"]
 
 
-def _optimum(out: xr.Dataset, view: xr.Dataset, name: str, table: Any) -> taguchi.Prediction:
-    p = taguchi.predict_optimum(view, name, table=table)
+def _optimum(out: xr.Dataset, view: xr.Dataset, name: str, table: Any) -> prediction.Prediction:
+    p = prediction.predict_optimum(view, name, table=table)
     at = {"response": name}
     levels = [p.levels.get(t, -1) for t in out["term"].values]
     out["optimum_level"].loc[at] = levels
@@ -361,9 +361,9 @@ def _tradeoff(
     view: xr.Dataset,
     names: list[str],
     tables: dict[str, Any],
-    optima: dict[str, taguchi.Prediction],
+    optima: dict[str, prediction.Prediction],
 ) -> None:
-    result = taguchi.tradeoff(
+    result = tradeoff.tradeoff(
         view, names, tables={n: tables[n] for n in names}, optima={n: optima[n] for n in names}
     )
     terms = list(out["term"].values)

@@ -23,12 +23,12 @@ from studies import provenance, tracking
 from studies.bench_plots import save_bench_figure
 from studies.bench_study import bench_study
 from studies.plan import Plan, plan_text
-from studies.reference import c_valve
 from studies.runner import evaluate_chunk
-from studies.scenes.rocker import HALF_TURN_DEG, grid_deg
-from studies.scenes.valve import ValveScene, kernel_settings, valve_rows
+from studies.scenes.chain import HALF_TURN_DEG, grid_deg
+from studies.scenes.valve.accuracy_reference import reference_lift
+from studies.scenes.valve.reference import c_valve
+from studies.scenes.valve.scene import ValveScene, kernel_settings, valve_rows
 from studies.simd import host_lanes
-from studies.valve_accuracy import reference_lift
 
 CAM_STUDY = """
 name = "bench_cam"
@@ -176,7 +176,7 @@ def _valve_kernels(cases: int, step: float, repeat: int) -> dict[str, Any]:
     """The compiled kernels alone on the same parameter rows: over the scene's integration
     window, and over a whole cam revolution (the equal-work figure for a 360° comparison).
 
-    Beside the Numba kernels, the C reference of the lane kernel (``studies/reference/
+    Beside the Numba kernels, the C reference of the lane kernel (``studies/scenes/valve/reference/
     valve_lanes.c``, lanes and one case at a time, both precisions) built with this machine's
     compiler: the issue's "C -O3 kernel of this form", measured here rather than quoted.
     """

@@ -21,7 +21,7 @@ from typing import Any
 
 import xarray as xr
 
-from studies import taguchi
+from studies import confirmation, taguchi
 from studies.analysis_text import status_line
 from studies.designs import orthogonal_array
 from studies.markdown_format import (
@@ -110,8 +110,8 @@ def _report(
     if len(optimised) > 1:
         section, levels = _tradeoff(an, view, optimised)
         lines += section
-    confirmation = taguchi.confirmation_toml(view, levels) if levels else ""
-    if confirmation:
+    toml = confirmation.confirmation_toml(view, levels) if levels else ""
+    if toml:
         lines += [
             "## Confirmation run",
             "",
@@ -125,12 +125,12 @@ def _report(
             ),
             "",
             "```toml",
-            confirmation.rstrip(),
+            toml.rstrip(),
             "```",
             "",
         ]
     lines += other_figures(lines, figures)
-    return "\n".join(lines).rstrip() + "\n", confirmation
+    return "\n".join(lines).rstrip() + "\n", toml
 
 
 def _header(ds: xr.Dataset, responses: list[str], analysed: list[str]) -> list[str]:

@@ -22,6 +22,7 @@ from studies.markdown_format import (
     units_of,
     value_text,
 )
+from studies.prediction import Prediction
 
 
 def _shown(view: xr.Dataset, response: str) -> str:
@@ -178,7 +179,7 @@ def _sn_lines(view: xr.Dataset, an: xr.Dataset, response: str, figures: set[str]
         lines[-2] += " With one observation per run the S/N is a log transform of the response."
     header, rows = _range_rows(view, an, sn)
     lines += [table(header, rows), ""]
-    p = prediction(an, sn)
+    p = stored_prediction(an, sn)
     lines += [
         f"Predicted S/N at its best levels: {num(p.mean)} dB"
         + (
@@ -203,11 +204,11 @@ def optimum_levels(an: xr.Dataset, name: str) -> dict[str, int]:
     }
 
 
-def prediction(an: xr.Dataset, name: str) -> taguchi.Prediction:
+def stored_prediction(an: xr.Dataset, name: str) -> Prediction:
     """The predicted optimum of ``name`` as the analysis Dataset holds it."""
     r = an.sel(response=name)
     terms = str(r.model_terms.values)
-    return taguchi.Prediction(
+    return Prediction(
         response=name,
         units=str(r.units.values),
         sense=str(r.sense.values),
@@ -226,7 +227,7 @@ def prediction(an: xr.Dataset, name: str) -> taguchi.Prediction:
 
 
 def _optimum_lines(view: xr.Dataset, an: xr.Dataset, name: str, response: str) -> list[str]:
-    p = prediction(an, name)
+    p = stored_prediction(an, name)
     rows = [
         [f, p.levels[f] + 1, value_text(levels_of(an, f)[p.levels[f]], units_of(view, f))]
         for f in taguchi.factor_names(view)
@@ -259,7 +260,7 @@ def _optimum_lines(view: xr.Dataset, an: xr.Dataset, name: str, response: str) -
     return [*lines, ""]
 
 
-def _observed(view: xr.Dataset, p: taguchi.Prediction, units: str) -> list[str]:
+def _observed(view: xr.Dataset, p: Prediction, units: str) -> list[str]:
     """The run that already holds the predicted combination (every one does in a full
     factorial), as a check on the additive model."""
     hit = np.ones(view.sizes["run"], dtype=bool)

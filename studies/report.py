@@ -15,7 +15,9 @@ from pathlib import Path
 
 import xarray as xr
 
-from studies import analysis, analysis_text, markdown_report, plots, scene_plots, scene_summaries
+from studies import analysis, analysis_text, markdown_report, plots
+from studies.figure_layout import save_figures
+from studies.scenes import SCENES, get_scene
 
 
 def write_analysis(
@@ -57,8 +59,11 @@ def write_analysis(
     status = json.loads(an.attrs.get("status_responses", "[]"))
     body += [analysis_text.status_line(an, r) for r in status]
     body += [_no_value_note(ds[r]) for r in scalar if r not in analysed and r not in status]
-    body += scene_summaries.scene_summaries(ds)
-    figures += scene_plots.save_scene_figures(ds, folder)
+    scene_name = str(ds.attrs.get("scene", ""))
+    if scene_name in SCENES:  # a plugin scene that is not installed here: generic outputs only
+        scene = get_scene(scene_name)
+        body += scene.summaries(ds)
+        figures += save_figures(ds, folder, scene.figures())
     text_path = folder / "analysis.txt"
     text_path.write_text("\n\n".join([header, *body]) + "\n", encoding="utf-8")
     reports = markdown_report.write_report(ds, an, folder, scalar, figures)

@@ -17,12 +17,19 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from studies.units import UNITS
+
+if TYPE_CHECKING:
+    import xarray as xr
+    from matplotlib.figure import Figure
+
+    FigureBuilder = Callable[[xr.Dataset], Figure | None]
 
 
 @dataclass(frozen=True)
@@ -237,6 +244,17 @@ class Scene(ABC):
     def point_warnings(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
         """Design points that will run but give no value (e.g. a concave cam), with advice;
         ``check`` and ``run`` print them. None by default."""
+        return []
+
+    def figures(self) -> dict[str, FigureBuilder]:
+        """The scene's own figures beside the generic ones, by file stem: each builder draws
+        from a results Dataset, or returns None when the Dataset lacks what it needs. None by
+        default; :mod:`studies.figure_layout` has the helpers."""
+        return {}
+
+    def summaries(self, ds: xr.Dataset) -> list[str]:
+        """Text blocks for ``analysis.txt`` beside the range analysis and ANOVA (tables a user
+        of this scene reads). None by default; :mod:`studies.summary_tables` has helpers."""
         return []
 
     def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray:

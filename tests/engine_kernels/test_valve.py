@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from engine_kernels import rocker, valve, valve_lanes
-from studies.reference.valve_ivp import valve_reference
+from studies.scenes.valve.reference.valve_ivp import valve_reference
 
 RPM = 2 * math.pi / 60
 MASS = valve.equivalent_mass(0.033, 0.015, 5e-6, 33.28e-3)

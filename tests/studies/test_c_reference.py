@@ -1,7 +1,7 @@
 """The C reference of the valve lane kernel does the same work as the Numba lanes.
 
 ``python -m studies bench valve`` compares the Numba lane kernel with this C kernel
-(``studies/reference/valve_lanes.c``) as "a C -O3 kernel of this form"; the comparison is
+(``studies/scenes/valve/reference/valve_lanes.c``) as "a C -O3 kernel of this form"; the comparison is
 only fair if both compute the same thing. Expected values: the Numba lane kernel, itself
 checked against the one-case kernel and scipy (tests/engine_kernels/test_valve_lanes.py).
 The two differ only in where the compilers fuse multiply-adds, so continuous outputs agree
@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from engine_kernels import valve, valve_lanes
-from studies.reference import c_valve
+from studies.scenes.valve.reference import c_valve
 
 RPM = 2 * math.pi / 60
 MASS = 0.033 + 0.015 / 3 + 5e-6 / 33.28e-3**2

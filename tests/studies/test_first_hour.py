@@ -15,7 +15,7 @@ import xarray as xr
 from studies.cli import main
 from studies.plan import plan_study
 from studies.scenes import SCENES, get_scene
-from studies.scenes.rocker_tappet import nose_tappet_lift
+from studies.scenes.chain_tappet import nose_tappet_lift
 from studies.units import UNITS, conversion_factor
 from study_text import readme_study
 

@@ -7,9 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from studies.lift_tables import read_lift_table, table_kinematics
 from studies.plan import plan_text
 from studies.runner import evaluate
+from studies.scenes.cam.lift_tables import read_lift_table, table_kinematics
 
 H, BETA = 8e-3, np.deg2rad(60.0)  # 8 mm cycloidal rise over 60 deg cam, nose at 0
 

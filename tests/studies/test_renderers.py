@@ -17,10 +17,12 @@ from studies import (
     analysis_text,
     markdown_report,
     plots,
+    prediction,
     sensitivity,
     statistics,
     sums_of_squares,
     taguchi,
+    tradeoff,
 )
 from studies.plan import plan_text
 from studies.results import build_dataset
@@ -47,9 +49,10 @@ STATISTICS = [
     (analysis, "analyze"),
     (taguchi, "anova"),
     (taguchi, "anova_table"),
-    (taguchi, "predict"),
-    (taguchi, "predict_optimum"),
-    (taguchi, "tradeoff"),
+    (prediction, "predict"),
+    (prediction, "predict_optimum"),
+    (tradeoff, "predict_optimum"),
+    (tradeoff, "tradeoff"),
     (taguchi, "interaction_means"),
     (taguchi, "interaction_anova"),
     (taguchi, "signal_to_noise"),

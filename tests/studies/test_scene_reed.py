@@ -9,12 +9,13 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from studies.campbell import campbell_figure
 from studies.definition import StudyError
+from studies.figure_layout import save_figures
 from studies.plan import plan_study, plan_text
 from studies.results import build_dataset
 from studies.runner import evaluate
-from studies.scene_plots import save_scene_figures
+from studies.scenes import get_scene
+from studies.scenes.reed.campbell import campbell_figure
 from studies.study_run import run_plan
 from study_text import scene_study
 
@@ -146,7 +147,7 @@ def test_mode_shape_curves_and_figure(tmp_path: Path) -> None:
     w = np.cosh(z) - np.cos(z) - sigma * (np.sinh(z) - np.sin(z))
     np.testing.assert_allclose(ds["mode_shape_1"].values[0], w / w[-1], atol=1e-12)
     assert ds["mode_shape_2"].values[0, -1] == pytest.approx(1.0)
-    paths = save_scene_figures(ds, tmp_path)
+    paths = save_figures(ds, tmp_path, get_scene("reed").figures())
     assert [p.name for p in paths] == ["mode_shapes.png"]
     assert paths[0].stat().st_size > 5_000
 

@@ -11,10 +11,10 @@ from numpy.polynomial import polynomial as poly
 from studies.definition import StudyError
 from studies.plan import plan_text
 from studies.runner import evaluate
-from studies.scenes import rocker as rocker_scene
-from studies.scenes import rocker_tappet
+from studies.scenes import chain as rocker_scene
+from studies.scenes import chain_tappet as rocker_tappet
+from studies.scenes.chain_parameters import CONVEX_POLYDYNE
 from studies.scenes.rocker import RockerScene
-from studies.scenes.rocker_parameters import CONVEX_POLYDYNE
 from study_text import recorded_stages, scene_study
 
 

@@ -14,14 +14,14 @@ import pytest
 import xarray as xr
 
 from engine_kernels import rocker, valve, valve_model
-from studies import valve_accuracy as acc
 from studies.bench import run_benchmark
 from studies.definition import StudyError
 from studies.plan import plan_study, plan_text
 from studies.runner import evaluate
-from studies.scene_plots import jump_speed_map_figure
-from studies.scenes.valve import valve_rows
-from studies.scenes.valve_parameters import STATUS_NOT_RUN
+from studies.scenes.valve import accuracy_reference as acc
+from studies.scenes.valve.figures import jump_speed_map_figure
+from studies.scenes.valve.parameters import STATUS_NOT_RUN
+from studies.scenes.valve.scene import valve_rows
 from studies.study_run import run_plan
 from study_text import recorded_stages, run, scene_study
 
@@ -162,7 +162,7 @@ def test_jump_speed_matches_the_rigid_drive_closed_form() -> None:
 
 # --- tolerance ----------------------------------------------------------------------------------
 def test_tolerance_picks_a_step_whose_error_is_within_it() -> None:
-    # Expected: scipy's event-restarted DOP853 at rtol 1e-10 (studies.reference.valve_ivp) on
+    # Expected: scipy's event-restarted DOP853 at rtol 1e-10 (studies.scenes.valve.reference.valve_ivp) on
     # the same model and excitation, at the grid points of the stored curve.
     tolerance = 1e-3  # mm
     plan = plan_text(

@@ -25,7 +25,7 @@ from scipy import stats
 from statsmodels.formula.api import ols
 from statsmodels.stats.anova import anova_lm
 
-from studies import designs, taguchi
+from studies import confirmation, designs, prediction, taguchi, tradeoff
 from studies.analysis import range_analysis
 from studies.designs.orthogonal_arrays import list_orthogonal_arrays, orthogonal_array
 
@@ -209,7 +209,7 @@ def test_predicted_optimum_matches_direct_computation_l9() -> None:
     design = oa("L9", "ABC", errors=["D"])
     y = np.random.default_rng(8).normal(800.0, 40.0, size=9)
     ds = make_dataset(design, y)
-    p = taguchi.predict_optimum(ds, "y")
+    p = prediction.predict_optimum(ds, "y")
     # Direct: level means, best = smallest, ŷ = T̄ + Σ (k_best - T̄).
     grand = y.mean()
     best = {f: int(np.argmin([y[design.levels[f] == lv].mean() for lv in range(3)])) for f in "ABC"}
@@ -235,7 +235,7 @@ def test_confirmation_interval_for_several_runs_and_larger_is_better() -> None:
     design = oa("L9", "ABC", errors=["D"])
     y = np.random.default_rng(9).normal(10.0, 2.0, size=9)
     ds = make_dataset(design, y)
-    p = taguchi.predict_optimum(ds, "y", sense="larger", alpha=0.1, confirmation_runs=3)
+    p = prediction.predict_optimum(ds, "y", sense="larger", alpha=0.1, confirmation_runs=3)
     best = {f: int(np.argmax([y[design.levels[f] == lv].mean() for lv in range(3)])) for f in "ABC"}
     assert p.levels == best
     # Ross (1996): ± sqrt(F(0.9; 1, ν_e) · V_e · (1/n_eff + 1/r)), F(1, ν) = t(0.95; ν)².
@@ -265,14 +265,14 @@ def test_saturated_l9_prediction_uses_the_pooled_error() -> None:
           for i, f in enumerate("ABCD")}  # fmt: skip
     pooled = min(ss, key=ss.get)
     kept = [f for f in "ABCD" if f != pooled]
-    p = taguchi.predict_optimum(ds, "y")
+    p = prediction.predict_optimum(ds, "y")
     assert set(p.terms) == set(kept)
     assert p.error_dof == 2
     assert p.error_ms == pytest.approx(ss[pooled] / 2, rel=1e-10)
     ref = statsmodels_prediction(ds, " + ".join(f"C(x{f})" for f in kept), list("ABCD"), p.levels)
     assert p.mean == pytest.approx(ref["mean"], rel=1e-12)
     assert p.interval == pytest.approx((ref["mean_ci_lower"], ref["mean_ci_upper"]), rel=1e-10)
-    unpooled = taguchi.predict_optimum(ds, "y", pool=[])
+    unpooled = prediction.predict_optimum(ds, "y", pool=[])
     assert unpooled.error_dof == 0
     assert np.isnan(unpooled.half_width)
 
@@ -282,7 +282,7 @@ def test_optimum_with_an_interaction_is_the_best_cell_of_the_fitted_model() -> N
     a, b, c = (design.levels[f] for f in "ABC")
     y = 10 + 2 * a + 1 * b - 4 * a * b + 0.5 * c + np.random.default_rng(2).normal(0, 0.1, 8)
     ds = make_dataset(design, y)
-    p = taguchi.predict_optimum(ds, "y", sense="larger")
+    p = prediction.predict_optimum(ds, "y", sense="larger")
     assert set(p.terms) == {"A", "B", "C", "A_x_B"}
     formula = "C(xA) + C(xB) + C(xC) + C(xA):C(xB)"
     fit = ols("y ~ " + formula, frame(ds, ["A", "B", "C"])).fit()
@@ -300,16 +300,16 @@ def test_predict_at_given_levels_and_bad_input() -> None:
     y = np.random.default_rng(3).normal(5.0, 1.0, size=9)
     ds = make_dataset(design, y)
     levels = {"A": 2, "B": 0, "C": 1}
-    p = taguchi.predict(ds, "y", levels)
+    p = prediction.predict(ds, "y", levels)
     ref = statsmodels_prediction(ds, "C(xA) + C(xB) + C(xC)", ["A", "B", "C"], levels)
     assert p.mean == pytest.approx(ref["mean"], rel=1e-12)
-    only_a = taguchi.predict(ds, "y", levels, terms=["A"])  # n_eff = 9 / (1 + 2)
+    only_a = prediction.predict(ds, "y", levels, terms=["A"])  # n_eff = 9 / (1 + 2)
     assert only_a.mean == pytest.approx(y[design.levels["A"] == 2].mean(), rel=1e-12)
     assert only_a.n_eff == pytest.approx(3.0)
     with pytest.raises(ValueError, match="levels missing"):
-        taguchi.predict(ds, "y", {"A": 0})
+        prediction.predict(ds, "y", {"A": 0})
     with pytest.raises(ValueError, match="unknown model term"):
-        taguchi.predict(ds, "y", levels, terms=["Z"])
+        prediction.predict(ds, "y", levels, terms=["Z"])
 
 
 # --- interaction means, confirmation run, trade-off ---------------------------------------------
@@ -354,7 +354,7 @@ y = "smaller"
 def test_confirmation_study_runs_the_chosen_levels_once() -> None:
     design = oa("L9", "ABC", errors=["D"])
     ds = make_dataset(design, np.arange(9.0), study_toml=STUDY, study_name="demo", run_id="r1")
-    text = taguchi.confirmation_toml(ds, {"A": 2, "B": 0, "C": 1})
+    text = confirmation.confirmation_toml(ds, {"A": 2, "B": 0, "C": 1})
     study = tomllib.loads(text)
     original = tomllib.loads(STUDY)
     assert study["name"] == "demo_confirmation"
@@ -367,7 +367,7 @@ def test_confirmation_study_runs_the_chosen_levels_once() -> None:
     for key in ["scene", "responses", "parameters", "sense"]:
         assert study[key] == original[key]
     assert text.startswith("# Confirmation run of demo (run r1)")
-    bare = tomllib.loads(taguchi.confirmation_toml(make_dataset(design, np.arange(9.0)), {"A": 0,
+    bare = tomllib.loads(confirmation.confirmation_toml(make_dataset(design, np.arange(9.0)), {"A": 0,
                                                    "B": 0, "C": 0}))  # fmt: skip
     assert set(bare) == {"factors"}
 
@@ -379,7 +379,7 @@ def test_tradeoff_of_conflicting_responses() -> None:
     design = oa("L9", "AB")
     a, b = design.levels["A"].astype(float), design.levels["B"].astype(float)
     ds = make_dataset(design, {"y1": 10 * a + b, "y2": -a + 10 * b})
-    result = taguchi.tradeoff(ds, ["y1", "y2"])
+    result = tradeoff.tradeoff(ds, ["y1", "y2"])
     t = result.table
     assert (t.loc["A", "best y1"], t.loc["A", "best y2"]) == (1, 3)
     assert t["conflict"].tolist() == [True, False]

@@ -11,9 +11,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from studies import valve_accuracy as acc
 from studies.definition import StudyError
 from studies.plan import plan_study, plan_text
+from studies.scenes.valve import accuracy_reference as acc
 from studies.study_run import run_plan
 
 

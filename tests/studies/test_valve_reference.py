@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from engine_kernels import valve
-from studies.reference.valve_ivp import table_excitation, valve_reference
+from studies.scenes.valve.reference.valve_ivp import table_excitation, valve_reference
 
 # SPEC §4 reference data with the values the source does not give (see test_valve.py).
 PARAMS = np.array(

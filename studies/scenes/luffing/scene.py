@@ -8,15 +8,21 @@ and pass flag; ``all_checks_ok`` and ``checks_passed`` sum them up.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from engine_kernels import luffing as lf
 from studies.scenes.base import Scene, SceneOutput
 from studies.scenes.checks import PointProblems
-from studies.scenes.luffing_parameters import CHECKS, KERNEL_NAMES, NEEDS, PARAMETERS, RESPONSES
+from studies.scenes.luffing.parameters import CHECKS, KERNEL_NAMES, NEEDS, PARAMETERS, RESPONSES
+from studies.scenes.luffing.summaries import luffing_summary
 from studies.units import UNITS
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from studies.scenes.base import FigureBuilder
 
 BEARING_CODES = {"ball": lf.BALL_BEARING, "roller": lf.ROLLER_BEARING}
 COLUMNS = {name: getattr(lf, name.upper()) for name in lf.PARAM_NAMES}
@@ -47,6 +53,15 @@ class LuffingScene(Scene):
     parameters = PARAMETERS
     responses = RESPONSES
     stage_order = NEEDS
+
+    # --- outputs beside the generic ones -----------------------------------------------------
+    def figures(self) -> dict[str, FigureBuilder]:
+        from studies.scenes.luffing.figures import motor_power_figure, pass_fail_map_figure  # noqa: PLC0415  (matplotlib on use)
+
+        return {"pass_fail_map": pass_fail_map_figure, "motor_power": motor_power_figure}
+
+    def summaries(self, ds: xr.Dataset) -> list[str]:
+        return luffing_summary(ds)
 
     def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
         found = PointProblems()

@@ -16,7 +16,7 @@ import numpy as np
 
 from engine_kernels import cam_batch as cb
 from engine_kernels import cam_profile, lift_laws, rocker
-from studies.scenes.cam import LAW_CODES, SHAPE_CODES
+from studies.scenes.cam_laws import LAW_CODES, SHAPE_CODES
 from studies.scenes.checks import PointProblems
 
 HALF_TURN_DEG = 180.0

@@ -6,7 +6,7 @@ Stages (each one compiled batch driver; a study runs only those its responses an
   and the error of the two-term approximation (always measured against the exact relations);
 * ``pressure`` — cylinder pressure on the cycle grid: the single-zone Wiebe cycle
   (:func:`engine_kernels.combustion.cycle_pressure_batch`) or a measured table
-  (:mod:`studies.pressure_tables`);
+  (:mod:`studies.scenes.crank.pressure_tables`);
 * ``forces`` — :func:`engine_kernels.crank_forces.crank_forces_batch`: gas, inertia, rod, side,
   tangential and radial forces and the torque of one cylinder;
 * ``multicylinder`` — :func:`engine_kernels.crank_layout.crank_multicylinder_batch`: summed
@@ -20,7 +20,7 @@ piston motion used for the inertia forces, the torque and the kinematic curves.
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -28,10 +28,9 @@ from engine_kernels import combustion as cb
 from engine_kernels import crank as ck
 from engine_kernels import crank_forces as cf
 from engine_kernels import crank_layout as cl
-from studies.pressure_tables import read_pressure_table, resample_pressure
 from studies.scenes.base import Scene, SceneOutput
 from studies.scenes.checks import PointProblems
-from studies.scenes.crank_parameters import (
+from studies.scenes.crank.parameters import (
     CRANK_ANGLE,
     CURVES,
     MAX_ORDER_HALVES,
@@ -40,7 +39,11 @@ from studies.scenes.crank_parameters import (
     SETTINGS,
     order_name,
 )
+from studies.scenes.crank.pressure_tables import read_pressure_table, resample_pressure
 from studies.units import UNITS
+
+if TYPE_CHECKING:
+    from studies.scenes.base import FigureBuilder
 
 CYCLE_DEG = 720.0
 EXHAUST_OPENING_DEG = 180.0  # after firing TDC: the cycle opens the exhaust at BDC
@@ -175,6 +178,20 @@ class CrankScene(Scene):
     curves = CURVES
     curve_axis = CRANK_ANGLE
     stage_order = ("kinematics", "pressure", "forces", "multicylinder")
+
+    # --- outputs beside the generic ones -----------------------------------------------------
+    def figures(self) -> dict[str, FigureBuilder]:
+        from studies.scenes.crank.figures import (  # noqa: PLC0415  (matplotlib on use)
+            approximation_error_figure,
+            torque_curve_figure,
+            torque_harmonics_figure,
+        )
+
+        return {
+            "torque_curve": torque_curve_figure,
+            "torque_harmonics": torque_harmonics_figure,
+            "approximation_error": approximation_error_figure,
+        }
 
     def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray:
         m = angle_count(settings["angle_step"])

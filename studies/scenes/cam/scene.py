@@ -13,37 +13,27 @@ A response runs only the stages it needs (``Response.needs``).
 from __future__ import annotations
 
 from collections import defaultdict
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from engine_kernels import cam_batch as cb
 from engine_kernels import cam_profile, lift_laws
-from studies.lift_tables import read_lift_table, table_kinematics
 from studies.scenes.base import Scene, SceneOutput
-from studies.scenes.cam_parameters import (
+from studies.scenes.cam.lift_tables import read_lift_table, table_kinematics
+from studies.scenes.cam.parameters import (
     CAM_ANGLE,
     CURVES,
     PARAMETERS,
     RESPONSES,
     SETTINGS,
-    SHAPES,
 )
+from studies.scenes.cam_laws import LAW_CODES, SHAPE_CODES, polydyne_problems
 
-LAW_CODES = {
-    "cycloidal": lift_laws.LAW_CYCLOIDAL,
-    "harmonic": lift_laws.LAW_HARMONIC,
-    "modified_sine": lift_laws.LAW_MODIFIED_SINE,
-    "modified_trapezoid": lift_laws.LAW_MODIFIED_TRAPEZOID,
-    "poly345": lift_laws.LAW_POLY345,
-    "poly4567": lift_laws.LAW_POLY4567,
-    "polydyne": lift_laws.LAW_POLYDYNE,
-    "six_segment": lift_laws.LAW_SIX_SEGMENT,
-    "table": -1,  # curves come from the spline of the table, not from a kernel law
-}
-SHAPE_CODES = {name: code for code, name in enumerate(SHAPES)}
+if TYPE_CHECKING:
+    from studies.scenes.base import FigureBuilder
+
 HALF_TURN_DEG = 180.0
-POLYDYNE_TOLERANCE = 1e-9
 
 # parameter name -> kernel column (all other kernel columns are named alike)
 _COLUMN = {
@@ -129,6 +119,12 @@ class CamScene(Scene):
     curves = CURVES
     curve_axis = CAM_ANGLE
     stage_order = ("kinematics", "geometry", "loads")
+
+    # --- outputs beside the generic ones -----------------------------------------------------
+    def figures(self) -> dict[str, FigureBuilder]:
+        from studies.scenes.cam.figures import cam_curves_figure  # noqa: PLC0415  (matplotlib on use)
+
+        return {"cam_curves": cam_curves_figure}
 
     def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray:
         step = np.rad2deg(settings["angle_step"])
@@ -293,28 +289,6 @@ def _ramp_problems(height: float, width: float, velocity: float) -> list[str]:
                 f"ramp_width = {deg(width):g} deg cannot carry a {height * MM:g} mm ramp ending at "
                 f"{velocity * MM:g} mm/rad: constant acceleration then constant velocity needs "
                 f"{lo_deg:.3g} ≤ ramp_width ≤ {hi_deg:.3g} deg"
-            )
-        ]
-    return []
-
-
-def polydyne_problems(c: np.ndarray) -> list[str]:
-    """Why polydyne coefficients c_k of f(x) = Σ c_k x^k are not a rise law (empty if they are)."""
-    if c.size > lift_laws.NCOEF:
-        return [f"polydyne_coefficients has {c.size} terms; at most {lift_laws.NCOEF} allowed"]
-    k = np.arange(c.size)
-    conditions = {
-        "f(0) = 0": c[0],
-        "f(1) = 1": c.sum() - 1.0,
-        "f'(0) = 0": c[1] if c.size > 1 else 0.0,
-        "f'(1) = 0": (k * c).sum(),
-    }
-    bad = [name for name, residual in conditions.items() if abs(residual) > POLYDYNE_TOLERANCE]
-    if bad:
-        return [
-            (
-                f"polydyne_coefficients {c.tolist()} violate {', '.join(bad)} "
-                "(f(x) = Σ c_k x^k must rise from 0 to 1 with zero end velocity)"
             )
         ]
     return []

@@ -13,7 +13,7 @@ Design points that share the cam and rocker parameters share one chain: both sta
 distinct parameter set and keep their tables in a bounded cache on the scene, so a study that
 varies only speeds or springs computes the kinematics once. A cam that is not convex, or a
 chain that does not close, is a per-point result (``chain_status``, ``cam_convex``), never an
-exception; impossible geometry is refused by :meth:`RockerScene.check_points` before anything
+exception; impossible geometry is refused by :meth:`ChainScene.check_points` before anything
 runs.
 """
 
@@ -29,16 +29,15 @@ import pandas as pd
 
 from engine_kernels import cam_profile, rocker
 from studies.scenes.base import CurveAxis, Scene, SceneOutput
-from studies.scenes.cam import SHAPE_CODES, polydyne_problems
-from studies.scenes.checks import PointProblems
-from studies.scenes.rocker_parameters import (
+from studies.scenes.cam_laws import SHAPE_CODES, polydyne_problems
+from studies.scenes.chain_parameters import (
     CAM_ANGLE,
     CURVES,
     PARAMETERS,
     RESPONSES,
     SETTINGS,
 )
-from studies.scenes.rocker_tappet import (
+from studies.scenes.chain_tappet import (
     HALF_TURN_DEG,
     TappetTable,
     concave_chains,
@@ -48,6 +47,7 @@ from studies.scenes.rocker_tappet import (
     step_deg,
     tappet_table,
 )
+from studies.scenes.checks import PointProblems
 
 MM = 1e3
 GRID_UNIT_DEG = 2.0
@@ -120,7 +120,7 @@ def chain_keys(points: dict[str, np.ndarray]) -> dict[tuple, np.ndarray]:
     }
 
 
-class RockerScene(Scene):
+class ChainScene(Scene):
     name = "rocker"
     seconds_per_point = 2e-2
     description = "OHC cam with variable-ratio rocker: valve lift, force ratio (kinematics)"

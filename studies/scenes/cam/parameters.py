@@ -7,70 +7,9 @@ values the source does not give; ``source`` on each parameter says which is whic
 from __future__ import annotations
 
 from studies.scenes.base import Curve, CurveAxis, Parameter, Response
+from studies.scenes.cam_laws import LAWS, segment_parameters
 
-LAWS = (
-    "six_segment",
-    "cycloidal",
-    "harmonic",
-    "modified_sine",
-    "modified_trapezoid",
-    "poly345",
-    "poly4567",
-    "polydyne",
-    "table",
-)
-SHAPES = ("lin", "sin_full", "sin_left", "fillet")
 SRC, ASSUMED = "12V150 source", "assumption"
-
-_SEG_WIDTHS = (4.5, 11.0, 4.5, 5.0, 22.0, 23.0)
-_SEG_SHAPES = ("lin", "sin_full", "lin", "sin_left", "fillet", "sin_left")
-_SEG_ACCELS = (55.0, 55.0, 0.0, -12.5, -22.5, -24.5)
-_SEG_AMPS = (0.0, 12.5, 0.0, 7.5, 0.0, 5.5)
-
-
-def _segment_parameters() -> tuple[Parameter, ...]:
-    out: list[Parameter] = []
-    for k in range(6):
-        n = k + 1
-        out += [
-            Parameter(
-                f"seg{n}_width",
-                "degree",
-                _SEG_WIDTHS[k],
-                f"width of acceleration segment {n}",
-                0.0,
-                90.0,
-                True,
-                source=SRC,
-            ),
-            Parameter(
-                f"seg{n}_shape",
-                "1",
-                _SEG_SHAPES[k],
-                f"shape of segment {n}",
-                choices=SHAPES,
-                source=SRC,
-            ),
-            Parameter(
-                f"seg{n}_accel",
-                "mm/rad^2",
-                _SEG_ACCELS[k],
-                f"end acceleration of segment {n} (before closure scaling)",
-                -1000.0,
-                1000.0,
-                source=SRC,
-            ),
-            Parameter(
-                f"seg{n}_amplitude",
-                "mm/rad^2",
-                _SEG_AMPS[k],
-                f"bulge amplitude of segment {n} (magnitude; sign set by the segment)",
-                0.0,
-                1000.0,
-                source=SRC,
-            ),
-        ]
-    return tuple(out)
 
 
 PARAMETERS: tuple[Parameter, ...] = (
@@ -127,7 +66,7 @@ PARAMETERS: tuple[Parameter, ...] = (
         source=ASSUMED,
     ),
     Parameter("ramp_velocity", "mm/rad", 1.2, "ramp end velocity", 0.0, 100.0, source=ASSUMED),
-    *_segment_parameters(),
+    *segment_parameters(),
     Parameter(
         "polydyne_coefficients",
         "1",

@@ -38,10 +38,10 @@ import numpy as np
 
 from engine_kernels import valve
 from studies.scenes.base import Curve, Parameter, Response
-from studies.scenes.rocker_parameters import CURVES as ROCKER_CURVES
-from studies.scenes.rocker_parameters import PARAMETERS as ROCKER_PARAMETERS
-from studies.scenes.rocker_parameters import RESPONSES as ROCKER_RESPONSES
-from studies.scenes.rocker_parameters import TAPPET_STEP
+from studies.scenes.chain_parameters import CURVES as ROCKER_CURVES
+from studies.scenes.chain_parameters import PARAMETERS as ROCKER_PARAMETERS
+from studies.scenes.chain_parameters import RESPONSES as ROCKER_RESPONSES
+from studies.scenes.chain_parameters import TAPPET_STEP
 
 THESIS, ASSUMED = "SPEC §4 thesis", "assumption"
 INTEGRATORS = ("lanes", "lanes_f32", "rk4", "rk4_switch_aware")

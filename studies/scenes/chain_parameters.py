@@ -10,8 +10,7 @@ parameter says where its default comes from.
 from __future__ import annotations
 
 from studies.scenes.base import Curve, CurveAxis, Parameter, Response
-from studies.scenes.cam_parameters import LAWS
-from studies.scenes.cam_parameters import PARAMETERS as CAM_PARAMETERS
+from studies.scenes.cam_laws import LAWS, segment_parameters
 
 SPEC3, SYNTHETIC = "SPEC §3", "synthetic cam (SPEC §3 suggestion)"
 ROCKER_LAWS = tuple(law for law in LAWS if law != "table")
@@ -20,7 +19,7 @@ PAD_SIDES = ("ahead", "behind")
 # the kernel tests (engine_kernels tests of the rocker and valve models).
 CONVEX_POLYDYNE = [0.0, 0.0, 0.0, 24.0, -68.0, 82.0, -51.0, 16.0, -2.0]
 
-_SEGMENTS = tuple(p for p in CAM_PARAMETERS if p.name.startswith("seg"))
+_SEGMENTS = segment_parameters()
 
 CAM_LAW_PARAMETERS: tuple[Parameter, ...] = (
     Parameter(

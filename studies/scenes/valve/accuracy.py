@@ -5,7 +5,7 @@ study. To measure the speed–accuracy trade (SPEC §4) they must vary between d
 this scene declares them as parameters (``integrator``, ``angle_step``) and adds two stages:
 
 * ``reference`` — the error of each run against scipy's event-restarted reference
-  (:mod:`studies.valve_accuracy`), computed once per distinct set of the other parameters
+  (:mod:`studies.scenes.valve.accuracy_reference`), computed once per distinct set of the other parameters
   (e.g. once per camshaft speed × seat stiffness pair) and reused by every integrator and step;
 * ``cost`` — measured seconds per case of the integrator's batch kernel (a timing).
 
@@ -17,15 +17,23 @@ from __future__ import annotations
 
 import math
 from functools import partial
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from studies import valve_accuracy as acc
 from studies.scenes.base import Parameter, Response, SceneOutput
+from studies.scenes.chain import CACHE_SIZE, BoundedCache, angle_step_problem, grid_deg, step_deg
 from studies.scenes.checks import PointProblems
-from studies.scenes.rocker import CACHE_SIZE, BoundedCache, angle_step_problem, grid_deg, step_deg
-from studies.scenes.valve import (
+from studies.scenes.valve import accuracy_reference as acc
+from studies.scenes.valve.parameters import (
+    ANGLE_STEP,
+    DYNAMIC_RESPONSES,
+    INTEGRATOR,
+    PARAMETERS,
+    WINDOW_SETTINGS,
+)
+from studies.scenes.valve.parameters import SETTINGS as VALVE_SETTINGS
+from studies.scenes.valve.scene import (
     MM,
     WINDOW_PROBE_DEG,
     ValveScene,
@@ -35,14 +43,9 @@ from studies.scenes.valve import (
     stability_problems,
     valve_rows,
 )
-from studies.scenes.valve_parameters import (
-    ANGLE_STEP,
-    DYNAMIC_RESPONSES,
-    INTEGRATOR,
-    PARAMETERS,
-    WINDOW_SETTINGS,
-)
-from studies.scenes.valve_parameters import SETTINGS as VALVE_SETTINGS
+
+if TYPE_CHECKING:
+    from studies.scenes.base import FigureBuilder
 
 REFERENCE_METHODS = ("DOP853", "Radau")
 REF, COST = ("tappet", "rocker", "reference"), ("tappet", "rocker", "cost")
@@ -92,6 +95,12 @@ class ValveAccuracyScene(ValveScene):
     curves = ()
     curve_axis = None
     stage_order = ("tappet", "rocker", "dynamics", "jump_speed", "reference", "cost")
+
+    # --- outputs beside the generic ones -----------------------------------------------------
+    def figures(self) -> dict[str, FigureBuilder]:
+        from studies.scenes.valve.figures import error_vs_cost_figure  # noqa: PLC0415
+
+        return {"error_vs_cost": error_vs_cost_figure}
 
     def __init__(self) -> None:
         super().__init__()

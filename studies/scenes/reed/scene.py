@@ -26,14 +26,20 @@ custom        youngs_modulus, density parameters
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from engine_kernels import reed as rd
 from studies.scenes.base import Curve, CurveAxis, Parameter, Response, Scene, SceneOutput
 from studies.scenes.checks import PointProblems
+from studies.scenes.reed.summaries import reed_summary
 from studies.units import UNITS
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from studies.scenes.base import FigureBuilder
 
 SRC = "SPEC §6 reference reed"
 MATERIALS: dict[str, tuple[float, float]] = {
@@ -262,6 +268,23 @@ class ReedScene(Scene):
     curves = CURVES
     curve_axis = POSITION
     stage_order = NEEDS
+
+    # --- outputs beside the generic ones -----------------------------------------------------
+    def figures(self) -> dict[str, FigureBuilder]:
+        from studies.scenes.reed.campbell import campbell_figure  # noqa: PLC0415
+        from studies.scenes.reed.figures import (  # noqa: PLC0415  (matplotlib on use)
+            frequency_map_figure,
+            mode_shapes_figure,
+        )
+
+        return {
+            "frequency_map": frequency_map_figure,
+            "mode_shapes": mode_shapes_figure,
+            "campbell": campbell_figure,
+        }
+
+    def summaries(self, ds: xr.Dataset) -> list[str]:
+        return reed_summary(ds)
 
     def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray:
         return np.linspace(0.0, 1.0, int(settings["shape_points"]))

@@ -1,7 +1,7 @@
 """Scene ``valve``: single-DOF valve-train dynamics driven through the rocker (SPEC §4).
 
 The excitation is the theoretical valve lift Y(θ) of the ``rocker`` scene's chain, so this
-scene extends :class:`~studies.scenes.rocker.RockerScene` and adds two stages:
+scene extends :class:`~studies.scenes.chain.ChainScene` and adds two stages:
 
 * ``dynamics`` — fixed-step RK4 of [V2] over the integration window (valve opening − 2° …
   closure + ``closing_window``, snapped outward to whole multiples of 2°), with the integrator
@@ -16,29 +16,30 @@ Kinematic responses run only ``tappet`` and ``rocker``. Points sharing the cam a
 parameters share one excitation table (cached per chain and step): it is the table every
 lane of a block reads. Jumps, bounces, an unstable run or an invalid chain are results
 (``follows_cam``, ``status``, ``run_ok``), never exceptions. How a tolerance picks the step is
-described in :mod:`studies.scenes.valve_parameters`.
+described in :mod:`studies.scenes.valve.parameters`.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from engine_kernels import rocker, valve, valve_lanes
-from studies.scenes.checks import PointProblems
-from studies.scenes.rocker import (
+from studies.scenes.chain import (
     CACHE_SIZE,
     GRID_UNIT_DEG,
     HALF_TURN_DEG,
     BoundedCache,
-    RockerScene,
+    ChainScene,
     open_range,
     step_deg,
 )
-from studies.scenes.rocker_parameters import RESPONSES as ROCKER_RESPONSES
-from studies.scenes.valve_parameters import (
+from studies.scenes.chain_parameters import RESPONSES as ROCKER_RESPONSES
+from studies.scenes.chain_summaries import chain_status_summary
+from studies.scenes.checks import PointProblems
+from studies.scenes.valve.parameters import (
     CURVES,
     JUMP_NOT_RUN,
     LANE_PRECISION,
@@ -48,6 +49,12 @@ from studies.scenes.valve_parameters import (
     SETTINGS,
     STATUS_NOT_RUN,
 )
+from studies.scenes.valve.summaries import dynamics_status_summary
+
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from studies.scenes.base import FigureBuilder
 
 MM, DEG, RPM = 1e3, math.degrees(1.0), 30.0 / math.pi
 WINDOW_PROBE_DEG = 0.25
@@ -188,7 +195,7 @@ def stability_problems(
     return found.messages()
 
 
-class ValveScene(RockerScene):
+class ValveScene(ChainScene):
     name = "valve"
     seconds_per_point = 1e-3
     description = "valve-train dynamics through the rocker: jump, bounce, seating, jump speed"
@@ -198,6 +205,16 @@ class ValveScene(RockerScene):
     curves = CURVES
     stage_order: tuple[str, ...] = ("tappet", "rocker", "dynamics", "jump_speed")
     status_responses: tuple[str, ...] = ("chain_status", "status")
+
+    # --- outputs beside the generic ones -----------------------------------------------------
+    def figures(self) -> dict[str, FigureBuilder]:
+        from studies.scenes.chain_figures import valve_lift_figure  # noqa: PLC0415
+        from studies.scenes.valve.figures import jump_speed_map_figure  # noqa: PLC0415
+
+        return {"valve_lift": valve_lift_figure, "jump_speed_map": jump_speed_map_figure}
+
+    def summaries(self, ds: xr.Dataset) -> list[str]:
+        return chain_status_summary(ds) + dynamics_status_summary(ds)
 
     def __init__(self) -> None:
         super().__init__()

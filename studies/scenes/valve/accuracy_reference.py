@@ -1,7 +1,7 @@
 """Accuracy and cost of the valve integrators: reference solution, trajectory error, timing.
 
 The error of a fixed-step run is measured against scipy's event-restarted ``solve_ivp``
-(:mod:`studies.reference.valve_ivp`, DOP853 or Radau at rtol ~1e-10) on the same model and
+(:mod:`studies.scenes.valve.reference.valve_ivp`, DOP853 or Radau at rtol ~1e-10) on the same model and
 the same excitation: the chain's valve lift sampled every ``REFERENCE_TABLE_DEG`` and
 interpolated as the kernels do. The error is the largest ``|y − y_ref|`` over the run's grid
 points (the whole integration window). The reference is evaluated on one grid holding the
@@ -27,8 +27,8 @@ from fractions import Fraction
 import numpy as np
 
 from engine_kernels import valve, valve_lanes
-from studies.reference.valve_ivp import table_excitation, valve_reference
-from studies.scenes.valve_parameters import LANE_PRECISION
+from studies.scenes.valve.parameters import LANE_PRECISION
+from studies.scenes.valve.reference.valve_ivp import table_excitation, valve_reference
 
 REFERENCE_TABLE_DEG = 1.0 / 64.0
 COST_CASES = 64

@@ -1,0 +1,111 @@
+"""The cam lift laws every cam-driven scene shares (``cam``, ``rocker``, ``valve``): the law and
+segment-shape names and their kernel codes, the six-segment profile's parameters (12V150
+initial design, SPEC §9), and the conditions a polydyne polynomial must meet."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from engine_kernels import lift_laws
+from studies.scenes.base import Parameter
+
+LAWS = (
+    "six_segment",
+    "cycloidal",
+    "harmonic",
+    "modified_sine",
+    "modified_trapezoid",
+    "poly345",
+    "poly4567",
+    "polydyne",
+    "table",
+)
+SHAPES = ("lin", "sin_full", "sin_left", "fillet")
+SRC = "12V150 source"
+
+_SEG_WIDTHS = (4.5, 11.0, 4.5, 5.0, 22.0, 23.0)
+_SEG_SHAPES = ("lin", "sin_full", "lin", "sin_left", "fillet", "sin_left")
+_SEG_ACCELS = (55.0, 55.0, 0.0, -12.5, -22.5, -24.5)
+_SEG_AMPS = (0.0, 12.5, 0.0, 7.5, 0.0, 5.5)
+
+
+def segment_parameters() -> tuple[Parameter, ...]:
+    out: list[Parameter] = []
+    for k in range(6):
+        n = k + 1
+        out += [
+            Parameter(
+                f"seg{n}_width",
+                "degree",
+                _SEG_WIDTHS[k],
+                f"width of acceleration segment {n}",
+                0.0,
+                90.0,
+                True,
+                source=SRC,
+            ),
+            Parameter(
+                f"seg{n}_shape",
+                "1",
+                _SEG_SHAPES[k],
+                f"shape of segment {n}",
+                choices=SHAPES,
+                source=SRC,
+            ),
+            Parameter(
+                f"seg{n}_accel",
+                "mm/rad^2",
+                _SEG_ACCELS[k],
+                f"end acceleration of segment {n} (before closure scaling)",
+                -1000.0,
+                1000.0,
+                source=SRC,
+            ),
+            Parameter(
+                f"seg{n}_amplitude",
+                "mm/rad^2",
+                _SEG_AMPS[k],
+                f"bulge amplitude of segment {n} (magnitude; sign set by the segment)",
+                0.0,
+                1000.0,
+                source=SRC,
+            ),
+        ]
+    return tuple(out)
+
+
+LAW_CODES = {
+    "cycloidal": lift_laws.LAW_CYCLOIDAL,
+    "harmonic": lift_laws.LAW_HARMONIC,
+    "modified_sine": lift_laws.LAW_MODIFIED_SINE,
+    "modified_trapezoid": lift_laws.LAW_MODIFIED_TRAPEZOID,
+    "poly345": lift_laws.LAW_POLY345,
+    "poly4567": lift_laws.LAW_POLY4567,
+    "polydyne": lift_laws.LAW_POLYDYNE,
+    "six_segment": lift_laws.LAW_SIX_SEGMENT,
+    "table": -1,  # curves come from the spline of the table, not from a kernel law
+}
+SHAPE_CODES = {name: code for code, name in enumerate(SHAPES)}
+POLYDYNE_TOLERANCE = 1e-9
+
+
+def polydyne_problems(c: np.ndarray) -> list[str]:
+    """Why polydyne coefficients c_k of f(x) = Σ c_k x^k are not a rise law (empty if they are)."""
+    if c.size > lift_laws.NCOEF:
+        return [f"polydyne_coefficients has {c.size} terms; at most {lift_laws.NCOEF} allowed"]
+    k = np.arange(c.size)
+    conditions = {
+        "f(0) = 0": c[0],
+        "f(1) = 1": c.sum() - 1.0,
+        "f'(0) = 0": c[1] if c.size > 1 else 0.0,
+        "f'(1) = 0": (k * c).sum(),
+    }
+    bad = [name for name, residual in conditions.items() if abs(residual) > POLYDYNE_TOLERANCE]
+    if bad:
+        return [
+            (
+                f"polydyne_coefficients {c.tolist()} violate {', '.join(bad)} "
+                "(f(x) = Σ c_k x^k must rise from 0 to 1 with zero end velocity)"
+            )
+        ]
+    return []

@@ -1,0 +1,6 @@
+"""Scene ``luffing``: the crane-trolley drive sizing checks (SPEC §7): the scene, its
+declarations, summary tables and figures."""
+
+from studies.scenes.luffing.scene import LuffingScene
+
+__all__ = ["LuffingScene"]

@@ -1,0 +1,5 @@
+"""Scene ``rocker``: OHC cam with a variable-ratio rocker, valve kinematics (SPEC §3)."""
+
+from studies.scenes.rocker.scene import RockerScene
+
+__all__ = ["RockerScene"]
