@@ -21,7 +21,8 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from engine_kernels import rocker, valve
+from engine_kernels import valvetrain as valve
+from engine_kernels.valvetrain import rocker
 from studies.scenes.valve_parameters import STATUS_NOT_RUN
 
 # check → (value, limit) response names of the luffing scene
