@@ -31,17 +31,21 @@ _STAMP = "engine_kernels.sources.sha256"
 
 
 def _drop_stale_cache() -> None:
-    """Delete cached machine code of this package if any kernel source changed since."""
+    """Delete cached machine code of this package if any kernel source changed since.
+
+    Covers the family subpackages too: each keeps its cache in its own ``__pycache__``.
+    """
     digest = hashlib.sha256()
-    for source in sorted(_PACKAGE.glob("*.py")):
-        digest.update(source.name.encode() + source.read_bytes())
+    for source in sorted(_PACKAGE.rglob("*.py")):
+        digest.update(source.relative_to(_PACKAGE).as_posix().encode() + source.read_bytes())
     cache = _PACKAGE / "__pycache__"
     stamp = cache / _STAMP
     try:
         if stamp.exists() and stamp.read_text() == digest.hexdigest():
             return
-        for stale in (*cache.glob("*.nbi"), *cache.glob("*.nbc")):
-            stale.unlink(missing_ok=True)
+        for folder in _PACKAGE.rglob("__pycache__"):
+            for stale in (*folder.glob("*.nbi"), *folder.glob("*.nbc")):
+                stale.unlink(missing_ok=True)
         cache.mkdir(exist_ok=True)
         stamp.write_text(digest.hexdigest())
     except OSError:

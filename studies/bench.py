@@ -18,7 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from engine_kernels import valve, valve_lanes
+from engine_kernels import valvetrain as valve
+from engine_kernels.valvetrain import lane_batch as valve_lanes
 from studies import provenance, tracking
 from studies.bench_plots import save_bench_figure
 from studies.bench_study import bench_study

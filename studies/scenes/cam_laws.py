@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from engine_kernels import lift_laws
+from engine_kernels.cam import lift_laws
 from studies.scenes.base import Parameter
 
 LAWS = (

@@ -2,11 +2,11 @@
 
 Two stages, each a compiled kernel:
 
-* ``tappet`` — :func:`engine_kernels.cam_batch.cam_kinematics_batch`: the flat-tappet lift law
+* ``tappet`` — :func:`engine_kernels.cam.kinematics.cam_kinematics_batch`: the flat-tappet lift law
   h, h', h'' on a tappet-angle grid (a standard rise law, a polydyne, or the six-segment
   profile), scaled so that the chain gives the target valve lift at the nose
-  (:func:`engine_kernels.rocker.tappet_lift_for_valve_lift`);
-* ``rocker`` — :func:`engine_kernels.rocker.rocker_valve_lift`: the chain [R1]–[R6], valve
+  (:func:`engine_kernels.valvetrain.rocker.tappet_lift_for_valve_lift`);
+* ``rocker`` — :func:`engine_kernels.valvetrain.rocker.rocker_valve_lift`: the chain [R1]–[R6], valve
   lift Y and its derivatives, force ratio and rocker angle on a cam-angle grid.
 
 Design points that share the cam and rocker parameters share one chain: both stages work per
@@ -27,7 +27,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from engine_kernels import cam_profile, rocker
+from engine_kernels.cam import multi_segment
+from engine_kernels.valvetrain import rocker
 from studies.scenes.base import CurveAxis, Scene, SceneOutput
 from studies.scenes.cam_laws import SHAPE_CODES, polydyne_problems
 from studies.scenes.chain_parameters import (
@@ -391,7 +392,7 @@ def _six_segment_problems(points: dict[str, np.ndarray], i: int) -> list[str]:
     shapes = np.array([SHAPE_CODES[points[f"seg{k}_shape"][i]] for k in range(1, 7)])
     half = float(points["rise_angle"][i])
     adjusted = np.empty(6)
-    if not cam_profile.segment_widths(widths, shapes, half, adjusted):
+    if not multi_segment.segment_widths(widths, shapes, half, adjusted):
         out.append(
             f"segment widths {np.round(np.degrees(widths), 3).tolist()} deg cannot be fitted to "
             f"the rise_angle = {math.degrees(half):g} deg half-event: the fillet and segment 6 "

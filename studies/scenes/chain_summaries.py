@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from engine_kernels import rocker
+from engine_kernels.valvetrain import rocker
 from studies.summary_tables import runs_line
 
 

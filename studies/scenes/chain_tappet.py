@@ -1,8 +1,8 @@
 """The flat-tappet cam law of a rocker chain, and advice where that cam is concave.
 
-Every design point's tappet law comes from :func:`engine_kernels.cam_batch.cam_kinematics_batch`
+Every design point's tappet law comes from :func:`engine_kernels.cam.kinematics.cam_kinematics_batch`
 with the nose lift that gives the target valve lift through the rocker
-(:func:`engine_kernels.rocker.tappet_lift_for_valve_lift`). A concave cam (r0 + h + h'' ≤ 0
+(:func:`engine_kernels.valvetrain.rocker.tappet_lift_for_valve_lift`). A concave cam (r0 + h + h'' ≤ 0
 somewhere, SPEC §3) is a per-point result, not an error; :func:`concave_chains` says before a
 run which points will have one and from which rise angle their law is convex.
 """
@@ -14,8 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from engine_kernels import cam_batch as cb
-from engine_kernels import cam_profile, lift_laws, rocker
+from engine_kernels.cam import kinematics as cb
+from engine_kernels.cam import lift_laws, multi_segment
+from engine_kernels.valvetrain import rocker
 from studies.scenes.cam_laws import LAW_CODES, SHAPE_CODES
 from studies.scenes.checks import PointProblems
 
@@ -50,7 +51,7 @@ def step_deg(step_rad: float) -> float:
 
 
 def geometry_row(points: dict[str, np.ndarray], i: int) -> np.ndarray:
-    """Rocker geometry of design point ``i`` indexed by ``engine_kernels.rocker.G_*`` [m]."""
+    """Rocker geometry of design point ``i`` indexed by ``engine_kernels.valvetrain.rocker.G_*`` [m]."""
     return np.array([float(points[name][i]) for name in rocker.ROCKER_GEOMETRY_NAMES])
 
 
@@ -77,7 +78,7 @@ def tappet_parameters(
         params[0, cb.P_RAMP_HEIGHT] = points["ramp_height"][i]
         params[0, cb.P_RAMP_WIDTH] = points["ramp_width"][i]
         params[0, cb.P_RAMP_VELOCITY] = points["ramp_velocity"][i]
-    for k in range(cam_profile.N_SEGMENTS):
+    for k in range(multi_segment.N_SEGMENTS):
         params[0, cb.P_SEG_WIDTH0 + k] = points[f"seg{k + 1}_width"][i]
         params[0, cb.P_SEG_ACCEL0 + k] = points[f"seg{k + 1}_accel"][i]
         params[0, cb.P_SEG_AMP0 + k] = points[f"seg{k + 1}_amplitude"][i]
@@ -96,7 +97,7 @@ def tappet_table(points: dict[str, np.ndarray], i: int, spacing: float) -> Tappe
     nose = nose_tappet_lift(points, i)
     params, shapes, coeffs = tappet_parameters(points, i, nose)
     curves = np.empty((1, 4, phi.size))
-    diag = np.empty((1, cam_profile.N_DIAG))
+    diag = np.empty((1, multi_segment.N_DIAG))
     cb.cam_kinematics_batch(params, shapes, coeffs, phi, curves, diag)
     law = np.ascontiguousarray(curves[0, :3])
     radius = float(np.min(points["base_radius"][i] + law[0] + law[2]))

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from engine_kernels.cam import (
+from engine_kernels.cam.contact import (
     contact_force,
     effective_modulus,
     entrainment_velocity,
@@ -21,7 +21,8 @@ from engine_kernels.cam import (
     relative_film_thickness,
     spring_margin,
 )
-from engine_kernels.cam_profile import (
+from engine_kernels.cam.lift_laws import LAW_CYCLOIDAL, LAW_HARMONIC, NCOEF, rise_return_cam
+from engine_kernels.cam.multi_segment import (
     N_DIAG,
     SHAPE_FILLET,
     SHAPE_LIN,
@@ -29,7 +30,6 @@ from engine_kernels.cam_profile import (
     SHAPE_SIN_LEFT,
     multi_segment_cam,
 )
-from engine_kernels.lift_laws import LAW_CYCLOIDAL, LAW_HARMONIC, NCOEF, rise_return_cam
 
 DEG = math.pi / 180.0
 MM = 1e-3

@@ -12,8 +12,9 @@ import numpy as np
 import pytest
 from scipy.integrate import trapezoid
 
-from engine_kernels import cam_batch as cb
-from engine_kernels.cam import (
+from engine_kernels.cam import kinematics as cb
+from engine_kernels.cam import loads as cam_loads
+from engine_kernels.cam.contact import (
     contact_force,
     effective_modulus,
     entrainment_velocity,
@@ -23,7 +24,15 @@ from engine_kernels.cam import (
     radius_of_curvature,
     relative_film_thickness,
 )
-from engine_kernels.cam_profile import (
+from engine_kernels.cam.lift_laws import (
+    LAW_CYCLOIDAL,
+    LAW_MODIFIED_SINE,
+    LAW_POLYDYNE,
+    LAW_SIX_SEGMENT,
+    NCOEF,
+    rise_return_cam,
+)
+from engine_kernels.cam.multi_segment import (
     D_EVENT_HALF_WIDTH,
     D_INPUT_VALID,
     D_POSITIVE_SCALE,
@@ -36,14 +45,6 @@ from engine_kernels.cam_profile import (
     SHAPE_SIN_FULL,
     SHAPE_SIN_LEFT,
     multi_segment_cam,
-)
-from engine_kernels.lift_laws import (
-    LAW_CYCLOIDAL,
-    LAW_MODIFIED_SINE,
-    LAW_POLYDYNE,
-    LAW_SIX_SEGMENT,
-    NCOEF,
-    rise_return_cam,
 )
 
 DEG = math.pi / 180.0
@@ -110,12 +111,12 @@ def _run_all(params, shapes, coeffs, theta, store=True):
     cb.cam_kinematics_batch(params, shapes, coeffs, theta, curves, diag)
     kin = np.empty((n, cb.N_KIN))
     cb.cam_kinematic_responses_batch(params, theta, curves, kin)
-    geo = np.empty((n, cb.N_GEO))
-    geo_curves = np.empty((n, cb.N_GEO_CURVES, m if store else 0))
-    cb.cam_geometry_batch(params, theta, curves, geo, geo_curves)
-    load = np.empty((n, cb.N_LOAD))
-    load_curves = np.empty((n, cb.N_LOAD_CURVES, m if store else 0))
-    cb.cam_loads_batch(params, theta, curves, load, load_curves)
+    geo = np.empty((n, cam_loads.N_GEO))
+    geo_curves = np.empty((n, cam_loads.N_GEO_CURVES, m if store else 0))
+    cam_loads.cam_geometry_batch(params, theta, curves, geo, geo_curves)
+    load = np.empty((n, cam_loads.N_LOAD))
+    load_curves = np.empty((n, cam_loads.N_LOAD_CURVES, m if store else 0))
+    cam_loads.cam_loads_batch(params, theta, curves, load, load_curves)
     return curves, diag, kin, geo, geo_curves, load, load_curves
 
 
@@ -131,10 +132,10 @@ def test_name_tuples_match_column_counts():
     assert len(cb.PARAM_NAMES) == len(cb.PARAM_UNITS) == cb.N_PARAMS
     assert len(DIAG_NAMES) == len(DIAG_UNITS) == N_DIAG
     assert len(cb.KINEMATIC_NAMES) == len(cb.KINEMATIC_UNITS) == cb.N_KIN
-    assert len(cb.GEOMETRY_NAMES) == len(cb.GEOMETRY_UNITS) == cb.N_GEO
-    assert len(cb.LOAD_NAMES) == len(cb.LOAD_UNITS) == cb.N_LOAD
-    assert len(cb.GEOMETRY_CURVE_NAMES) == cb.N_GEO_CURVES
-    assert len(cb.LOAD_CURVE_NAMES) == cb.N_LOAD_CURVES
+    assert len(cam_loads.GEOMETRY_NAMES) == len(cam_loads.GEOMETRY_UNITS) == cam_loads.N_GEO
+    assert len(cam_loads.LOAD_NAMES) == len(cam_loads.LOAD_UNITS) == cam_loads.N_LOAD
+    assert len(cam_loads.GEOMETRY_CURVE_NAMES) == cam_loads.N_GEO_CURVES
+    assert len(cam_loads.LOAD_CURVE_NAMES) == cam_loads.N_LOAD_CURVES
     assert cb.PARAM_NAMES[cb.P_SEG_AMP0 + 5] == "seg_amp5"
     assert cb.PARAM_NAMES[cb.P_SPRING_MARGIN_LIMIT] == "spring_margin_limit"
 
@@ -309,11 +310,11 @@ def test_cusped_cam_gives_numbers_and_failed_flags(results):
     i = 5
     # Closed form of the cycloidal cam: rho = r0 + H f + H f2/β² reaches
     # r0 + H (3/4 + 1/(2π)) - 2π H/β² at x = 3/4, far below zero.
-    assert geo[i, cb.G_MIN_RADIUS] < 0.0
-    assert geo[i, cb.G_RADIUS_OK] == 0.0
-    assert load[i, cb.L_MAX_STRESS] == math.inf
-    assert load[i, cb.L_STRESS_OK] == 0.0
-    assert load[i, cb.L_MIN_FORCE] > 0.0
+    assert geo[i, cam_loads.G_MIN_RADIUS] < 0.0
+    assert geo[i, cam_loads.G_RADIUS_OK] == 0.0
+    assert load[i, cam_loads.L_MAX_STRESS] == math.inf
+    assert load[i, cam_loads.L_STRESS_OK] == 0.0
+    assert load[i, cam_loads.L_MIN_FORCE] > 0.0
     for table in (diag, kin, geo, load):
         assert not np.isnan(table[i]).any()
 
@@ -334,8 +335,9 @@ def test_unknown_law_is_flagged_not_raised():
 _INTERPRETED = """
 import sys
 import numpy as np
-from engine_kernels import cam_batch as cb
-from engine_kernels.cam_profile import N_DIAG
+from engine_kernels.cam import kinematics as cb
+from engine_kernels.cam import loads as cam_loads
+from engine_kernels.cam.multi_segment import N_DIAG
 
 data = np.load(sys.argv[1])
 params, shapes, coeffs, theta = data["params"], data["shapes"], data["coeffs"], data["theta"]
@@ -345,10 +347,10 @@ diag = np.empty((n, N_DIAG))
 cb.cam_kinematics_batch(params, shapes, coeffs, theta, curves, diag)
 kin = np.empty((n, cb.N_KIN))
 cb.cam_kinematic_responses_batch(params, theta, curves, kin)
-geo = np.empty((n, cb.N_GEO))
-cb.cam_geometry_batch(params, theta, curves, geo, np.empty((n, cb.N_GEO_CURVES, 0)))
-load = np.empty((n, cb.N_LOAD))
-cb.cam_loads_batch(params, theta, curves, load, np.empty((n, cb.N_LOAD_CURVES, 0)))
+geo = np.empty((n, cam_loads.N_GEO))
+cam_loads.cam_geometry_batch(params, theta, curves, geo, np.empty((n, cam_loads.N_GEO_CURVES, 0)))
+load = np.empty((n, cam_loads.N_LOAD))
+cam_loads.cam_loads_batch(params, theta, curves, load, np.empty((n, cam_loads.N_LOAD_CURVES, 0)))
 np.savez(sys.argv[2], curves=curves, diag=diag, kin=kin, geo=geo, load=load)
 """
 

@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import quad, simpson
 
-from engine_kernels.cam_profile import (
+from engine_kernels.cam.multi_segment import (
     D_CLOSURE_RESIDUAL,
     D_EVENT_HALF_WIDTH,
     D_FILLET_MONOTONE,

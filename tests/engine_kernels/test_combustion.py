@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
-from engine_kernels import combustion as cb
+from engine_kernels.crank import combustion as cb
 
 BORE, RADIUS, LAMBDA, EPS, K = 0.150, 0.090, 0.28, 14.0, 1.35
 P_A, P_EX = 0.30e6, 0.25e6

@@ -9,8 +9,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from engine_kernels import combustion as cb
-from engine_kernels import crank, crank_forces, crank_layout
+from engine_kernels.crank import combustion as cb
+from engine_kernels.crank import connecting_rod, piston
+from engine_kernels.crank import forces as crank_forces
+from engine_kernels.crank import kinematics as crank
+from engine_kernels.crank import multicylinder as crank_layout
 
 RPM = math.pi / 30.0
 # 12V150 (SPEC §5): bore 150 mm, rated 2600 rpm, 23 MPa max pressure; stroke 180 mm is the
@@ -103,14 +106,14 @@ def multicylinder(row, pressure, firing, axis, n_orders=24):
 def test_exact_velocity_and_acceleration_match_finite_differences(alpha, lam):
     # Expected: 4th-order central differences of the exact displacement [K1] (error ~h⁴).
     r, h = 0.05, 1e-3
-    x = [crank.piston_displacement_exact(r, lam, alpha + k * h) for k in (-2, -1, 0, 1, 2)]
+    x = [piston.piston_displacement_exact(r, lam, alpha + k * h) for k in (-2, -1, 0, 1, 2)]
     dx = (x[0] - 8 * x[1] + 8 * x[3] - x[4]) / (12 * h)
     ddx = (-x[0] + 16 * x[1] - 30 * x[2] + 16 * x[3] - x[4]) / (12 * h * h)
     omega = 300.0
-    assert crank.piston_velocity_exact(r, lam, omega, alpha) == pytest.approx(
+    assert piston.piston_velocity_exact(r, lam, omega, alpha) == pytest.approx(
         omega * dx, abs=1e-9 * r * omega
     )
-    assert crank.piston_acceleration_exact(r, lam, omega, alpha) == pytest.approx(
+    assert piston.piston_acceleration_exact(r, lam, omega, alpha) == pytest.approx(
         omega**2 * ddx, abs=1e-6 * r * omega**2
     )
 
@@ -118,7 +121,7 @@ def test_exact_velocity_and_acceleration_match_finite_differences(alpha, lam):
 def test_exact_displacement_is_the_textbook_geometry():
     # Expected: x = r(1 − cos α) + l(1 − cos β) with l = r/λ, evaluated directly in numpy.
     alpha = np.linspace(0, 2 * math.pi, 37)
-    got = [crank.piston_displacement_exact(0.09, 0.3, a) for a in alpha]
+    got = [piston.piston_displacement_exact(0.09, 0.3, a) for a in alpha]
     expected = 0.09 * (1 - np.cos(alpha)) + 0.3 * (1 - np.cos(np.arcsin(0.3 * np.sin(alpha))))
     np.testing.assert_allclose(got, expected, rtol=0, atol=1e-15)
 
@@ -128,13 +131,17 @@ def test_exact_displacement_is_the_textbook_geometry():
 def test_rod_rates_match_finite_differences(alpha, lam):
     # Expected: central differences of β(α) and β̇(α) (constant ω, d/dt = ω d/dα).
     omega, h = 200.0, 1e-4
-    db = (crank.rod_angle(lam, alpha + h) - crank.rod_angle(lam, alpha - h)) / (2 * h)
+    db = (connecting_rod.rod_angle(lam, alpha + h) - connecting_rod.rod_angle(lam, alpha - h)) / (
+        2 * h
+    )
     ddb = (
-        crank.rod_angular_velocity(lam, omega, alpha + h)
-        - crank.rod_angular_velocity(lam, omega, alpha - h)
+        connecting_rod.rod_angular_velocity(lam, omega, alpha + h)
+        - connecting_rod.rod_angular_velocity(lam, omega, alpha - h)
     ) / (2 * h)
-    assert crank.rod_angular_velocity(lam, omega, alpha) == pytest.approx(omega * db, abs=1e-6)
-    assert crank.rod_angular_acceleration(lam, omega, alpha) == pytest.approx(
+    assert connecting_rod.rod_angular_velocity(lam, omega, alpha) == pytest.approx(
+        omega * db, abs=1e-6
+    )
+    assert connecting_rod.rod_angular_acceleration(lam, omega, alpha) == pytest.approx(
         omega * ddb, abs=1e-6 * omega**2
     )
 
@@ -146,11 +153,13 @@ def test_rod_extremes_match_brute_force_maxima():
         omega = 250.0
         cos_beta = np.sqrt(1 - (lam * np.sin(alpha)) ** 2)
         beta_ddot = -lam * (1 - lam**2) * omega**2 * np.sin(alpha) / cos_beta**3
-        assert crank.rod_angle_max(lam) == pytest.approx(np.arcsin(lam * np.sin(alpha)).max())
-        assert crank.rod_angular_velocity_max(lam, omega) == pytest.approx(
+        assert connecting_rod.rod_angle_max(lam) == pytest.approx(
+            np.arcsin(lam * np.sin(alpha)).max()
+        )
+        assert connecting_rod.rod_angular_velocity_max(lam, omega) == pytest.approx(
             (lam * omega * np.cos(alpha) / cos_beta).max()
         )
-        assert crank.rod_angular_acceleration_max(lam, omega) == pytest.approx(
+        assert connecting_rod.rod_angular_acceleration_max(lam, omega) == pytest.approx(
             np.abs(beta_ddot).max(), rel=1e-9
         )
 
@@ -233,9 +242,9 @@ def test_kinematic_curves_follow_the_chosen_model():
 def test_power_balance_torque_times_speed_equals_force_times_velocity(alpha, lam, force):
     # Law: T·r·ω = P·ẋ (virtual work of the frictionless slider-crank).
     r, omega = 0.07, 300.0
-    beta = crank.rod_angle(lam, alpha)
+    beta = connecting_rod.rod_angle(lam, alpha)
     power_crank = crank_forces.tangential_force(force, alpha, beta) * r * omega
-    power_piston = force * crank.piston_velocity_exact(r, lam, omega, alpha)
+    power_piston = force * piston.piston_velocity_exact(r, lam, omega, alpha)
     assert power_crank == pytest.approx(power_piston, abs=1e-9 * abs(force) * r * omega + 1e-12)
 
 

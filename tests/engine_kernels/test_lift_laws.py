@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from numpy.polynomial import Polynomial
 from scipy.integrate import quad
 
-from engine_kernels.lift_laws import (
+from engine_kernels.cam.lift_laws import (
     LAW_CYCLOIDAL,
     LAW_HARMONIC,
     LAW_MODIFIED_SINE,

@@ -9,7 +9,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from engine_kernels import luffing as lf
+from engine_kernels.luffing import drive, guide_tube
+from engine_kernels.luffing import sizing as lf
 
 MOTORS = np.array([50.0, 100.0, 200.0, 400.0, 750.0])  # rated powers [W], ascending
 RPM = math.pi / 30.0
@@ -54,7 +55,7 @@ REFERENCE = {
     lf.KEY_SHAFT_DIAMETER: 8.0 * MM,
     lf.ALLOWABLE_CRUSHING_STRESS: 100.0e6,
     lf.BEARING_RATING: 5100.0,
-    lf.BEARING_TYPE: lf.BALL_BEARING,
+    lf.BEARING_TYPE: drive.BALL_BEARING,
     lf.REQUIRED_BEARING_LIFE: 20_000 * HOUR,
 }
 
@@ -128,7 +129,7 @@ def test_reference_drive_recomputed_by_hand():
 
 
 def test_roller_bearing_uses_exponent_ten_thirds():
-    ball, roller = run(np.array([params_row(), params_row(bearing_type=lf.ROLLER_BEARING)]))
+    ball, roller = run(np.array([params_row(), params_row(bearing_type=drive.ROLLER_BEARING)]))
     ratio = roller[lf.OUT_BEARING_LIFE] / ball[lf.OUT_BEARING_LIFE]
     assert ratio == pytest.approx((5100 / 240) ** (10 / 3 - 3), rel=1e-14)
 
@@ -168,8 +169,8 @@ def test_matching_reduction_passes_the_ratio_check():
 )
 def test_tube_deflection_and_slope_are_in_ratio_span_over_three(load, weight, span, modulus, i):
     # Law for a mid-span point load: y/θ = (l³/48)/(l²/16) = l/3.
-    y = lf.tube_midspan_deflection(load, weight, span, modulus, i)
-    theta = lf.tube_end_slope(load, weight, span, modulus, i)
+    y = guide_tube.tube_midspan_deflection(load, weight, span, modulus, i)
+    theta = guide_tube.tube_end_slope(load, weight, span, modulus, i)
     assert y / theta == pytest.approx(span / 3, rel=1e-14)
 
 

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from engine_kernels import rk4
+from engine_kernels.valvetrain import rk4
 
 
 def amplification(z):

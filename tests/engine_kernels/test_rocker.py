@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.polynomial import polynomial as poly
 
-from engine_kernels import rocker
+from engine_kernels.valvetrain import rocker
 
 MM = 1e-3
 # SPEC §3 reference geometry (125 cc motorcycle): r0, rs, la, lc, lb, rho_b, z, lash [mm].

@@ -16,7 +16,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from engine_kernels import rocker, valve, valve_lanes
+from engine_kernels import valvetrain as valve
+from engine_kernels.valvetrain import lane_batch as valve_lanes
+from engine_kernels.valvetrain import rocker
 from studies.scenes.valve.reference.valve_ivp import valve_reference
 
 RPM = 2 * math.pi / 60

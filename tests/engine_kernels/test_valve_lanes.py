@@ -25,8 +25,10 @@ from hypothesis import settings as hypothesis_settings
 from hypothesis import strategies as st
 from llvmlite import binding as llvmlite_binding
 
-from engine_kernels import valve, valve_lanes
+from engine_kernels import valvetrain as valve
 from engine_kernels._jit import FASTMATH
+from engine_kernels.valvetrain import lane_batch as valve_lanes
+from engine_kernels.valvetrain import lanes as lane_loops
 from studies.simd import host_lanes, target_features, widest_vector
 
 RPM = 2 * math.pi / 60
@@ -138,11 +140,11 @@ def test_blocks_hold_one_substep_count_each(counts):
     order = np.argsort(substeps, kind="mergesort")
     starts = valve_lanes.block_starts(substeps, order)
     blocks = [order[a:b] for a, b in itertools.pairwise(starts)]
-    assert all(0 < len(block) <= valve_lanes.LANES for block in blocks)
+    assert all(0 < len(block) <= lane_loops.LANES for block in blocks)
     assert all(len(set(substeps[block])) == 1 for block in blocks)
     cases = np.concatenate(blocks) if blocks else np.empty(0, dtype=np.int64)
     assert sorted(cases.tolist()) == np.flatnonzero(substeps).tolist()
-    expected = sum(math.ceil(np.sum(substeps == c) / valve_lanes.LANES) for c in range(1, 5))
+    expected = sum(math.ceil(np.sum(substeps == c) / lane_loops.LANES) for c in range(1, 5))
     assert len(blocks) == expected
 
 
@@ -172,9 +174,9 @@ def test_lane_loops_vectorise(loop):
     # The point of the lane kernel (STYLE, "Hot integrators"): each loop over lanes must
     # compile to vector arithmetic. A call or a load under a branch in the loop body stops
     # that silently, so look at the LLVM IR of a fresh (uncached) compilation.
-    function = getattr(valve_lanes, loop).py_func
+    function = getattr(lane_loops, loop).py_func
     compiled = numba.njit(fastmath=FASTMATH)(function)
-    data = np.zeros((valve_lanes.N_LANE_ROWS + valve.N_STATS) * valve_lanes.LANES)
+    data = np.zeros((lane_loops.N_LANE_ROWS + valve.N_STATS) * lane_loops.LANES)
     arguments = {
         "_observe_lanes": (0.0, 0.0, 0.0, True),
         "_step_lanes": (0.0,) * 4,
@@ -303,8 +305,8 @@ def test_single_precision_loops_fill_the_host_vectors(loop, arguments):
     # double arithmetic or narrower vectors without notice. The width is the host's, never
     # pinned to one instruction set (expected_lanes: 8 on AVX2, 16 or 8 on AVX-512).
     lanes = expected_lanes(np.float32)
-    function = numba.njit(fastmath=FASTMATH)(getattr(valve_lanes, loop).py_func)
-    data = np.zeros((valve_lanes.N_LANE_ROWS + valve.N_STATS) * valve_lanes.LANES, np.float32)
+    function = numba.njit(fastmath=FASTMATH)(getattr(lane_loops, loop).py_func)
+    data = np.zeros((lane_loops.N_LANE_ROWS + valve.N_STATS) * lane_loops.LANES, np.float32)
     function(data, *(np.float32(a) if isinstance(a, float) else a for a in arguments))
     llvm = function.inspect_llvm(function.signatures[0])
     assert widest_vector(llvm, np.float32) >= lanes

@@ -136,7 +136,7 @@ def test_points_that_did_not_run_are_reported_and_strict_fails(
 
 
 # Closed-form rise laws f(s) and f''(s) on s ∈ [0, 1] (Norton, double-dwell functions),
-# written here independently of engine_kernels.lift_laws.
+# written here independently of engine_kernels.cam.lift_laws.
 RISE_LAWS = {
     "cycloidal": (
         lambda s: s - np.sin(2 * np.pi * s) / (2 * np.pi),

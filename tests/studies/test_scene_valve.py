@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from engine_kernels import rocker, valve, valve_model
+from engine_kernels import valvetrain as valve
+from engine_kernels.valvetrain import layout, rocker
 from studies.bench import run_benchmark
 from studies.definition import StudyError
 from studies.plan import plan_study, plan_text
@@ -277,7 +278,7 @@ def test_status_codes_are_integers_with_cf_flags_and_are_counted_not_averaged(
     folder = run_plan(plan_text(text), tmp_path, progress=False).folder
     ds = xr.open_dataset(folder / "results.nc")
     for name, codes in (
-        ("status", (*valve_model.VALVE_STATUS_NAMES, "not_run")),
+        ("status", (*layout.VALVE_STATUS_NAMES, "not_run")),
         ("jump_speed_status", (*valve.JUMP_STATUS_NAMES, "not_run")),
     ):
         assert ds[name].dtype == np.int8

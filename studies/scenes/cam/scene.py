@@ -1,6 +1,6 @@
 """Scene ``cam``: flat-faced tappet cam kinematics and contact criteria (SPEC §2).
 
-Three stages, each one compiled batch driver of :mod:`engine_kernels.cam_batch`:
+Three stages, each one compiled batch driver of :mod:`engine_kernels.cam.kinematics` and :mod:`engine_kernels.cam.loads`:
 
 * ``kinematics`` — lift h and h', h'', h''' on the cam-angle grid (six-segment profile, a
   standard rise law, or a smoothed measured table) and the kinematic responses;
@@ -17,8 +17,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from engine_kernels import cam_batch as cb
-from engine_kernels import cam_profile, lift_laws
+from engine_kernels.cam import kinematics as cb
+from engine_kernels.cam import lift_laws, multi_segment
+from engine_kernels.cam import loads as cam_loads
 from studies.scenes.base import Scene, SceneOutput
 from studies.scenes.cam.lift_tables import read_lift_table, table_kinematics
 from studies.scenes.cam.parameters import (
@@ -75,37 +76,37 @@ _SCALAR_SOURCE: dict[str, tuple[str, int, float]] = {
     "max_jerk": ("kin", cb.K_MAX_JERK, MM),
     "fullness": ("kin", cb.K_WORKING_FULLNESS, 1.0),
     "event_fullness": ("kin", cb.K_FULLNESS, 1.0),
-    "working_lift_unscaled": ("diag", cam_profile.D_UNSCALED_WORKING_LIFT, MM),
-    "fillet_monotone": ("diag", cam_profile.D_FILLET_MONOTONE, 1.0),
-    "ramp_feasible": ("diag", cam_profile.D_RAMP_FEASIBLE, 1.0),
-    "min_radius_of_curvature": ("geo", cb.G_MIN_RADIUS, MM),
-    "radius_margin": ("geo", cb.G_RADIUS_MARGIN, MM),
-    "radius_ok": ("geo", cb.G_RADIUS_OK, 1.0),
-    "max_lubrication_coefficient_nose": ("geo", cb.G_MAX_LUBRICATION, 1.0),
-    "min_lubrication_coefficient_nose": ("geo", cb.G_MIN_LUBRICATION, 1.0),
-    "min_relative_film_thickness_nose": ("geo", cb.G_MIN_FILM_RATIO, 1.0),
-    "max_entrainment_velocity": ("geo", cb.G_MAX_ENTRAINMENT, 1.0),
-    "max_contact_force": ("load", cb.L_MAX_FORCE, 1.0),
-    "min_contact_force": ("load", cb.L_MIN_FORCE, 1.0),
-    "max_contact_stress": ("load", cb.L_MAX_STRESS, MPA),
-    "stress_margin": ("load", cb.L_STRESS_MARGIN, MPA),
-    "stress_ok": ("load", cb.L_STRESS_OK, 1.0),
-    "spring_margin": ("load", cb.L_SPRING_MARGIN, 1.0),
-    "spring_margin_ok": ("load", cb.L_SPRING_OK, 1.0),
-    "min_film_thickness_nose": ("load", cb.L_MIN_FILM, UM),
+    "working_lift_unscaled": ("diag", multi_segment.D_UNSCALED_WORKING_LIFT, MM),
+    "fillet_monotone": ("diag", multi_segment.D_FILLET_MONOTONE, 1.0),
+    "ramp_feasible": ("diag", multi_segment.D_RAMP_FEASIBLE, 1.0),
+    "min_radius_of_curvature": ("geo", cam_loads.G_MIN_RADIUS, MM),
+    "radius_margin": ("geo", cam_loads.G_RADIUS_MARGIN, MM),
+    "radius_ok": ("geo", cam_loads.G_RADIUS_OK, 1.0),
+    "max_lubrication_coefficient_nose": ("geo", cam_loads.G_MAX_LUBRICATION, 1.0),
+    "min_lubrication_coefficient_nose": ("geo", cam_loads.G_MIN_LUBRICATION, 1.0),
+    "min_relative_film_thickness_nose": ("geo", cam_loads.G_MIN_FILM_RATIO, 1.0),
+    "max_entrainment_velocity": ("geo", cam_loads.G_MAX_ENTRAINMENT, 1.0),
+    "max_contact_force": ("load", cam_loads.L_MAX_FORCE, 1.0),
+    "min_contact_force": ("load", cam_loads.L_MIN_FORCE, 1.0),
+    "max_contact_stress": ("load", cam_loads.L_MAX_STRESS, MPA),
+    "stress_margin": ("load", cam_loads.L_STRESS_MARGIN, MPA),
+    "stress_ok": ("load", cam_loads.L_STRESS_OK, 1.0),
+    "spring_margin": ("load", cam_loads.L_SPRING_MARGIN, 1.0),
+    "spring_margin_ok": ("load", cam_loads.L_SPRING_OK, 1.0),
+    "min_film_thickness_nose": ("load", cam_loads.L_MIN_FILM, UM),
 }
 _CURVE_SOURCE: dict[str, tuple[str, int, float]] = {
     "lift": ("kin_curves", 0, MM),
     "velocity": ("kin_curves", 1, MM),
     "acceleration": ("kin_curves", 2, MM),
     "jerk": ("kin_curves", 3, MM),
-    "radius_of_curvature": ("geo_curves", cb.GC_RADIUS, MM),
-    "lubrication_coefficient": ("geo_curves", cb.GC_LUBRICATION, 1.0),
-    "entrainment_velocity": ("geo_curves", cb.GC_ENTRAINMENT, 1.0),
-    "relative_film_thickness": ("geo_curves", cb.GC_FILM_RATIO, 1.0),
-    "contact_force": ("load_curves", cb.LC_FORCE, 1.0),
-    "contact_stress": ("load_curves", cb.LC_STRESS, MPA),
-    "film_thickness": ("load_curves", cb.LC_FILM, UM),
+    "radius_of_curvature": ("geo_curves", cam_loads.GC_RADIUS, MM),
+    "lubrication_coefficient": ("geo_curves", cam_loads.GC_LUBRICATION, 1.0),
+    "entrainment_velocity": ("geo_curves", cam_loads.GC_ENTRAINMENT, 1.0),
+    "relative_film_thickness": ("geo_curves", cam_loads.GC_FILM_RATIO, 1.0),
+    "contact_force": ("load_curves", cam_loads.LC_FORCE, 1.0),
+    "contact_stress": ("load_curves", cam_loads.LC_STRESS, MPA),
+    "film_thickness": ("load_curves", cam_loads.LC_FILM, UM),
 }
 
 
@@ -150,7 +151,7 @@ class CamScene(Scene):
             widths = np.array([p[f"seg{k}_width"][i] for k in range(1, 7)])
             shapes = np.array([SHAPE_CODES[p[f"seg{k}_shape"][i]] for k in range(1, 7)])
             adjusted = np.empty(6)
-            if not cam_profile.segment_widths(widths, shapes, p["rise_angle"][i], adjusted):
+            if not multi_segment.segment_widths(widths, shapes, p["rise_angle"][i], adjusted):
                 out.append(
                     f"segment widths {np.round(deg(widths), 3).tolist()} deg cannot be fitted to "
                     f"the rise_angle = {deg(p['rise_angle'][i]):g} deg half-event: the fillet and segment 6 "
@@ -216,7 +217,7 @@ class CamScene(Scene):
         params, theta = ctx["params"], ctx["theta"]
         n, m = params.shape[0], theta.size
         curves = np.empty((n, 4, m))
-        diag = np.empty((n, cam_profile.N_DIAG))
+        diag = np.empty((n, multi_segment.N_DIAG))
         cb.cam_kinematics_batch(params, ctx["shapes"], ctx["coeffs"], theta, curves, diag)
         table_rows = np.flatnonzero(ctx["points"]["law"] == "table")
         for i in table_rows:
@@ -224,7 +225,7 @@ class CamScene(Scene):
             smoothing = ctx["settings"]["table_smoothing"]
             curves[i] = table_kinematics(np.deg2rad(angle), lift * 1e-3, smoothing, theta)
             diag[i] = 1.0
-            diag[i, cam_profile.D_UNSCALED_WORKING_LIFT] = lift.max() * 1e-3
+            diag[i, multi_segment.D_UNSCALED_WORKING_LIFT] = lift.max() * 1e-3
         kin = np.empty((n, cb.N_KIN))
         cb.cam_kinematic_responses_batch(params, theta, curves, kin)
         ctx |= {"kin_curves": curves, "diag": diag, "kin": kin}
@@ -232,17 +233,19 @@ class CamScene(Scene):
     def stage_geometry(self, ctx: dict[str, Any]) -> None:
         params, theta, curves = ctx["params"], ctx["theta"], ctx["kin_curves"]
         want = any(_CURVE_SOURCE[c][0] == "geo_curves" for c in ctx["curves"])
-        geo = np.empty((params.shape[0], cb.N_GEO))
-        geo_curves = np.empty((params.shape[0], cb.N_GEO_CURVES, theta.size if want else 0))
-        cb.cam_geometry_batch(params, theta, curves, geo, geo_curves)
+        geo = np.empty((params.shape[0], cam_loads.N_GEO))
+        geo_curves = np.empty((params.shape[0], cam_loads.N_GEO_CURVES, theta.size if want else 0))
+        cam_loads.cam_geometry_batch(params, theta, curves, geo, geo_curves)
         ctx |= {"geo": geo, "geo_curves": geo_curves}
 
     def stage_loads(self, ctx: dict[str, Any]) -> None:
         params, theta, curves = ctx["params"], ctx["theta"], ctx["kin_curves"]
         want = any(_CURVE_SOURCE[c][0] == "load_curves" for c in ctx["curves"])
-        load = np.empty((params.shape[0], cb.N_LOAD))
-        load_curves = np.empty((params.shape[0], cb.N_LOAD_CURVES, theta.size if want else 0))
-        cb.cam_loads_batch(params, theta, curves, load, load_curves)
+        load = np.empty((params.shape[0], cam_loads.N_LOAD))
+        load_curves = np.empty(
+            (params.shape[0], cam_loads.N_LOAD_CURVES, theta.size if want else 0)
+        )
+        cam_loads.cam_loads_batch(params, theta, curves, load, load_curves)
         ctx |= {"load": load, "load_curves": load_curves}
 
 

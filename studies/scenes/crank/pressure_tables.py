@@ -3,7 +3,7 @@
 A table is rows of ``crank angle [deg], pressure [MPa]`` (a header line and ``#`` comments are
 allowed) over one four-stroke cycle, with **firing TDC at 0°** as measured traces are usually
 written (−360…360° or any other 720° window; angles are read modulo 720°). The scene's grid has
-gas-exchange TDC at 0° and firing TDC at 360° (:mod:`engine_kernels.crank`), so the table is
+gas-exchange TDC at 0° and firing TDC at 360° (:mod:`engine_kernels.crank.kinematics`), so the table is
 shifted by 360° and interpolated linearly and periodically onto it.
 """
 

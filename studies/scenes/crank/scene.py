@@ -2,14 +2,14 @@
 
 Stages (each one compiled batch driver; a study runs only those its responses and curves need):
 
-* ``kinematics`` — :func:`engine_kernels.crank.crank_kinematics_batch`: piston and rod motion
+* ``kinematics`` — :func:`engine_kernels.crank.kinematics.crank_kinematics_batch`: piston and rod motion
   and the error of the two-term approximation (always measured against the exact relations);
 * ``pressure`` — cylinder pressure on the cycle grid: the single-zone Wiebe cycle
-  (:func:`engine_kernels.combustion.cycle_pressure_batch`) or a measured table
+  (:func:`engine_kernels.crank.combustion.cycle_pressure_batch`) or a measured table
   (:mod:`studies.scenes.crank.pressure_tables`);
-* ``forces`` — :func:`engine_kernels.crank_forces.crank_forces_batch`: gas, inertia, rod, side,
+* ``forces`` — :func:`engine_kernels.crank.forces.crank_forces_batch`: gas, inertia, rod, side,
   tangential and radial forces and the torque of one cylinder;
-* ``multicylinder`` — :func:`engine_kernels.crank_layout.crank_multicylinder_batch`: summed
+* ``multicylinder`` — :func:`engine_kernels.crank.multicylinder.crank_multicylinder_batch`: summed
   torque of the layout, its harmonic orders and the free first- and second-order forces and
   (inline layouts) moments.
 
@@ -24,10 +24,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from engine_kernels import combustion as cb
-from engine_kernels import crank as ck
-from engine_kernels import crank_forces as cf
-from engine_kernels import crank_layout as cl
+from engine_kernels.crank import combustion as cb
+from engine_kernels.crank import forces as cf
+from engine_kernels.crank import kinematics as ck
+from engine_kernels.crank import multicylinder as cl
 from studies.scenes.base import Scene, SceneOutput
 from studies.scenes.checks import PointProblems
 from studies.scenes.crank.parameters import (

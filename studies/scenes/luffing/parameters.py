@@ -7,7 +7,7 @@ span/250 and end slope 0.01 rad, a 3 × 3 key (k = 1.5 mm, l = 14 mm) on an 8 mm
 100 MPa allowed, a 6001 deep-groove ball bearing (C = 5.1 kN) for 20 000 h.
 
 Every check is reported as value, limit and pass flag (``*_ok``); see
-:mod:`engine_kernels.luffing` for the choices the SPEC leaves open.
+:mod:`engine_kernels.luffing.sizing` for the choices the SPEC leaves open.
 """
 
 from __future__ import annotations
@@ -253,7 +253,7 @@ _VALUES = (
     ("bearing_ok", "1", "bearing life at least the required life", "larger"),
 )
 KERNEL_NAMES = tuple(name for name, *_ in _VALUES)
-"""Response names in the column order of :data:`engine_kernels.luffing.OUTPUTS`."""
+"""Response names in the column order of :data:`engine_kernels.luffing.sizing.OUTPUTS`."""
 CHECKS = ("motor", "ratio", "coupling", "deflection", "slope", "key", "bearing")
 """The design checks, each with an ``<check>_ok`` flag response."""
 

@@ -1,6 +1,6 @@
 """The ``luffing`` scene: trolley-drive sizing checks of the tower-crane test rig (SPEC §7).
 
-One stage, ``sizing`` (:func:`engine_kernels.luffing.luffing_batch`): the chain resistance →
+One stage, ``sizing`` (:func:`engine_kernels.luffing.sizing.luffing_batch`): the chain resistance →
 work power → motor power → next rated motor → belt, pulley, shaft load → coupling torque, key,
 bearing life, and the guide-tube deflection and slope. Every check is reported as value, limit
 and pass flag; ``all_checks_ok`` and ``checks_passed`` sum them up.
@@ -12,7 +12,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from engine_kernels import luffing as lf
+from engine_kernels.luffing import drive
+from engine_kernels.luffing import sizing as lf
 from studies.scenes.base import Scene, SceneOutput
 from studies.scenes.checks import PointProblems
 from studies.scenes.luffing.parameters import CHECKS, KERNEL_NAMES, NEEDS, PARAMETERS, RESPONSES
@@ -24,7 +25,7 @@ if TYPE_CHECKING:
 
     from studies.scenes.base import FigureBuilder
 
-BEARING_CODES = {"ball": lf.BALL_BEARING, "roller": lf.ROLLER_BEARING}
+BEARING_CODES = {"ball": drive.BALL_BEARING, "roller": drive.ROLLER_BEARING}
 COLUMNS = {name: getattr(lf, name.upper()) for name in lf.PARAM_NAMES}
 """Kernel column of each parameter (the scene's parameter names are the kernel's)."""
 

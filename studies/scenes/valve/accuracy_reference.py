@@ -26,7 +26,8 @@ from fractions import Fraction
 
 import numpy as np
 
-from engine_kernels import valve, valve_lanes
+from engine_kernels import valvetrain as valve
+from engine_kernels.valvetrain import lane_batch as valve_lanes
 from studies.scenes.valve.parameters import LANE_PRECISION
 from studies.scenes.valve.reference.valve_ivp import table_excitation, valve_reference
 
@@ -54,7 +55,7 @@ def reference_lift(
     """Reference valve lift [m] at the cam angles ``theta`` [rad] (scipy, event restarts).
 
     fine   : (table, table_step [rad], start [rad]) of Y, Y', Y'' at a fine spacing.
-    row    : valve parameter row (``engine_kernels.valve.P_*``, SI).
+    row    : valve parameter row (``engine_kernels.valvetrain.P_*``, SI).
     method : ``"DOP853"`` or ``"Radau"``; rtol: relative tolerance of the solver.
     """
     excitation = table_excitation(*fine)

@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from engine_kernels import valve
+from engine_kernels import valvetrain as valve
 from studies.scenes.base import Curve, Parameter, Response
 from studies.scenes.chain_parameters import CURVES as ROCKER_CURVES
 from studies.scenes.chain_parameters import PARAMETERS as ROCKER_PARAMETERS

@@ -5,11 +5,11 @@ scene extends :class:`~studies.scenes.chain.ChainScene` and adds two stages:
 
 * ``dynamics`` — fixed-step RK4 of [V2] over the integration window (valve opening − 2° …
   closure + ``closing_window``, snapped outward to whole multiples of 2°), with the integrator
-  of the settings: :func:`engine_kernels.valve_lanes.valve_response_lanes` (``lanes``, and
-  ``lanes_f32`` on a float32 copy of the table), :func:`engine_kernels.valve.valve_response_batch`
-  (``rk4``, ``rk4_switch_aware``), or one :func:`engine_kernels.valve.valve_response` call
+  of the settings: :func:`engine_kernels.valvetrain.lane_batch.valve_response_lanes` (``lanes``, and
+  ``lanes_f32`` on a float32 copy of the table), :func:`engine_kernels.valvetrain.valve_response_batch`
+  (``rk4``, ``rk4_switch_aware``), or one :func:`engine_kernels.valvetrain.valve_response` call
   per point (double precision) when curves are stored;
-* ``jump_speed`` — :func:`engine_kernels.valve.jump_speed` per design point (scan over
+* ``jump_speed`` — :func:`engine_kernels.valvetrain.jump_speed` per design point (scan over
   geometric speeds, then bisection), at ``angle_step``.
 
 Kinematic responses run only ``tappet`` and ``rocker``. Points sharing the cam and rocker
@@ -26,7 +26,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from engine_kernels import rocker, valve, valve_lanes
+from engine_kernels import valvetrain as valve
+from engine_kernels.valvetrain import lane_batch as valve_lanes
+from engine_kernels.valvetrain import rocker
 from studies.scenes.chain import (
     CACHE_SIZE,
     GRID_UNIT_DEG,
@@ -112,7 +114,7 @@ CHECK_BLOCK = 1 << 18  # design points per block of the stability check
 
 
 def valve_rows(points: dict[str, np.ndarray], idx: np.ndarray | slice) -> np.ndarray:
-    """Kernel parameter rows (``engine_kernels.valve.P_*``, SI) of the design points idx
+    """Kernel parameter rows (``engine_kernels.valvetrain.P_*``, SI) of the design points idx
     (indices or a slice)."""
     first = points["cam_speed"][idx]
     rows = np.zeros((len(first), len(valve.VALVE_PARAM_NAMES)))

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from engine_kernels import valve
+from engine_kernels import valvetrain as valve
 from studies.scenes.valve.parameters import STATUS_NOT_RUN
 from studies.summary_tables import runs_line
 

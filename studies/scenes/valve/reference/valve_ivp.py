@@ -6,7 +6,7 @@ smooth, so a high-order adaptive solver (DOP853 or Radau, rtol ~1e-10) integrate
 to its switch, found as a terminal event, and restarts there in the new mode. Each event only
 fires in the direction that leaves the current mode, so a restart on the switching surface
 does not find the same event again. This is the oracle the fixed-step RK4 kernels of
-``engine_kernels.valve`` are measured against; it is slow and never used in studies.
+``engine_kernels.valvetrain`` are measured against; it is slow and never used in studies.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.interpolate import CubicHermiteSpline
 
-from engine_kernels import valve
+from engine_kernels import valvetrain as valve
 
 Excitation = Callable[[float | np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
 
@@ -81,7 +81,7 @@ def valve_reference(
     """Solve [V2] from ``theta_eval[0]`` to ``theta_eval[-1]`` with event restarts.
 
     excitation : callable θ [rad] → (Y [m], Y' [m/rad], Y'' [m/rad²]).
-    params     : parameter row indexed by ``engine_kernels.valve.P_*`` (SI units).
+    params     : parameter row indexed by ``engine_kernels.valvetrain.P_*`` (SI units).
     theta_eval : increasing cam angles [rad] at which lift [m] and velocity [m/s] are returned.
     method     : ``"DOP853"`` or ``"Radau"``.
     rtol, atol : solver tolerances (atol in m and m/s).

@@ -6,7 +6,7 @@ modulus over the four linear modes of [V2] (contact+seat, contact, seat, free) s
 number of equal sub-steps that keeps ``|h λ| ≤ STEP_RATIO_TARGET`` (2.0, a margin under
 ``RK4_STABILITY_BOUND`` = 2.6); past ``max_substeps`` the case is not integrated and its
 status is ``STATUS_SUBSTEP_LIMIT`` (with the needed count in ``O_SUBSTEPS``). The check of the
-run itself, from the physics, is in :mod:`engine_kernels.valve_observations`.
+run itself, from the physics, is in :mod:`engine_kernels.valvetrain.energy_balance`.
 """
 
 from __future__ import annotations
@@ -14,8 +14,7 @@ from __future__ import annotations
 import math
 
 from engine_kernels._jit import batch, jit, prange
-from engine_kernels.rk4 import stable_substeps
-from engine_kernels.valve_model import (
+from engine_kernels.valvetrain.layout import (
     O_STATUS,
     O_STEP_RATIO,
     O_SUBSTEPS,
@@ -31,8 +30,9 @@ from engine_kernels.valve_model import (
     S_STABILITY_GUARD,
     STATUS_INVALID_INPUT,
     STATUS_SUBSTEP_LIMIT,
-    valve_spectral_radius,
 )
+from engine_kernels.valvetrain.model import valve_spectral_radius
+from engine_kernels.valvetrain.rk4 import stable_substeps
 
 # Sub-steps keep |h λ| at or below this, with a margin under RK4_STABILITY_BOUND: each linear
 # mode is stable up to the bound, but the switching, clipped system still pumps energy at

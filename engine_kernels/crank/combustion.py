@@ -1,6 +1,6 @@
 """Parametric single-zone cylinder-pressure cycle for the ``crank`` scene (SPEC §5).
 
-A four-stroke cycle on the crank-angle grid of :mod:`engine_kernels.crank` (α_j = 4π j/m,
+A four-stroke cycle on the crank-angle grid of :mod:`engine_kernels.crank.kinematics` (α_j = 4π j/m,
 gas-exchange TDC at α = 0, firing TDC at α = 2π):
 
 * intake stroke, 0 ≤ α < π: p = intake pressure p_a;
@@ -28,7 +28,8 @@ from __future__ import annotations
 import math
 
 from engine_kernels._jit import batch, jit, prange
-from engine_kernels.crank import CYCLE_ANGLE, piston_displacement_exact
+from engine_kernels.crank.kinematics import CYCLE_ANGLE
+from engine_kernels.crank.piston import piston_displacement_exact
 
 HEAT_MODE_ENERGY = 0
 """Heat input given as heat released per cycle [J]."""

@@ -5,8 +5,8 @@ angles of V layouts, the free first- and second-order reciprocating forces and m
 layout, the
 periodic interpolation and harmonic amplitude used on the cycle grid, the output columns of the
 multi-cylinder driver and :func:`crank_multicylinder_batch` (summed torque, its harmonic orders
-and the free forces). Parameter columns and conventions are those of :mod:`engine_kernels.crank`;
-the single-cylinder torque comes from :mod:`engine_kernels.crank_forces`.
+and the free forces). Parameter columns and conventions are those of :mod:`engine_kernels.crank.kinematics`;
+the single-cylinder torque comes from :mod:`engine_kernels.crank.forces`.
 """
 
 from __future__ import annotations
@@ -16,7 +16,8 @@ import math
 import numpy as np
 
 from engine_kernels._jit import batch, jit, prange
-from engine_kernels.crank import (
+from engine_kernels.crank.forces import crank_torque_curve
+from engine_kernels.crank.kinematics import (
     ANGULAR_SPEED,
     CRANK_RADIUS,
     CYCLE_ANGLE,
@@ -24,7 +25,6 @@ from engine_kernels.crank import (
     RECIPROCATING_MASS,
     ROD_RATIO,
 )
-from engine_kernels.crank_forces import crank_torque_curve
 
 # Columns of the multi-cylinder output out[n, N_MULTI_OUT].
 MULTI_MEAN_TORQUE = 0

@@ -26,7 +26,7 @@ import math
 import numpy as np
 
 from engine_kernels._jit import batch, jit, prange
-from engine_kernels.rk4 import hermite_slope, hermite_value
+from engine_kernels.valvetrain.rk4 import hermite_slope, hermite_value
 
 PAD_AHEAD = 1
 PAD_BEHIND = -1

@@ -1,4 +1,4 @@
-"""Valve-train model [V1], [V2]: data layout, forces, energy, stiffest mode (SPEC §4).
+"""Valve-train model [V1], [V2]: forces, energy, stiffest mode, excitation (SPEC §4).
 
 Model [V2], in time, with the valve lift y measured from the closed position where the seat
 is pre-compressed by ``δ0 = Ps0/kz``::
@@ -7,11 +7,10 @@ is pre-compressed by ``δ0 = Ps0/kz``::
         + max(0, kz (δ0 − y) − bz ẏ)   while y < δ0        seat; never pulls
         − ks y − Ps0 − γ ẏ
 
-Parameters are rows indexed by the ``P_*`` constants, outputs by the ``O_*`` constants, curves
-by the ``C_*`` constants, integer settings by the ``S_*`` constants (build them with
-:func:`valve_settings`). The excitation is a table of the theoretical valve lift Y(θ) and its
-angle derivatives (rows Y [m], Y' [m/rad], Y'' [m/rad²]) read by :func:`excitation_at`.
-Reference: SPEC §4 and the motorcycle OHC valve-train thesis data quoted there.
+Parameter rows and the other data layouts (``P_*``, ``O_*``, ``C_*``, ``S_*``) are in
+:mod:`engine_kernels.valvetrain.layout`. The excitation is a table of the theoretical valve
+lift Y(θ) and its angle derivatives (rows Y [m], Y' [m/rad], Y'' [m/rad²]) read by
+:func:`excitation_at`. Reference: SPEC §4 and the motorcycle OHC valve-train thesis data quoted there.
 """
 
 from __future__ import annotations
@@ -19,140 +18,28 @@ from __future__ import annotations
 import numpy as np
 
 from engine_kernels._jit import jit, jit_inline
-from engine_kernels.rk4 import hermite_value, oscillator_spectral_radius
-
-P_SPEED = 0
-P_MASS = 1
-P_DRIVE_STIFFNESS = 2
-P_DRIVE_DAMPING = 3
-P_SPRING_RATE = 4
-P_PRELOAD = 5
-P_SEAT_STIFFNESS = 6
-P_SEAT_DAMPING = 7
-P_EXTERNAL_DAMPING = 8
-P_INITIAL_LIFT = 9
-P_INITIAL_VELOCITY = 10
-VALVE_PARAM_NAMES = (
-    "camshaft_speed",
-    "equivalent_mass",
-    "drive_stiffness",
-    "drive_damping",
-    "spring_rate",
-    "spring_preload",
-    "seat_stiffness",
-    "seat_damping",
-    "external_damping",
-    "initial_lift",
-    "initial_velocity",
+from engine_kernels.valvetrain.layout import (
+    P_DRIVE_DAMPING,
+    P_DRIVE_STIFFNESS,
+    P_EXTERNAL_DAMPING,
+    P_MASS,
+    P_PRELOAD,
+    P_SEAT_DAMPING,
+    P_SEAT_STIFFNESS,
+    P_SPEED,
+    P_SPRING_RATE,
 )
-VALVE_PARAM_UNITS = ("rad/s", "kg", "N/m", "N s/m", "N/m", "N", "N/m", "N s/m", "N s/m", "m", "m/s")
-
-O_MAX_LIFT = 0
-O_MAX_VELOCITY = 1
-O_MIN_VELOCITY = 2
-O_MAX_ACCELERATION = 3
-O_MIN_ACCELERATION = 4
-O_JUMP_START = 5
-O_JUMP_DURATION = 6
-O_JUMP_GAP = 7
-O_BOUNCE_COUNT = 8
-O_BOUNCE_HEIGHT = 9
-O_SEATING_VELOCITY = 10
-O_MAX_CONTACT_FORCE = 11
-O_SUBSTEPS = 12
-O_STEP_RATIO = 13
-O_TRANSITIONS = 14
-O_STATUS = 15
-O_ERROR_ESTIMATE = 16
-VALVE_OUTPUT_NAMES = (
-    "max_lift",
-    "max_opening_velocity",
-    "max_closing_velocity",
-    "max_acceleration",
-    "min_acceleration",
-    "jump_start",
-    "jump_duration",
-    "jump_max_gap",
-    "bounce_count",
-    "bounce_height",
-    "seating_velocity",
-    "max_contact_force",
-    "substeps",
-    "step_ratio",
-    "mode_transitions",
-    "status",
-    "error_estimate",
-)
-VALVE_OUTPUT_UNITS = (
-    "m",
-    "m/s",
-    "m/s",
-    "m/s^2",
-    "m/s^2",
-    "rad",
-    "rad",
-    "m",
-    "1",
-    "m",
-    "m/s",
-    "N",
-    "1",
-    "1",
-    "1",
-    "1",
-    "m",
-)
-
-C_LIFT = 0
-C_VELOCITY = 1
-C_ACCELERATION = 2
-C_DRIVE_FORCE = 3
-C_SEAT_FORCE = 4
-VALVE_CURVE_NAMES = ("lift", "velocity", "acceleration", "drive_force", "seat_force")
-VALVE_CURVE_UNITS = ("m", "m/s", "m/s^2", "N", "N")
+from engine_kernels.valvetrain.rk4 import hermite_value, oscillator_spectral_radius
 
 # Constants of the integrator arithmetic, typed float32: exact in both precisions, so a
 # float64 kernel computes the same numbers as with Python floats, while the float32 lane
-# kernel (engine_kernels.valve_lanes) is not promoted to float64 by a literal.
+# kernel (engine_kernels.valvetrain.lanes) is not promoted to float64 by a literal.
 ZERO = np.float32(0.0)
 HALF = np.float32(0.5)
 ONE = np.float32(1.0)
 TWO = np.float32(2.0)
 INF = np.float32(np.inf)
 NAN = np.float32(np.nan)
-
-S_MAX_SUBSTEPS = 0
-S_SWITCH_AWARE = 1
-S_ESTIMATE_ERROR = 2
-S_STABILITY_GUARD = 3
-DEFAULT_MAX_SUBSTEPS = 256
-
-STATUS_OK = 0
-STATUS_SUBSTEP_LIMIT = 1
-STATUS_UNSTABLE = 2
-STATUS_NONFINITE = 3
-STATUS_INVALID_INPUT = 4
-VALVE_STATUS_NAMES = ("ok", "substep_limit", "unstable", "nonfinite", "invalid_input")
-
-
-def valve_settings(
-    max_substeps=DEFAULT_MAX_SUBSTEPS,
-    switch_aware=False,
-    estimate_error=False,
-    stability_guard=True,
-):
-    """Integer settings array for the valve kernels (plain Python, builds the ``S_*`` row).
-
-    max_substeps    : int   Hard cap on RK4 sub-steps per grid step (stability guard).
-    switch_aware    : bool  Locate contact and seat switches inside steps (one-case kernel).
-    estimate_error  : bool  Step-doubling error estimate in ``O_ERROR_ESTIMATE``.
-    stability_guard : bool  False integrates with one sub-step whatever the bound says: only
-                            to demonstrate the physics-based instability detection.
-    """
-    return np.array(
-        [max_substeps, int(switch_aware), int(estimate_error), int(stability_guard)], dtype=np.int64
-    )
-
 
 # Selects for loops over SIMD lanes. Numba's builtin max and min are function calls, and a
 # call inside a lane loop stops it from vectorising, so these are conditional expressions

@@ -1,65 +1,42 @@
 """Valve-train dynamics: single-DOF valve driven through a compliant rocker (SPEC §4).
 
-The model [V1], [V2] and its data layout (``P_*`` parameters, ``O_*`` outputs, ``C_*``
-curves, ``S_*`` settings, status codes) are in :mod:`engine_kernels.valve_model`; this module
-integrates one case at a time and re-exports that public API, so ``engine_kernels.valve`` is
-the one import a caller needs.
+The model [V1], [V2] is in :mod:`engine_kernels.valvetrain.model`, its data layout (``P_*``
+parameters, ``O_*`` outputs, ``C_*`` curves, ``S_*`` settings, status codes) in
+:mod:`engine_kernels.valvetrain.layout`; this module integrates one case at a time. The
+package :mod:`engine_kernels.valvetrain` re-exports the public API of the valve kernels, so
+it is the one import a caller needs.
 
 Integration is fixed-step classic RK4 over a cam-angle grid: the excitation table holds the
 theoretical valve lift Y(θ) and its angle derivatives at half-step spacing (SPEC §9: RK4 step
 0.5° cam, excitation every 0.25°), the time step is ``Δθ/ω`` and ``Ẏ = ω Y'``. The valve
 starts at the initial lift and velocity of the parameter row (normally at rest on the seat).
-The stability guard (:mod:`engine_kernels.valve_guard`) sub-steps or refuses a case before
+The stability guard (:mod:`engine_kernels.valvetrain.guard`) sub-steps or refuses a case before
 integrating it; the running observations and the physics check of the run are in
-:mod:`engine_kernels.valve_observations`; switch-aware stepping (settings
-``switch_aware = 1``) is in :mod:`engine_kernels.valve_switching`. The step-doubling error
+:mod:`engine_kernels.valvetrain.observations`; switch-aware stepping (settings
+``switch_aware = 1``) is in :mod:`engine_kernels.valvetrain.switching`. The step-doubling error
 estimate (``estimate_error = 1``) compares the lift with a run at twice the step (divided by
 2⁴ − 1); it is NaN where the doubled step would break the stability bound.
 
-:mod:`engine_kernels.valve_lanes` runs the same plain-RK4 integration, with the same
+:mod:`engine_kernels.valvetrain.lanes` runs the same plain-RK4 integration, with the same
 arithmetic and results, for blocks of cases in SIMD lanes: about 4× more cases per CPU-second
 at the SPEC §9 step. Reference: SPEC §4 and the thesis data quoted there.
 """
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from engine_kernels._jit import batch, jit, jit_inline, prange
-from engine_kernels.valve_guard import (
-    STEP_RATIO_TARGET,
-    error_estimate_is_stable,
-    prepare_case,
-    stability_substeps,
-    stability_substeps_batch,
-    valid_valve_parameters,
-)
-from engine_kernels.valve_model import (
+from engine_kernels.valvetrain.energy_balance import ENERGY_INTERVAL, observe_energy
+from engine_kernels.valvetrain.guard import error_estimate_is_stable, prepare_case
+from engine_kernels.valvetrain.layout import (
     C_ACCELERATION,
     C_DRIVE_FORCE,
     C_LIFT,
     C_SEAT_FORCE,
     C_VELOCITY,
-    DEFAULT_MAX_SUBSTEPS,
-    O_BOUNCE_COUNT,
-    O_BOUNCE_HEIGHT,
+    N_STATS,
     O_ERROR_ESTIMATE,
-    O_JUMP_DURATION,
-    O_JUMP_GAP,
-    O_JUMP_START,
-    O_MAX_ACCELERATION,
-    O_MAX_CONTACT_FORCE,
-    O_MAX_LIFT,
-    O_MAX_VELOCITY,
-    O_MIN_ACCELERATION,
-    O_MIN_VELOCITY,
-    O_SEATING_VELOCITY,
-    O_STATUS,
-    O_STEP_RATIO,
-    O_SUBSTEPS,
-    O_TRANSITIONS,
     P_DRIVE_DAMPING,
     P_DRIVE_STIFFNESS,
     P_EXTERNAL_DAMPING,
@@ -69,193 +46,29 @@ from engine_kernels.valve_model import (
     P_PRELOAD,
     P_SEAT_DAMPING,
     P_SEAT_STIFFNESS,
-    P_SPEED,
     P_SPRING_RATE,
     S_ESTIMATE_ERROR,
-    S_MAX_SUBSTEPS,
-    S_STABILITY_GUARD,
     S_SWITCH_AWARE,
-    STATUS_INVALID_INPUT,
-    STATUS_NONFINITE,
-    STATUS_OK,
-    STATUS_SUBSTEP_LIMIT,
-    STATUS_UNSTABLE,
-    TWO,
     VALVE_CURVE_NAMES,
-    VALVE_CURVE_UNITS,
-    VALVE_OUTPUT_NAMES,
-    VALVE_OUTPUT_UNITS,
-    VALVE_PARAM_NAMES,
-    VALVE_PARAM_UNITS,
-    VALVE_STATUS_NAMES,
+)
+from engine_kernels.valvetrain.model import (
     drive_push,
-    equivalent_mass,
-    excitation_at,
     excitation_lift_slope,
     specific_acceleration,
     specific_coefficients,
     specific_forces,
-    valve_acceleration,
-    valve_energy,
-    valve_settings,
-    valve_spectral_radius,
 )
-from engine_kernels.valve_observations import (
-    ENERGY_FLOOR_FRACTION,
-    ENERGY_INTERVAL,
-    ENERGY_REST_RISE,
-    ENERGY_SLACK,
-    N_STATS,
+from engine_kernels.valvetrain.observations import (
     TRANSITION_BAND,
     finish_observations,
     nose_position,
     observe_closure,
-    observe_energy,
     observe_valve,
     record_closure_events,
     start_observations,
 )
-from engine_kernels.valve_switching import (
-    SWITCH_OVERSHOOT,
-    SWITCHES_PER_STEP,
-    switch_aware_step,
-)
-
-__all__ = [
-    "C_ACCELERATION",
-    "C_DRIVE_FORCE",
-    "C_LIFT",
-    "C_SEAT_FORCE",
-    "C_VELOCITY",
-    "DEFAULT_MAX_SUBSTEPS",
-    "ENERGY_FLOOR_FRACTION",
-    "ENERGY_INTERVAL",
-    "ENERGY_REST_RISE",
-    "ENERGY_SLACK",
-    "ERROR_ORDER_DIVISOR",
-    "JUMP_AT_LOWER_BOUND",
-    "JUMP_FOUND",
-    "JUMP_NONE_IN_RANGE",
-    "JUMP_RUN_FAILED",
-    "JUMP_STATUS_NAMES",
-    "N_STATS",
-    "O_BOUNCE_COUNT",
-    "O_BOUNCE_HEIGHT",
-    "O_ERROR_ESTIMATE",
-    "O_JUMP_DURATION",
-    "O_JUMP_GAP",
-    "O_JUMP_START",
-    "O_MAX_ACCELERATION",
-    "O_MAX_CONTACT_FORCE",
-    "O_MAX_LIFT",
-    "O_MAX_VELOCITY",
-    "O_MIN_ACCELERATION",
-    "O_MIN_VELOCITY",
-    "O_SEATING_VELOCITY",
-    "O_STATUS",
-    "O_STEP_RATIO",
-    "O_SUBSTEPS",
-    "O_TRANSITIONS",
-    "P_DRIVE_DAMPING",
-    "P_DRIVE_STIFFNESS",
-    "P_EXTERNAL_DAMPING",
-    "P_INITIAL_LIFT",
-    "P_INITIAL_VELOCITY",
-    "P_MASS",
-    "P_PRELOAD",
-    "P_SEAT_DAMPING",
-    "P_SEAT_STIFFNESS",
-    "P_SPEED",
-    "P_SPRING_RATE",
-    "STATUS_INVALID_INPUT",
-    "STATUS_NONFINITE",
-    "STATUS_OK",
-    "STATUS_SUBSTEP_LIMIT",
-    "STATUS_UNSTABLE",
-    "STEP_RATIO_TARGET",
-    "SWITCHES_PER_STEP",
-    "SWITCH_OVERSHOOT",
-    "S_ESTIMATE_ERROR",
-    "S_MAX_SUBSTEPS",
-    "S_STABILITY_GUARD",
-    "S_SWITCH_AWARE",
-    "TRANSITION_BAND",
-    "VALVE_CURVE_NAMES",
-    "VALVE_CURVE_UNITS",
-    "VALVE_OUTPUT_NAMES",
-    "VALVE_OUTPUT_UNITS",
-    "VALVE_PARAM_NAMES",
-    "VALVE_PARAM_UNITS",
-    "VALVE_STATUS_NAMES",
-    "equivalent_mass",
-    "error_estimate_is_stable",
-    "excitation_at",
-    "jump_speed",
-    "prepare_case",
-    "rk4_valve_step",
-    "stability_substeps",
-    "stability_substeps_batch",
-    "valid_valve_parameters",
-    "valve_acceleration",
-    "valve_energy",
-    "valve_response",
-    "valve_response_batch",
-    "valve_settings",
-    "valve_spectral_radius",
-]
-
-ERROR_ORDER_DIVISOR = 15.0
-
-
-@jit_inline
-def rk4_valve_step(
-    lift,
-    velocity,
-    acc,
-    tau,
-    half_tau,
-    sixth_tau,
-    push_mid,
-    push_end,
-    stiffness,
-    damping,
-    spring_rate,
-    preload,
-    seat_stiffness,
-    seat_damping,
-    external_damping,
-    seat_depth,
-):
-    """One classic RK4 step of [V2] from the first-stage acceleration ``acc`` [m/s²].
-
-    tau, half_tau, sixth_tau : float  Time step h, h/2 and h/6 [s] (passed in so the lane
-                                      kernel computes them once per case, not per step).
-    push_mid, push_end       : float  Excitation term ``k'Y + b'Ẏ`` at the half step and the
-                                      end (:func:`engine_kernels.valve_model.drive_push`)
-                                      [m/s²].
-    Coefficients per unit mass as in :func:`engine_kernels.valve_model.specific_forces` and
-    :func:`engine_kernels.valve_model.specific_acceleration`. Returns the lift [m] and
-    velocity [m/s] at the step end. Reference: Hairer, Nørsett & Wanner, *Solving ODEs I*,
-    §II.1.
-    """
-    k, b, ps0, kz, bz = stiffness, damping, preload, seat_stiffness, seat_damping
-    ks, gamma, depth = spring_rate, external_damping, seat_depth
-    p2 = lift + half_tau * velocity
-    v2 = velocity + half_tau * acc
-    drive, seat = specific_forces(p2, v2, push_mid, k, b, ps0, kz, bz)
-    a2 = specific_acceleration(p2, v2, drive, seat, ks, ps0, gamma, depth)
-    p3 = lift + half_tau * v2
-    v3 = velocity + half_tau * a2
-    drive, seat = specific_forces(p3, v3, push_mid, k, b, ps0, kz, bz)
-    a3 = specific_acceleration(p3, v3, drive, seat, ks, ps0, gamma, depth)
-    p4 = lift + tau * v3
-    v4 = velocity + tau * a3
-    drive, seat = specific_forces(p4, v4, push_end, k, b, ps0, kz, bz)
-    a4 = specific_acceleration(p4, v4, drive, seat, ks, ps0, gamma, depth)
-    return (
-        lift + sixth_tau * (velocity + TWO * (v2 + v3) + v4),
-        velocity + sixth_tau * (acc + TWO * (a2 + a3) + a4),
-    )
+from engine_kernels.valvetrain.step import ERROR_ORDER_DIVISOR, rk4_valve_step
+from engine_kernels.valvetrain.switching import switch_aware_step
 
 
 @jit_inline
@@ -554,69 +367,3 @@ def valve_response_batch(excitation, table_step, table_start, params, settings, 
             out[i],
             np.empty((len(VALVE_CURVE_NAMES), 0)),
         )
-
-
-JUMP_FOUND = 0
-JUMP_NONE_IN_RANGE = 1
-JUMP_AT_LOWER_BOUND = 2
-JUMP_RUN_FAILED = 3
-JUMP_STATUS_NAMES = ("found", "none_in_range", "at_lower_bound", "run_failed")
-
-
-@jit
-def jump_speed(
-    excitation,
-    table_step,
-    table_start,
-    params,
-    settings,
-    speed_low,
-    speed_high,
-    scan_points,
-    tolerance,
-):
-    """Lowest camshaft speed at which the valve separates from the drive (SPEC §4).
-
-    Scans ``scan_points`` geometrically spaced speeds from ``speed_low`` to ``speed_high``
-    for the first one with a jump (``O_JUMP_DURATION > 0``), then bisects between it and
-    the previous scan point until the bracket is narrower than ``tolerance`` times its
-    upper end. Returns ``(speed [rad/s], code)`` with code ``JUMP_FOUND``,
-    ``JUMP_NONE_IN_RANGE`` (speed NaN), ``JUMP_AT_LOWER_BOUND`` (separates already at
-    ``speed_low``) or ``JUMP_RUN_FAILED`` (a run did not finish with ``STATUS_OK``).
-
-    params      : 1-D array  Parameter row (``P_*``); its speed entry is ignored.
-    speed_low   : float      Lower end of the search [rad/s].
-    speed_high  : float      Upper end of the search [rad/s].
-    scan_points : int        Number of scan speeds (≥ 2).
-    tolerance   : float      Relative bracket width at which bisection stops [-].
-    Other arguments as in :func:`valve_response`.
-    """
-    work = params.copy()
-    out = np.empty(len(VALVE_OUTPUT_NAMES))
-    no_curves = np.empty((len(VALVE_CURVE_NAMES), 0))
-    below = speed_low
-    above = math.nan
-    for i in range(scan_points):
-        speed = speed_low * (speed_high / speed_low) ** (i / (scan_points - 1))
-        work[P_SPEED] = speed
-        valve_response(excitation, table_step, table_start, work, settings, out, no_curves)
-        if out[O_STATUS] != STATUS_OK:
-            return math.nan, JUMP_RUN_FAILED
-        if out[O_JUMP_DURATION] > 0.0:
-            if i == 0:
-                return speed, JUMP_AT_LOWER_BOUND
-            above = speed
-            break
-        below = speed
-    if math.isnan(above):
-        return math.nan, JUMP_NONE_IN_RANGE
-    while above - below > tolerance * above:
-        work[P_SPEED] = 0.5 * (below + above)
-        valve_response(excitation, table_step, table_start, work, settings, out, no_curves)
-        if out[O_STATUS] != STATUS_OK:
-            return math.nan, JUMP_RUN_FAILED
-        if out[O_JUMP_DURATION] > 0.0:
-            above = work[P_SPEED]
-        else:
-            below = work[P_SPEED]
-    return above, JUMP_FOUND

@@ -1,16 +1,18 @@
 """Slider-crank kinematics: the parameter matrix and piston and rod motion (SPEC §5).
 
 This module holds what every ``crank`` kernel shares — the cycle angle, the kinematics model
-codes and the columns of the parameter matrix — plus the piston kinematics (exact [K1] and
-two-term [K2]–[K4]), the rod angle and its rates, their extremes, and the kinematics batch
-driver. Forces and torque of one cylinder live in :mod:`engine_kernels.crank_forces`;
-multi-cylinder layouts in :mod:`engine_kernels.crank_layout`.
+codes and the columns of the parameter matrix — plus piston motion under the chosen model, its
+extremes, and the kinematics batch driver. The piston formulas (exact [K1] and two-term
+[K2]–[K4]) are in :mod:`engine_kernels.crank.piston`, the rod angle and its rates in
+:mod:`engine_kernels.crank.connecting_rod`. Forces and torque of one cylinder live in
+:mod:`engine_kernels.crank.forces`; multi-cylinder layouts in
+:mod:`engine_kernels.crank.multicylinder`.
 
 Conventions
 -----------
 * Crank angle α [rad] is measured on the crankshaft from the cylinder's TDC, in the direction
   of rotation. The four-stroke cycle spans ``CYCLE_ANGLE`` = 4π (0–720°): gas-exchange TDC at
-  α = 0, firing TDC at α = 2π (the convention of :mod:`engine_kernels.combustion`).
+  α = 0, firing TDC at α = 2π (the convention of :mod:`engine_kernels.crank.combustion`).
 * Curves live on the uniform periodic grid α_j = CYCLE_ANGLE·j/m, j = 0…m−1, so cycle means and
   harmonic orders are plain sums over the grid.
 * Piston displacement x is measured from TDC toward the crank; a piston force P is positive when
@@ -23,9 +25,9 @@ and runs only the drivers its responses need:
 
 * :func:`crank_kinematics_batch` (this module) — piston and rod kinematics, approximation
   errors;
-* :func:`engine_kernels.crank_forces.crank_forces_batch` — gas, inertia, rod, side, tangential,
+* :func:`engine_kernels.crank.forces.crank_forces_batch` — gas, inertia, rod, side, tangential,
   radial forces and torque of one cylinder from a pressure curve;
-* :func:`engine_kernels.crank_layout.crank_multicylinder_batch` — summed torque of a layout, its
+* :func:`engine_kernels.crank.multicylinder.crank_multicylinder_batch` — summed torque of a layout, its
   harmonic orders and the free first- and second-order reciprocating forces.
 """
 
@@ -34,6 +36,22 @@ from __future__ import annotations
 import math
 
 from engine_kernels._jit import batch, jit, prange
+from engine_kernels.crank.connecting_rod import (
+    rod_angle,
+    rod_angle_max,
+    rod_angular_acceleration,
+    rod_angular_acceleration_max,
+    rod_angular_velocity,
+    rod_angular_velocity_max,
+)
+from engine_kernels.crank.piston import (
+    piston_acceleration_exact,
+    piston_acceleration_two_term,
+    piston_displacement_exact,
+    piston_displacement_two_term,
+    piston_velocity_exact,
+    piston_velocity_two_term,
+)
 
 CYCLE_ANGLE = 4.0 * math.pi
 """Crank angle of one four-stroke cycle [rad] (720°)."""
@@ -131,128 +149,6 @@ KINEMATICS_CURVES = (
 KINEMATICS_CURVE_UNITS = ("m", "m/s", "m/s^2", "rad", "rad/s", "rad/s^2")
 
 
-# --- kinematics -----------------------------------------------------------------------------
-
-
-@jit
-def rod_angle(rod_ratio, crank_angle):
-    """Connecting-rod angle β from sin β = λ sin α  [K1].
-
-    rod_ratio  : float  λ = r/l [-].
-    crank_angle: float  Crank angle α from TDC [rad].
-    Reference: SPEC §5 [K1].
-    """
-    return math.asin(rod_ratio * math.sin(crank_angle))
-
-
-@jit
-def piston_displacement_exact(crank_radius, rod_ratio, crank_angle):
-    """Exact piston displacement from TDC x = r(1 − cos α) + l(1 − cos β)  [K1].
-
-    Written as x = r[(1 − cos α) + λ sin²α/(1 + cos β)], which needs no division by λ and keeps
-    full precision as λ → 0.
-
-    crank_radius: float  r [m].
-    rod_ratio   : float  λ = r/l [-].
-    crank_angle : float  α from TDC [rad].
-    Reference: SPEC §5 [K1].
-    """
-    s = math.sin(crank_angle)
-    cos_beta = math.sqrt(1.0 - (rod_ratio * s) ** 2)
-    return crank_radius * ((1.0 - math.cos(crank_angle)) + rod_ratio * s * s / (1.0 + cos_beta))
-
-
-@jit
-def piston_velocity_exact(crank_radius, rod_ratio, angular_speed, crank_angle):
-    """Exact piston velocity ẋ = rω[sin α + (λ/2) sin 2α / cos β] = rω sin(α + β)/cos β  [K1].
-
-    crank_radius : float  r [m].
-    rod_ratio    : float  λ = r/l [-].
-    angular_speed: float  Crank speed ω [rad/s].
-    crank_angle  : float  α from TDC [rad].
-    Reference: SPEC §5 [K1], differentiated once in time at constant ω.
-    """
-    s = math.sin(crank_angle)
-    cos_beta = math.sqrt(1.0 - (rod_ratio * s) ** 2)
-    return (
-        crank_radius
-        * angular_speed
-        * (s + 0.5 * rod_ratio * math.sin(2.0 * crank_angle) / cos_beta)
-    )
-
-
-@jit
-def piston_acceleration_exact(crank_radius, rod_ratio, angular_speed, crank_angle):
-    """Exact piston acceleration ẍ = rω²[cos α + λ cos 2α / cos β + λ³ sin²2α/(4 cos³β)]  [K1].
-
-    crank_radius : float  r [m].
-    rod_ratio    : float  λ = r/l [-].
-    angular_speed: float  Crank speed ω [rad/s].
-    crank_angle  : float  α from TDC [rad].
-    Reference: SPEC §5 [K1], differentiated twice in time at constant ω.
-    """
-    s = math.sin(crank_angle)
-    cos_beta = math.sqrt(1.0 - (rod_ratio * s) ** 2)
-    s2 = math.sin(2.0 * crank_angle)
-    return (
-        crank_radius
-        * angular_speed**2
-        * (
-            math.cos(crank_angle)
-            + rod_ratio * math.cos(2.0 * crank_angle) / cos_beta
-            + rod_ratio**3 * s2 * s2 / (4.0 * cos_beta**3)
-        )
-    )
-
-
-@jit
-def piston_displacement_two_term(crank_radius, rod_ratio, crank_angle):
-    """Two-term piston displacement x = r[(1 − cos α) + (λ/4)(1 − cos 2α)]  [K2].
-
-    crank_radius: float  r [m].
-    rod_ratio   : float  λ = r/l [-].
-    crank_angle : float  α from TDC [rad].
-    Reference: SPEC §5 [K2].
-    """
-    return crank_radius * (
-        (1.0 - math.cos(crank_angle)) + 0.25 * rod_ratio * (1.0 - math.cos(2.0 * crank_angle))
-    )
-
-
-@jit
-def piston_velocity_two_term(crank_radius, rod_ratio, angular_speed, crank_angle):
-    """Two-term piston velocity v = rω(sin α + (λ/2) sin 2α)  [K3].
-
-    crank_radius : float  r [m].
-    rod_ratio    : float  λ = r/l [-].
-    angular_speed: float  Crank speed ω [rad/s].
-    crank_angle  : float  α from TDC [rad].
-    Reference: SPEC §5 [K3].
-    """
-    return (
-        crank_radius
-        * angular_speed
-        * (math.sin(crank_angle) + 0.5 * rod_ratio * math.sin(2.0 * crank_angle))
-    )
-
-
-@jit
-def piston_acceleration_two_term(crank_radius, rod_ratio, angular_speed, crank_angle):
-    """Two-term piston acceleration a = rω²(cos α + λ cos 2α)  [K4].
-
-    crank_radius : float  r [m].
-    rod_ratio    : float  λ = r/l [-].
-    angular_speed: float  Crank speed ω [rad/s].
-    crank_angle  : float  α from TDC [rad].
-    Reference: SPEC §5 [K4].
-    """
-    return (
-        crank_radius
-        * angular_speed**2
-        * (math.cos(crank_angle) + rod_ratio * math.cos(2.0 * crank_angle))
-    )
-
-
 @jit
 def piston_motion(model, crank_radius, rod_ratio, angular_speed, crank_angle):
     """Piston displacement, velocity and acceleration (x, ẋ, ẍ) under the chosen model.
@@ -338,66 +234,6 @@ def piston_acceleration_min(model, crank_radius, rod_ratio, angular_speed):
     inner = piston_motion(model, crank_radius, rod_ratio, angular_speed, 0.5 * (lo + hi))[2]
     at_bdc = piston_motion(model, crank_radius, rod_ratio, angular_speed, math.pi)[2]
     return min(inner, at_bdc)
-
-
-@jit
-def rod_angular_velocity(rod_ratio, angular_speed, crank_angle):
-    """Rod angular velocity β̇ = λω cos α / cos β  [K1].
-
-    rod_ratio    : float  λ = r/l [-].
-    angular_speed: float  Crank speed ω [rad/s].
-    crank_angle  : float  α from TDC [rad].
-    Reference: SPEC §5.
-    """
-    s = math.sin(crank_angle)
-    return rod_ratio * angular_speed * math.cos(crank_angle) / math.sqrt(1.0 - (rod_ratio * s) ** 2)
-
-
-@jit
-def rod_angular_acceleration(rod_ratio, angular_speed, crank_angle):
-    """Rod angular acceleration β̈ = −λ(1 − λ²) ω² sin α / cos³β  [K1].
-
-    rod_ratio    : float  λ = r/l [-].
-    angular_speed: float  Crank speed ω [rad/s].
-    crank_angle  : float  α from TDC [rad].
-    Reference: SPEC §5 (exact, constant ω).
-    """
-    s = math.sin(crank_angle)
-    cos_beta = math.sqrt(1.0 - (rod_ratio * s) ** 2)
-    return -rod_ratio * (1.0 - rod_ratio**2) * angular_speed**2 * s / cos_beta**3
-
-
-@jit
-def rod_angle_max(rod_ratio):
-    """Largest rod angle β_max = asin λ, at α = 90° (and −β_max at 270°).
-
-    rod_ratio: float  λ = r/l [-]. Reference: SPEC §5.
-    """
-    return math.asin(rod_ratio)
-
-
-@jit
-def rod_angular_velocity_max(rod_ratio, angular_speed):
-    """Largest rod angular velocity λω, at α = 0° (and −λω at 180°).
-
-    rod_ratio    : float  λ = r/l [-].
-    angular_speed: float  Crank speed ω [rad/s].
-    Reference: SPEC §5.
-    """
-    return rod_ratio * angular_speed
-
-
-@jit
-def rod_angular_acceleration_max(rod_ratio, angular_speed):
-    """Largest rod angular acceleration magnitude λω²/√(1 − λ²), at α = 90° and 270°.
-
-    |β̈| = λ(1 − λ²)ω² sin α/(1 − λ² sin²α)^{3/2} grows with sin α, so it peaks at sin α = ±1.
-
-    rod_ratio    : float  λ = r/l [-].
-    angular_speed: float  Crank speed ω [rad/s].
-    Reference: SPEC §5.
-    """
-    return rod_ratio * angular_speed**2 / math.sqrt(1.0 - rod_ratio**2)
 
 
 @jit

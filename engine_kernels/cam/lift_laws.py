@@ -32,7 +32,7 @@ LAW_POLY345 = 4
 LAW_POLY4567 = 5
 LAW_POLYDYNE = 6
 LAW_SIX_SEGMENT = 7
-"""Not a rise law: the multi-segment acceleration profile of ``cam_profile`` (SPEC §2)."""
+"""Not a rise law: the multi-segment acceleration profile of ``multi_segment`` (SPEC §2)."""
 
 N_RISE_LAWS = 7
 """Rise-law codes are 0 … N_RISE_LAWS - 1."""

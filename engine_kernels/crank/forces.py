@@ -4,7 +4,7 @@ This module holds the gas force [F1], the reciprocating inertia forces of first 
 [F2], the rotating inertia force [F3], the rod, side, tangential and radial forces, the
 single-cylinder torque curve, the output columns of the force driver and
 :func:`crank_forces_batch`. It reads the parameter matrix and kinematics of
-:mod:`engine_kernels.crank`, whose module docstring states the sign conventions.
+:mod:`engine_kernels.crank.kinematics`, whose module docstring states the sign conventions.
 """
 
 from __future__ import annotations
@@ -14,7 +14,8 @@ import math
 import numpy as np
 
 from engine_kernels._jit import batch, jit, prange
-from engine_kernels.crank import (
+from engine_kernels.crank.connecting_rod import rod_angle
+from engine_kernels.crank.kinematics import (
     ANGULAR_SPEED,
     BORE,
     CRANK_RADIUS,
@@ -25,7 +26,6 @@ from engine_kernels.crank import (
     ROD_RATIO,
     ROTATING_MASS,
     piston_motion,
-    rod_angle,
 )
 
 # Columns of the single-cylinder force output out[n, N_FORCE_OUT].
@@ -202,7 +202,7 @@ def piston_force(model, row, pressure, crank_angle):
 
     model      : int         MODEL_EXACT (Pj = −mj ẍ exact) or MODEL_TWO_TERM (first + second
                              order only).
-    row        : float[:]    One row of ``params`` (columns of :mod:`engine_kernels.crank`).
+    row        : float[:]    One row of ``params`` (columns of :mod:`engine_kernels.crank.kinematics`).
     pressure   : float       Cylinder pressure p [Pa].
     crank_angle: float       α [rad].
     Returns (Pg [N], Pj [N]). Reference: SPEC §5.
@@ -239,7 +239,7 @@ def crank_torque_curve(row, pressure, torque_out):
 def crank_forces_batch(params, pressure, out, curves_out):
     """Single-cylinder forces and torque over the four-stroke cycle  [F1]–[F3].
 
-    params    : float[n, N_PARAMS]   Case parameters (columns of :mod:`engine_kernels.crank`).
+    params    : float[n, N_PARAMS]   Case parameters (columns of :mod:`engine_kernels.crank.kinematics`).
     pressure  : float[n_p, m]        Cylinder pressure [Pa] on α_j = CYCLE_ANGLE·j/m; n_p = n
                                      (one curve per case) or 1 (shared by every case).
     out       : float[n, N_FORCE_OUT]  Scalars, columns FORCE_* (names FORCE_OUTPUTS); the

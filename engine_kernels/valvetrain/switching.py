@@ -6,7 +6,8 @@ switching function's sign is compared with the current mode, and a cubic Hermite
 switching function through its values and time derivatives looks inside the step for a dip
 past zero; the earliest crossing is located (seeded on the Hermite, refined by re-taking the
 RK4 sub-step to it, aiming just past the root so it is not found again), the mode switches
-and the step is finished. This restores fourth order (SPEC §4, "Integrators and the
+and the step is finished (the motion in a fixed mode is in
+:mod:`engine_kernels.valvetrain.modes`). This restores fourth order (SPEC §4, "Integrators and the
 speed–accuracy trade") and makes step doubling a usable error estimate.
 """
 
@@ -15,8 +16,9 @@ from __future__ import annotations
 import math
 
 from engine_kernels._jit import jit
-from engine_kernels.rk4 import hermite_value
-from engine_kernels.valve_model import excitation_at
+from engine_kernels.valvetrain.model import excitation_at
+from engine_kernels.valvetrain.modes import consistent_modes, mode_acceleration, mode_step
+from engine_kernels.valvetrain.rk4 import hermite_value
 
 SWITCH_OVERSHOOT = 1e-9
 SWITCHES_PER_STEP = 8
@@ -94,98 +96,6 @@ def _cubic_root(g0, d0, g1, d1):
 
 
 @jit
-def _mode_acceleration(
-    lift,
-    velocity,
-    drive_lift,
-    drive_velocity,
-    contact,
-    seated,
-    inv_mass,
-    k,
-    b,
-    ks,
-    ps0,
-    kz,
-    bz,
-    gamma,
-    depth,
-):
-    """Acceleration with the contact and seat modes held fixed (no clipping) [m/s²]."""
-    force = -ks * lift - ps0 - gamma * velocity
-    if contact:
-        force += k * (drive_lift - lift) + b * (drive_velocity - velocity)
-    if seated:
-        force += kz * (depth - lift) - bz * velocity
-    return force * inv_mass
-
-
-@jit
-def _mode_step(
-    excitation,
-    table_step,
-    start,
-    stop,
-    speed,
-    lift,
-    velocity,
-    contact,
-    seated,
-    inv_mass,
-    k,
-    b,
-    ks,
-    ps0,
-    kz,
-    bz,
-    gamma,
-    depth,
-):
-    """One RK4 step in a fixed mode between two table positions; returns the end state."""
-    tau = (stop - start) * table_step / speed
-    y0, yd0 = excitation_at(excitation, table_step, start, speed)
-    ym, ydm = excitation_at(excitation, table_step, 0.5 * (start + stop), speed)
-    y1, yd1 = excitation_at(excitation, table_step, stop, speed)
-    a1 = _mode_acceleration(
-        lift, velocity, y0, yd0, contact, seated, inv_mass, k, b, ks, ps0, kz, bz, gamma, depth
-    )
-    p2 = lift + 0.5 * tau * velocity
-    v2 = velocity + 0.5 * tau * a1
-    a2 = _mode_acceleration(
-        p2, v2, ym, ydm, contact, seated, inv_mass, k, b, ks, ps0, kz, bz, gamma, depth
-    )
-    p3 = lift + 0.5 * tau * v2
-    v3 = velocity + 0.5 * tau * a2
-    a3 = _mode_acceleration(
-        p3, v3, ym, ydm, contact, seated, inv_mass, k, b, ks, ps0, kz, bz, gamma, depth
-    )
-    p4 = lift + tau * v3
-    v4 = velocity + tau * a3
-    a4 = _mode_acceleration(
-        p4, v4, y1, yd1, contact, seated, inv_mass, k, b, ks, ps0, kz, bz, gamma, depth
-    )
-    return (
-        lift + tau / 6.0 * (velocity + 2.0 * v2 + 2.0 * v3 + v4),
-        velocity + tau / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4),
-    )
-
-
-@jit
-def _consistent_modes(
-    lift, velocity, drive_lift, drive_velocity, contact, seated, k, b, kz, bz, depth
-):
-    """Modes implied by the state; an exact zero keeps the current mode."""
-    drive = k * (drive_lift - lift) + b * (drive_velocity - velocity)
-    if drive != 0.0:
-        contact = drive > 0.0
-    gap = depth - lift
-    seat = kz * gap - bz * velocity
-    if gap != 0.0 and seat != 0.0:
-        seated = gap > 0.0 and seat > 0.0
-    return contact, seated
-
-
-@jit
 def _guard_values(
     excitation,
     table_step,
@@ -214,7 +124,7 @@ def _guard_values(
         * speed
         * (excitation[2, index] + s * (excitation[2, index + 1] - excitation[2, index]))
     )
-    acc = _mode_acceleration(
+    acc = mode_acceleration(
         lift,
         velocity,
         drive_lift,
@@ -274,11 +184,11 @@ def switch_aware_step(
     start, stop: float      Table positions of the step [-] (table intervals from node 0).
     speed      : float      Camshaft speed ω [rad/s].
     lift, velocity : float  State at ``start`` [m], [m/s].
-    Coefficients as in :func:`engine_kernels.valve_model.valve_acceleration`. Returns the end
+    Coefficients as in :func:`engine_kernels.valvetrain.model.valve_acceleration`. Returns the end
     state and the number of located switches (at most ``SWITCHES_PER_STEP``).
     """
     drive_lift, drive_velocity = excitation_at(excitation, table_step, start, speed)
-    contact, seated = _consistent_modes(
+    contact, seated = consistent_modes(
         lift, velocity, drive_lift, drive_velocity, False, lift < depth, k, b, kz, bz, depth
     )
     position = start
@@ -286,7 +196,7 @@ def switch_aware_step(
     for _ in range(SWITCHES_PER_STEP + 1):
         span = stop - position
         tau = span * table_step / speed
-        new_lift, new_velocity = _mode_step(
+        new_lift, new_velocity = mode_step(
             excitation,
             table_step,
             position,
@@ -364,7 +274,7 @@ def switch_aware_step(
         fraction = min(first + SWITCH_OVERSHOOT, 1.0)
         for _newton in range(4):
             target = position + fraction * span
-            trial_lift, trial_velocity = _mode_step(
+            trial_lift, trial_velocity = mode_step(
                 excitation,
                 table_step,
                 position,
@@ -413,7 +323,7 @@ def switch_aware_step(
         velocity = trial_velocity
         switches += 1
         drive_lift, drive_velocity = excitation_at(excitation, table_step, position, speed)
-        new_contact, new_seated = _consistent_modes(
+        new_contact, new_seated = consistent_modes(
             lift, velocity, drive_lift, drive_velocity, contact, seated, k, b, kz, bz, depth
         )
         if new_contact == contact and new_seated == seated:

@@ -1,4 +1,4 @@
-"""Batch drivers of the `cam` scene: one design case per ``prange`` iteration (SPEC §2, §8).
+"""Cam kinematics batch drivers and the parameter columns of the `cam` scene (SPEC §2, §8).
 
 Each case is a row of ``params[n, N_PARAMS]`` (float64, SI, columns P_*); six-segment shapes are
 rows of ``shapes[n, 6]`` (int64) and polydyne coefficients rows of ``coeffs[n, NCOEF]``. The
@@ -9,7 +9,9 @@ drivers are separate so a study computes only what its responses need:
 3. ``cam_geometry_batch``              curvature, lubrication coefficient, entrainment;
 4. ``cam_loads_batch``                 contact force, Hertz stress, spring margin, EHL film.
 
-Output columns are named by the K_*, G_*, L_* constants and the *_NAMES / *_UNITS tuples (in
+Drivers 1 and 2 are in this module, 3 and 4 (and their G_*, L_* columns) in
+:mod:`engine_kernels.cam.loads`; one design case per ``prange`` iteration. Output columns are
+named by the K_*, G_*, L_* constants and the *_NAMES / *_UNITS tuples (in
 column order). Design criteria come out as margins and 1.0/0.0 flags: a concave or cusped cam
 gives a negative minimum radius, infinite stress and flags 0 — numbers, never an exception.
 """
@@ -21,19 +23,9 @@ import math
 import numpy as np
 
 from engine_kernels._jit import batch, jit, prange
-from engine_kernels.cam import (
-    contact_force,
-    effective_modulus,
-    entrainment_velocity,
-    film_thickness_dowson_higginson,
-    fullness_coefficient,
-    hertz_line_contact_stress,
-    lubrication_coefficient,
-    radius_of_curvature,
-    relative_film_thickness,
-    spring_margin,
-)
-from engine_kernels.cam_profile import (
+from engine_kernels.cam.contact import fullness_coefficient
+from engine_kernels.cam.lift_laws import LAW_SIX_SEGMENT, N_RISE_LAWS, rise_return_cam
+from engine_kernels.cam.multi_segment import (
     D_CLOSURE_RESIDUAL,
     D_EVENT_HALF_WIDTH,
     D_INPUT_VALID,
@@ -44,7 +36,6 @@ from engine_kernels.cam_profile import (
     multi_segment_cam,
     ramp_layout,
 )
-from engine_kernels.lift_laws import LAW_SIX_SEGMENT, N_RISE_LAWS, rise_return_cam
 
 P_LAW = 0
 P_CAM_SPEED = 1
@@ -173,68 +164,6 @@ fullness follows SPEC §2 over the whole event (ramps included); working_fullnes
 ratio for the lift above the ramp over the working part only, ∫(h - Hr) dθ over |θ| <= W
 divided by (h_max - Hr)·2W — the fullness of the valve opening once the lash is taken up."""
 
-G_MIN_RADIUS = 0
-G_RADIUS_MARGIN = 1
-G_RADIUS_OK = 2
-G_MAX_LUBRICATION = 3
-G_MIN_LUBRICATION = 4
-G_MIN_FILM_RATIO = 5
-G_MAX_ENTRAINMENT = 6
-N_GEO = 7
-GEOMETRY_NAMES = (
-    "min_radius",
-    "radius_margin",
-    "radius_ok",
-    "max_lubrication_coefficient",
-    "min_lubrication_coefficient",
-    "min_relative_film_thickness",
-    "max_entrainment_velocity",
-)
-GEOMETRY_UNITS = ("m", "m", "1", "1", "1", "1", "m/s")
-"""radius_margin = min rho - limit, radius_ok = margin > 0; the lubrication coefficient and
-relative film thickness are taken within ±nose_window of the nose."""
-GC_RADIUS = 0
-GC_LUBRICATION = 1
-GC_ENTRAINMENT = 2
-GC_FILM_RATIO = 3
-N_GEO_CURVES = 4
-GEOMETRY_CURVE_NAMES = (
-    "radius_of_curvature",
-    "lubrication_coefficient",
-    "entrainment_velocity",
-    "relative_film_thickness",
-)
-GEOMETRY_CURVE_UNITS = ("m", "1", "m/s", "1")
-
-L_MAX_FORCE = 0
-L_MIN_FORCE = 1
-L_MAX_STRESS = 2
-L_STRESS_MARGIN = 3
-L_STRESS_OK = 4
-L_SPRING_MARGIN = 5
-L_SPRING_OK = 6
-L_MIN_FILM = 7
-N_LOAD = 8
-LOAD_NAMES = (
-    "max_contact_force",
-    "min_contact_force",
-    "max_contact_stress",
-    "stress_margin",
-    "stress_ok",
-    "spring_margin",
-    "spring_ok",
-    "min_film_thickness",
-)
-LOAD_UNITS = ("N", "N", "Pa", "Pa", "1", "1", "1", "m")
-"""stress_margin = limit - max stress, stress_ok = margin ≥ 0; spring_ok = margin > limit;
-min_film_thickness (Dowson-Higginson) within ±nose_window of the nose."""
-LC_FORCE = 0
-LC_STRESS = 1
-LC_FILM = 2
-N_LOAD_CURVES = 3
-LOAD_CURVE_NAMES = ("contact_force", "contact_stress", "film_thickness")
-LOAD_CURVE_UNITS = ("N", "Pa", "m")
-
 
 @jit
 def half_widths(params, i):
@@ -254,7 +183,7 @@ def half_widths(params, i):
 
 
 @jit
-def _nose_index(theta):
+def nose_index(theta):
     """Grid index closest to the nose (used when the nose window holds no grid point)."""
     best = 0
     for j in range(theta.shape[0]):
@@ -264,7 +193,7 @@ def _nose_index(theta):
 
 
 @jit
-def _invalid_case(curves, i):
+def invalid_case(curves, i):
     """True when case ``i`` has NaN curves (input flagged invalid by the kinematics)."""
     for c in range(curves.shape[1]):
         for j in range(curves.shape[2]):
@@ -278,11 +207,11 @@ def cam_kinematics_batch(params, shapes, coeffs, theta, curves_out, diag_out):
     """Lift curves and profile diagnostics for every case (SPEC §2).
 
     params    : array  (n, N_PARAMS) case parameters, SI (see PARAM_NAMES/PARAM_UNITS).
-    shapes    : array  (n, 6) int64 six-segment shape codes (SHAPE_* of ``cam_profile``).
+    shapes    : array  (n, 6) int64 six-segment shape codes (SHAPE_* of ``multi_segment``).
     coeffs    : array  (n, NCOEF) polydyne coefficients [-].
     theta     : array  (m,) cam angles from the nose [rad].
     curves_out: array  (n, 4, m) output h [m], h' [m/rad], h'' [m/rad²], h''' [m/rad³].
-    diag_out  : array  (n, N_DIAG) output, ``cam_profile.DIAG_NAMES``; for rise laws closure
+    diag_out  : array  (n, N_DIAG) output, ``multi_segment.DIAG_NAMES``; for rise laws closure
                        residual and raw nose velocity 0, scales 1, flags 1, unscaled working
                        lift H and event half-width β.
 
@@ -334,7 +263,7 @@ def cam_kinematic_responses_batch(params, theta, curves, out):
     out   : array  (n, N_KIN) output, columns KINEMATIC_NAMES (units KINEMATIC_UNITS).
     """
     for i in prange(params.shape[0]):
-        if _invalid_case(curves, i):
+        if invalid_case(curves, i):
             out[i, :] = np.nan
             continue
         working, event = half_widths(params, i)
@@ -371,136 +300,3 @@ def cam_kinematic_responses_batch(params, theta, curves, out):
         rise = max_lift - base
         valid = rise > 0.0 and working > 0.0
         out[i, K_WORKING_FULLNESS] = working_area / (rise * 2.0 * working) if valid else 0.0
-
-
-@batch
-def cam_geometry_batch(params, theta, curves, out, curves_out):
-    """Curvature and lubrication responses per case (SPEC [C1]-[C4]).
-
-    params    : array  (n, N_PARAMS) case parameters, SI.
-    theta     : array  (m,) cam angles from the nose [rad].
-    curves    : array  (n, 4, m) lift curves from ``cam_kinematics_batch``.
-    out       : array  (n, N_GEO) output, columns GEOMETRY_NAMES (units GEOMETRY_UNITS).
-    curves_out: array  (n, 4, m) output radius of curvature [m], lubrication coefficient [-],
-                       entrainment velocity [m/s], relative film thickness [-]; last
-                       dimension 0 to skip.
-
-    The nose window is |θ| ≤ P_NOSE_WINDOW, or the grid point nearest the nose if it holds
-    none.
-    """
-    nose = _nose_index(theta)
-    store = curves_out.shape[2] > 0
-    for i in prange(params.shape[0]):
-        if _invalid_case(curves, i):
-            out[i, :] = np.nan
-            if store:
-                curves_out[i, :, :] = np.nan
-            continue
-        speed = params[i, P_CAM_SPEED]
-        r0 = params[i, P_BASE_RADIUS]
-        window = params[i, P_NOSE_WINDOW]
-        min_radius = math.inf
-        max_lub = -math.inf
-        min_lub = math.inf
-        min_film = math.inf
-        max_entrain = 0.0
-        for j in range(theta.shape[0]):
-            h = curves[i, 0, j]
-            h2 = curves[i, 2, j]
-            rho = radius_of_curvature(r0, h, h2)
-            lub = lubrication_coefficient(r0, h, h2)
-            entrain = entrainment_velocity(speed, r0, h, h2)
-            film = relative_film_thickness(lub)
-            min_radius = min(min_radius, rho)
-            max_entrain = max(max_entrain, abs(entrain))
-            if abs(theta[j]) <= window or j == nose:
-                max_lub = max(max_lub, lub)
-                min_lub = min(min_lub, lub)
-                min_film = min(min_film, film)
-            if store:
-                curves_out[i, GC_RADIUS, j] = rho
-                curves_out[i, GC_LUBRICATION, j] = lub
-                curves_out[i, GC_ENTRAINMENT, j] = entrain
-                curves_out[i, GC_FILM_RATIO, j] = film
-        margin = min_radius - params[i, P_MIN_RADIUS_LIMIT]
-        out[i, G_MIN_RADIUS] = min_radius
-        out[i, G_RADIUS_MARGIN] = margin
-        out[i, G_RADIUS_OK] = 1.0 if margin > 0.0 else 0.0
-        out[i, G_MAX_LUBRICATION] = max_lub
-        out[i, G_MIN_LUBRICATION] = min_lub
-        out[i, G_MIN_FILM_RATIO] = min_film
-        out[i, G_MAX_ENTRAINMENT] = max_entrain
-
-
-@batch
-def cam_loads_batch(params, theta, curves, out, curves_out):
-    """Contact-load responses per case (SPEC §2, [C5]).
-
-    params    : array  (n, N_PARAMS) case parameters, SI.
-    theta     : array  (m,) cam angles from the nose [rad].
-    curves    : array  (n, 4, m) lift curves from ``cam_kinematics_batch``.
-    out       : array  (n, N_LOAD) output, columns LOAD_NAMES (units LOAD_UNITS).
-    curves_out: array  (n, 3, m) output contact force [N], Hertz stress [Pa], minimum film
-                       thickness [m]; last dimension 0 to skip.
-
-    A concave or cusped cam (radius of curvature ≤ 0 under load) gives max stress +inf, stress
-    margin -inf and stress_ok 0; its film thickness is 0 there (see
-    ``film_thickness_dowson_higginson``).
-    """
-    nose = _nose_index(theta)
-    store = curves_out.shape[2] > 0
-    for i in prange(params.shape[0]):
-        if _invalid_case(curves, i):
-            out[i, :] = np.nan
-            if store:
-                curves_out[i, :, :] = np.nan
-            continue
-        speed = params[i, P_CAM_SPEED]
-        r0 = params[i, P_BASE_RADIUS]
-        width = params[i, P_CAM_WIDTH]
-        preload = params[i, P_SPRING_PRELOAD]
-        rate = params[i, P_SPRING_RATE]
-        mass = params[i, P_EQUIVALENT_MASS]
-        window = params[i, P_NOSE_WINDOW]
-        modulus = effective_modulus(
-            params[i, P_E1], params[i, P_NU1], params[i, P_E2], params[i, P_NU2]
-        )
-        max_force = -math.inf
-        min_force = math.inf
-        max_stress = 0.0
-        min_film = math.inf
-        for j in range(theta.shape[0]):
-            h = curves[i, 0, j]
-            h2 = curves[i, 2, j]
-            rho = radius_of_curvature(r0, h, h2)
-            force = contact_force(preload, rate, mass, speed, h, h2)
-            stress = hertz_line_contact_stress(force, modulus, width, rho)
-            max_force = max(max_force, force)
-            min_force = min(min_force, force)
-            max_stress = max(max_stress, stress)
-            in_window = abs(theta[j]) <= window or j == nose
-            if in_window or store:
-                film = film_thickness_dowson_higginson(
-                    rho,
-                    entrainment_velocity(speed, r0, h, h2),
-                    force / width,
-                    params[i, P_VISCOSITY],
-                    params[i, P_PRESSURE_VISCOSITY],
-                    modulus,
-                )
-                if in_window:
-                    min_film = min(min_film, film)
-                if store:
-                    curves_out[i, LC_FORCE, j] = force
-                    curves_out[i, LC_STRESS, j] = stress
-                    curves_out[i, LC_FILM, j] = film
-        margin = spring_margin(curves[i, 0], curves[i, 2], preload, rate, mass, speed)
-        stress_margin = params[i, P_STRESS_LIMIT] - max_stress
-        out[i, L_MAX_FORCE] = max_force
-        out[i, L_MIN_FORCE] = min_force
-        out[i, L_MAX_STRESS] = max_stress
-        out[i, L_STRESS_MARGIN] = stress_margin
-        out[i, L_STRESS_OK] = 1.0 if stress_margin >= 0.0 else 0.0
-        out[i, L_SPRING_MARGIN] = margin
-        out[i, L_SPRING_OK] = 1.0 if margin > params[i, P_SPRING_MARGIN_LIMIT] else 0.0
-        out[i, L_MIN_FILM] = min_film

@@ -1,0 +1,367 @@
+"""Valve dynamics [V2] stepped for a block of cases in SIMD lanes (SPEC §4, STYLE "Hot integrators").
+
+Same model, plain fixed-step RK4, observations and arithmetic as
+:func:`engine_kernels.valvetrain.integrator.valve_response` (no switch location, no curves),
+so both give the same numbers, ``LANES`` cases at a time; the batch drivers that group cases
+into blocks are in :mod:`engine_kernels.valvetrain.lane_batch`. Every grid step reads the
+shared excitation once and then runs loops over the lanes: one observes the grid point, one
+takes the RK4 step (two loops run faster than one fused loop, which runs out of registers).
+Sub-stepped blocks also follow the seat phase at every sub-step point, where a landing on a
+stiff seat cannot hide. Only when some lane's seat phase changed (first closure, a bounce)
+does a scalar loop record it.
+
+Per-lane data (coefficients per unit mass, state, observations) are rows of one flat array,
+row ``r`` of lane ``l`` at ``r·LANES + l``: with compile-time row offsets the compiler can
+prove that rows never overlap. What else keeps the lane loops vectorised (checked in
+tests/engine_kernels/test_valve_lanes.py): every helper called in them is inlined by Numba
+(``jit_inline``) and takes scalars or this array but calls nothing itself (Numba's builtin
+``max``/``min`` are calls: ``model.larger`` and friends are selects), and no row is loaded
+under a condition.
+
+Precision follows the excitation table: a float64 table gives the numbers of the one-case
+kernel; a float32 table runs the lanes in single precision, twice the lanes per vector (8
+instead of 4 per AVX2 register, 16 instead of 8 per AVX-512 one; the stability guard, the
+coefficients and the outputs stay float64; sub-steps interpolate the excitation in float64).
+At the default 0.5° step the single-precision round-off is orders of magnitude below the RK4
+error (tests/engine_kernels/test_valve_lanes.py).
+"""
+
+from __future__ import annotations
+
+from engine_kernels._jit import jit, jit_inline
+from engine_kernels.valvetrain.energy_balance import ENERGY_INTERVAL, observe_energy
+from engine_kernels.valvetrain.layout import (
+    P_INITIAL_LIFT,
+    P_INITIAL_VELOCITY,
+)
+from engine_kernels.valvetrain.model import (
+    drive_push,
+    excitation_lift_slope,
+    specific_acceleration,
+    specific_forces,
+)
+from engine_kernels.valvetrain.observations import (
+    nose_position,
+    observe_closure,
+    observe_valve,
+    record_closure_events,
+    start_observations,
+)
+from engine_kernels.valvetrain.step import rk4_valve_step
+
+LANES = 32
+
+# Rows of the flat per-block array, followed by the N_STATS observation rows. Coefficients
+# are per unit mass (see engine_kernels.valvetrain.model.specific_coefficients).
+R_K = 0
+R_B = 1
+R_KS = 2
+R_PS0 = 3
+R_KZ = 4
+R_BZ = 5
+R_GAMMA = 6
+R_DEPTH = 7
+R_SPEED = 8
+R_B_SPEED = 9
+R_BAND = 10
+R_MASS = 11
+R_TAU = 12
+R_HALF_TAU = 13
+R_SIXTH_TAU = 14
+R_TIME_STEP = 15
+R_LIFT = 16
+R_VELOCITY = 17
+R_ACC = 18
+R_PREV_LIFT = 19
+R_PREV_VELOCITY = 20
+R_DIFFERENCE = 21
+R_ANGLE = 22
+N_LANE_ROWS = 23
+R_STATS = N_LANE_ROWS * LANES
+
+
+@jit_inline
+def _lane_point(data, l, drive_lift, slope):
+    """State of lane ``l`` and its forces at a point of excitation Y [m], Y' [m/rad].
+
+    Returns lift [m], velocity [m/s], drive and seat forces per unit mass before clipping
+    [N/kg] (``specific_forces``) and the acceleration [m/s²] (``specific_acceleration``).
+    """
+    lift = data[R_LIFT * LANES + l]
+    velocity = data[R_VELOCITY * LANES + l]
+    drive, seat, acc = _lane_forces(data, l, lift, velocity, drive_lift, slope)
+    return lift, velocity, drive, seat, acc
+
+
+@jit_inline
+def _lane_forces(data, l, lift, velocity, drive_lift, slope):
+    """Forces and acceleration of lane ``l`` in state (lift [m], velocity [m/s]) (_lane_point)."""
+    push = drive_push(drive_lift, slope, data[R_K * LANES + l], data[R_B_SPEED * LANES + l])
+    drive, seat = specific_forces(
+        lift,
+        velocity,
+        push,
+        data[R_K * LANES + l],
+        data[R_B * LANES + l],
+        data[R_PS0 * LANES + l],
+        data[R_KZ * LANES + l],
+        data[R_BZ * LANES + l],
+    )
+    acc = specific_acceleration(
+        lift,
+        velocity,
+        drive,
+        seat,
+        data[R_KS * LANES + l],
+        data[R_PS0 * LANES + l],
+        data[R_GAMMA * LANES + l],
+        data[R_DEPTH * LANES + l],
+    )
+    return drive, seat, acc
+
+
+@jit_inline
+def _lane_step(data, l, lift, velocity, acc, ym, sm, y1, s1):
+    """RK4 step of lane ``l`` from its first-stage ``acc``; excitation Y [m], Y' [m/rad]."""
+    k = data[R_K * LANES + l]
+    b_speed = data[R_B_SPEED * LANES + l]
+    lift, velocity = rk4_valve_step(
+        lift,
+        velocity,
+        acc,
+        data[R_TAU * LANES + l],
+        data[R_HALF_TAU * LANES + l],
+        data[R_SIXTH_TAU * LANES + l],
+        drive_push(ym, sm, k, b_speed),
+        drive_push(y1, s1, k, b_speed),
+        k,
+        data[R_B * LANES + l],
+        data[R_KS * LANES + l],
+        data[R_PS0 * LANES + l],
+        data[R_KZ * LANES + l],
+        data[R_BZ * LANES + l],
+        data[R_GAMMA * LANES + l],
+        data[R_DEPTH * LANES + l],
+    )
+    data[R_LIFT * LANES + l] = lift
+    data[R_VELOCITY * LANES + l] = velocity
+
+
+@jit
+def _start_lanes(data, angle, drive_lift, slope):
+    """First grid point of every lane: acceleration into ``R_ACC``, observations started."""
+    for l in range(LANES):
+        lift, velocity, drive, seat, acc = _lane_point(data, l, drive_lift, slope)
+        data[R_ACC * LANES + l] = acc
+        start_observations(
+            data,
+            R_STATS + l,
+            LANES,
+            angle,
+            lift,
+            velocity,
+            acc,
+            drive_lift,
+            data[R_SPEED * LANES + l] * slope,
+            drive,
+            seat,
+            data[R_DEPTH * LANES + l],
+        )
+
+
+@jit
+def _observe_lanes(data, angle, drive_lift, slope, past_nose):
+    """Grid point of every lane: acceleration into ``R_ACC``, observations updated.
+
+    Returns True if the seat phase of some lane changed (``record_closure_events``): a flag,
+    not a count, so no 64-bit integer in the loop halves the float32 vector width.
+    """
+    changed = False
+    for l in range(LANES):
+        lift, velocity, drive, seat, acc = _lane_point(data, l, drive_lift, slope)
+        data[R_ACC * LANES + l] = acc
+        event = observe_valve(
+            data,
+            R_STATS + l,
+            LANES,
+            angle,
+            lift,
+            velocity,
+            acc,
+            drive_lift,
+            data[R_SPEED * LANES + l] * slope,
+            drive,
+            seat,
+            data[R_DEPTH * LANES + l],
+            data[R_BAND * LANES + l],
+            past_nose,
+        )
+        changed |= event
+    return changed
+
+
+@jit
+def _record_events_lanes(data, prev_drive_lift, prev_slope):
+    """Record closure and bounce events of every lane (scalar; only after an event).
+
+    prev_drive_lift, prev_slope : Y [m] and Y' [m/rad] at the previous (sub-)step point,
+    where the state in ``_PREV_*`` was.
+    """
+    for l in range(LANES):
+        lift = data[R_PREV_LIFT * LANES + l]
+        velocity = data[R_PREV_VELOCITY * LANES + l]
+        _, _, acc = _lane_forces(data, l, lift, velocity, prev_drive_lift, prev_slope)
+        record_closure_events(
+            data, R_STATS + l, LANES, lift, velocity, acc, data[R_DEPTH * LANES + l]
+        )
+
+
+@jit
+def _energy_lanes(data, drive_lift, slope):
+    """Energy checks of every lane at a grid point (``observe_energy``)."""
+    for l in range(LANES):
+        lift, velocity, drive, _, _ = _lane_point(data, l, drive_lift, slope)
+        observe_energy(
+            data,
+            R_STATS + l,
+            LANES,
+            data[R_TIME_STEP * LANES + l],
+            lift,
+            velocity,
+            drive_lift,
+            data[R_SPEED * LANES + l] * slope,
+            drive,
+            data[R_K * LANES + l],
+            data[R_KS * LANES + l],
+            data[R_PS0 * LANES + l],
+            data[R_KZ * LANES + l],
+            data[R_DEPTH * LANES + l],
+        )
+
+
+@jit
+def _step_lanes(data, ym, sm, y1, s1):
+    """RK4 grid step of every lane from the acceleration in ``R_ACC``.
+
+    Keeps the state it starts from in ``_PREV_*`` (for ``record_closure_events``).
+    """
+    for l in range(LANES):
+        lift = data[R_LIFT * LANES + l]
+        velocity = data[R_VELOCITY * LANES + l]
+        data[R_PREV_LIFT * LANES + l] = lift
+        data[R_PREV_VELOCITY * LANES + l] = velocity
+        _lane_step(data, l, lift, velocity, data[R_ACC * LANES + l], ym, sm, y1, s1)
+
+
+@jit
+def _substep_lanes(data, ya, sa, ym, sm, yb, sb):
+    """RK4 sub-step of every lane; excitation at its start, middle and end.
+
+    Keeps the state it starts from in ``_PREV_*`` (for ``record_closure_events``).
+    """
+    for l in range(LANES):
+        lift, velocity, _, _, acc = _lane_point(data, l, ya, sa)
+        data[R_PREV_LIFT * LANES + l] = lift
+        data[R_PREV_VELOCITY * LANES + l] = velocity
+        _lane_step(data, l, lift, velocity, acc, ym, sm, yb, sb)
+
+
+@jit
+def _observe_seat_lanes(data, past_nose):
+    """Seat phase of every lane at an RK4 sub-step point inside a grid step.
+
+    A landing on a stiff seat can begin and end between grid points, never between sub-step
+    points (see ``engine_kernels.valvetrain.integrator._observe_substep``). ``past_nose``: the point is at or
+    past the cam's nose.
+    Returns True if the seat phase of some lane changed (``observe_closure``).
+    """
+    changed = False
+    for l in range(LANES):
+        changed |= observe_closure(
+            data,
+            R_STATS + l,
+            LANES,
+            data[R_LIFT * LANES + l],
+            data[R_DEPTH * LANES + l],
+            past_nose,
+        )
+    return changed
+
+
+@jit
+def _record_lanes(data, trace, n, compare):
+    """Record the lift of every lane at grid point ``n`` or compare with a finer trace."""
+    for l in range(LANES):
+        lift = data[R_LIFT * LANES + l]
+        if compare:
+            difference = abs(lift - trace[2 * n, l])
+            data[R_DIFFERENCE * LANES + l] = max(data[R_DIFFERENCE * LANES + l], difference)
+        else:
+            trace[n, l] = lift
+
+
+@jit
+def lane_pass(excitation, table_step, table_start, half, substeps, params, cases, data, trace):
+    """Integrate all lanes of a block at RK4 grid step ``2·half·table_step``.
+
+    substeps : int  RK4 sub-steps per grid step, the same for every lane of the block.
+    cases    : 1-D int64  Parameter rows of the lanes (their initial state).
+    Records the lift per grid point in ``trace`` (grid point × lane) when ``half`` is 1 or,
+    when it is 2, keeps the largest difference from that trace in ``R_DIFFERENCE``.
+    """
+    n_steps = (excitation.shape[1] - 1) // (2 * half)
+    grid_step = 2.0 * half * table_step
+    record = trace.shape[0] > 0
+    compare = half == 2
+    for l in range(LANES):
+        speed = data[R_SPEED * LANES + l]
+        tau = grid_step / speed / substeps
+        data[R_TAU * LANES + l] = tau
+        data[R_HALF_TAU * LANES + l] = 0.5 * tau
+        data[R_SIXTH_TAU * LANES + l] = tau / 6.0
+        data[R_TIME_STEP * LANES + l] = grid_step / speed
+        data[R_LIFT * LANES + l] = params[cases[l], P_INITIAL_LIFT]
+        data[R_VELOCITY * LANES + l] = params[cases[l], P_INITIAL_VELOCITY]
+        data[R_DIFFERENCE * LANES + l] = 0.0
+    prev_drive_lift, prev_slope = excitation[0, 0], excitation[1, 0]  # read once n > 0
+    nose = nose_position(excitation)
+    for n in range(n_steps + 1):
+        node = 2 * half * n
+        drive_lift = excitation[0, node]
+        slope = excitation[1, node]
+        data[R_ANGLE * LANES] = table_start + n * grid_step
+        angle = data[R_ANGLE * LANES]  # in the block's precision
+        if record:
+            _record_lanes(data, trace, n, compare)
+        if n == 0:
+            _start_lanes(data, angle, drive_lift, slope)
+        elif _observe_lanes(data, angle, drive_lift, slope, node >= nose):
+            _record_events_lanes(data, prev_drive_lift, prev_slope)
+        if n % ENERGY_INTERVAL == 0 or n == n_steps:
+            _energy_lanes(data, drive_lift, slope)
+        if n == n_steps:
+            break
+        prev_drive_lift, prev_slope = drive_lift, slope
+        if substeps == 1:
+            _step_lanes(
+                data,
+                excitation[0, node + half],
+                excitation[1, node + half],
+                excitation[0, node + 2 * half],
+                excitation[1, node + 2 * half],
+            )
+            continue
+        for j in range(substeps):
+            position = node + 2.0 * half * j / substeps
+            ya, sa = excitation_lift_slope(excitation, table_step, position)
+            if j > 0:
+                if _observe_seat_lanes(data, position >= nose):
+                    _record_events_lanes(data, prev_drive_lift, prev_slope)
+                prev_drive_lift, prev_slope = ya, sa
+            ym, sm = excitation_lift_slope(
+                excitation, table_step, node + 2.0 * half * (j + 0.5) / substeps
+            )
+            yb, sb = excitation_lift_slope(
+                excitation, table_step, node + 2.0 * half * (j + 1) / substeps
+            )
+            _substep_lanes(data, ya, sa, ym, sm, yb, sb)
