@@ -39,13 +39,12 @@ from __future__ import annotations
 import re
 import tomllib
 from dataclasses import dataclass, field
-from difflib import get_close_matches
 from pathlib import Path
 from typing import Any
 
+from studies.definition_values import Factor, ValueParser, suggest
 from studies.scenes import SCENES, Scene, get_scene
-from studies.scenes.base import is_finite_number, short
-from studies.units import UNITS, canonical, compatible_units
+from studies.scenes.base import short
 
 CATALOG = Path(__file__).parent / "catalog"
 TOP_LEVEL_KEYS = {
@@ -61,7 +60,6 @@ TOP_LEVEL_KEYS = {
     "sense",
 }
 DESIGN_KEYS = {"type", "error_columns", "interactions", "pool"}
-FACTOR_KEYS = {"levels", "units", "column", "base"}
 NAME_PATTERN = re.compile(r"[A-Za-z0-9_-]+")  # whole names only: used with fullmatch
 MAX_NAME_LENGTH = 64  # the name is a folder name; file systems allow 255 bytes
 
@@ -75,17 +73,6 @@ class StudyError(ValueError):
         lines = "\n".join(f"  - {p}" for p in problems)
         n = len(problems)
         super().__init__(f"study {source} has {n} problem{'s' if n != 1 else ''}:\n{lines}")
-
-
-@dataclass(frozen=True)
-class Factor:
-    """A varied parameter: its levels in ``units``, optional array column and sweep base."""
-
-    name: str
-    levels: tuple[Any, ...]
-    units: str
-    column: int | None = None
-    base: Any = None
 
 
 @dataclass(frozen=True)
@@ -156,18 +143,15 @@ def parse_study(text: str, source: str = "<string>") -> tuple[StudyDefinition | 
     return _Parser(data, text, source).parse()
 
 
-class _Parser:
+class _Parser(ValueParser):
     def __init__(self, data: dict[str, Any], text: str, source: str) -> None:
+        super().__init__()
         self.data, self.text, self.source = data, text, source
-        self.problems: list[str] = []
-
-    def problem(self, msg: str) -> None:
-        self.problems.append(msg)
 
     def parse(self) -> tuple[StudyDefinition | None, list[str]]:
         d = self.data
         for key in sorted(set(d) - TOP_LEVEL_KEYS):
-            self.problem(f"unknown top-level key {key!r}{_suggest(key, TOP_LEVEL_KEYS)}")
+            self.problem(f"unknown top-level key {key!r}{suggest(key, TOP_LEVEL_KEYS)}")
         name = self._string("name", required=True)
         if name and not NAME_PATTERN.fullmatch(name):
             self.problem(f"name = {short(name)} may only contain letters, digits, '_' and '-'")
@@ -264,7 +248,7 @@ class _Parser:
             self.problem(f"design = {short(design)} must be a string or a [design] table")
             return "full_factorial", []
         for key in sorted(set(design) - DESIGN_KEYS):
-            self.problem(f"unknown key {key!r} in [design]{_suggest(key, DESIGN_KEYS)}")
+            self.problem(f"unknown key {key!r} in [design]{suggest(key, DESIGN_KEYS)}")
         kind = design.get("type", "full_factorial")
         if not isinstance(kind, str):
             self.problem(f"design type = {short(kind)} must be a string")
@@ -297,7 +281,7 @@ class _Parser:
             if name not in factors:
                 self.problem(
                     f"[design] interactions name {name!r}, which is not a factor"
-                    f"{_suggest(name, factors)}"
+                    f"{suggest(name, factors)}"
                 )
         return [(a, b) for a, b in pairs if a in factors and b in factors]
 
@@ -316,7 +300,7 @@ class _Parser:
         for name in names:
             if name not in factors:
                 self.problem(
-                    f"[design] pool names {name!r}, which is not a factor{_suggest(name, factors)}"
+                    f"[design] pool names {name!r}, which is not a factor{suggest(name, factors)}"
                 )
         return tuple(names)
 
@@ -326,7 +310,7 @@ class _Parser:
         names = [r.name for r in scene.responses]
         for r in responses:
             if scene.response(r) is None:
-                self.problem(f"unknown response {r!r} for scene {scene.name!r}{_suggest(r, names)}")
+                self.problem(f"unknown response {r!r} for scene {scene.name!r}{suggest(r, names)}")
         curve_names = [c.name for c in scene.curves]
         for c in curves:
             if scene.curve(c) is None:
@@ -337,125 +321,3 @@ class _Parser:
                 self.problem(f"[sense] names {r!r}, which is not in responses")
             if s not in ("smaller", "larger"):
                 self.problem(f"[sense] {r} = {short(s)} must be 'smaller' or 'larger'")
-
-    def _parameters(self, scene: Scene, raw: dict[str, Any]) -> dict[str, tuple[Any, str]]:
-        out: dict[str, tuple[Any, str]] = {}
-        for name, given in raw.items():
-            value = given
-            param = scene.parameter(name)
-            if param is None:
-                known = [p.name for p in scene.parameters]
-                self.problem(
-                    f"unknown parameter {name!r} for scene {scene.name!r}{_suggest(name, known)}"
-                )
-                continue
-            units = param.units
-            if isinstance(given, dict):
-                extra = set(given) - {"value", "units"}
-                if extra or "value" not in given:
-                    self.problem(f"parameter {name} must be a number or {{value = …, units = …}}")
-                    continue
-                units = given.get("units", param.units)
-                value = given["value"]
-            if not self._units_ok(f"parameter {name}", param, units):
-                continue
-            problem = param.check(value, None if param.kind != "number" else units)
-            if problem:
-                self.problem(problem)
-                continue
-            out[name] = (value, canonical(units) if isinstance(units, str) else units)
-        return out
-
-    def _units_ok(self, what: str, param: Any, units: Any) -> bool:
-        if param.kind != "number":
-            if isinstance(units, str) and canonical(units) == param.units:
-                return True
-            self.problem(f"{what}: units = {short(units)} do not apply to a {param.kind} parameter")
-            return False
-        if not isinstance(units, str) or units not in UNITS:
-            self.problem(f"{what}: unknown units {short(units)} (expected {param.units!r})")
-            return False
-        if UNITS[units].dimension != UNITS[param.units].dimension:
-            compatible = sorted(compatible_units(param.units))
-            self.problem(
-                f"{what}: units {units!r} measure {UNITS[units].dimension}, but {param.name} is "
-                f"measured in {UNITS[param.units].dimension} (use one of {', '.join(compatible)})"
-            )
-            return False
-        return True
-
-    def _factors(self, scene: Scene, raw: dict[str, Any], design: str) -> list[Factor]:
-        factors: list[Factor] = []
-        for name, spec in raw.items():
-            param = scene.parameter(name)
-            if param is None:
-                known = [p.name for p in scene.parameters]
-                self.problem(
-                    f"unknown factor {name!r}: scene {scene.name!r} has no such parameter"
-                    f"{_suggest(name, known)}"
-                )
-                continue
-            if not isinstance(spec, dict):
-                self.problem(f"factor {name} must be a table with 'levels' (got {short(spec)})")
-                continue
-            for key in sorted(set(spec) - FACTOR_KEYS):
-                self.problem(f"unknown key {key!r} in factor {name}{_suggest(key, FACTOR_KEYS)}")
-            if param.kind in ("vector", "text"):
-                self.problem(f"{name} is a {param.kind} parameter and cannot be a factor")
-                continue
-            units = spec.get("units", param.units)
-            levels = spec.get("levels")
-            ok = self._units_ok(f"factor {name}", param, units)
-            if not isinstance(levels, list) or not levels:
-                self.problem(f"factor {name} has no levels: give a non-empty list 'levels'")
-                continue
-            dups = sorted({repr(v) for v in levels if levels.count(v) > 1})
-            if dups:
-                self.problem(f"factor {name} has duplicate levels: {', '.join(dups)}")
-            if ok:
-                for v in levels:
-                    problem = param.check(v, units if param.kind == "number" else None)
-                    if problem:
-                        self.problem(f"factor {name}: {problem}")
-            column = spec.get("column")
-            if column is not None and not (is_finite_number(column) and isinstance(column, int)):
-                self.problem(
-                    f"factor {name}: column = {short(column)} must be a whole number ≥ 1 "
-                    "(an array column)"
-                )
-                column = None
-            elif column is not None and column < 1:
-                self.problem(f"factor {name}: column = {column} must be a whole number ≥ 1")
-                column = None
-            base = spec.get("base")
-            if base is not None and (isinstance(base, bool) or base not in levels):
-                self.problem(
-                    f"factor {name}: base = {short(base)} must be one of its levels {short(levels)}"
-                )
-                base = None
-            if column is not None and design in ("full_factorial", "sweep"):
-                self.problem(f"factor {name}: 'column' only applies to orthogonal-array designs")
-            factors.append(Factor(name, tuple(levels), canonical(str(units)), column, base))
-        return factors
-
-    def _settings(self, scene: Scene, raw: dict[str, Any]) -> dict[str, Any]:
-        settings = {s.name: s.default for s in scene.settings}
-        for name, value in raw.items():
-            setting = scene.setting(name)
-            if setting is None:
-                known = [s.name for s in scene.settings]
-                self.problem(
-                    f"unknown setting {name!r} for scene {scene.name!r}{_suggest(name, known)}"
-                )
-                continue
-            problem = setting.check(value)
-            if problem:
-                self.problem(f"setting {problem}")
-                continue
-            settings[name] = value
-        return settings
-
-
-def _suggest(name: str, known: Any) -> str:
-    close = get_close_matches(name, list(known), n=1)
-    return f" (did you mean {close[0]!r}?)" if close else ""
