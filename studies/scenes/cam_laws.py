@@ -21,6 +21,8 @@ LAWS = (
     "table",
 )
 SHAPES = ("lin", "sin_full", "sin_left", "fillet")
+MIN_RISE_ANGLE_DEG = 1.0
+"""Smallest rise angle a study may give: below it a law is no cam, and h″ = H f″/β² overflows."""
 SRC = "12V150 source"
 
 _SEG_WIDTHS = (4.5, 11.0, 4.5, 5.0, 22.0, 23.0)

@@ -10,7 +10,7 @@ parameter says where its default comes from.
 from __future__ import annotations
 
 from studies.scenes.base import Curve, CurveAxis, Parameter, Response
-from studies.scenes.cam_laws import LAWS, segment_parameters
+from studies.scenes.cam_laws import LAWS, MIN_RISE_ANGLE_DEG, segment_parameters
 
 SPEC3, SYNTHETIC = "SPEC §3", "synthetic cam (SPEC §3 suggestion)"
 ROCKER_LAWS = tuple(law for law in LAWS if law != "table")
@@ -44,10 +44,10 @@ CAM_LAW_PARAMETERS: tuple[Parameter, ...] = (
         "rise_angle",
         "degree",
         70.0,
-        "rise duration β of a standard law; working half-event of the six-segment profile",
-        0.0,
+        "rise duration β of a standard law; working half-event of the six-segment profile "
+        "(from 1°: shorter rises are not cams, and their h″ ∝ 1/β² overflows)",
+        MIN_RISE_ANGLE_DEG,
         150.0,
-        True,
         source=SYNTHETIC,
     ),
     Parameter(

@@ -7,7 +7,7 @@ values the source does not give; ``source`` on each parameter says which is whic
 from __future__ import annotations
 
 from studies.scenes.base import Curve, CurveAxis, Parameter, Response
-from studies.scenes.cam_laws import LAWS, segment_parameters
+from studies.scenes.cam_laws import LAWS, MIN_RISE_ANGLE_DEG, segment_parameters
 
 SRC, ASSUMED = "12V150 source", "assumption"
 
@@ -41,10 +41,10 @@ PARAMETERS: tuple[Parameter, ...] = (
         "rise_angle",
         "degree",
         70.0,
-        "rise duration β of a standard law; working half-event of the six-segment profile",
-        0.0,
+        "rise duration β of a standard law; working half-event of the six-segment profile "
+        "(from 1°: shorter rises are not cams, and their h″ ∝ 1/β² overflows)",
+        MIN_RISE_ANGLE_DEG,
         170.0,
-        True,
         source=SRC,
     ),
     Parameter(
