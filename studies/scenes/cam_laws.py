@@ -31,6 +31,50 @@ _SEG_ACCELS = (55.0, 55.0, 0.0, -12.5, -22.5, -24.5)
 _SEG_AMPS = (0.0, 12.5, 0.0, 7.5, 0.0, 5.5)
 
 
+def rise_angle_parameter(maximum: float, source: str) -> Parameter:
+    """The rise angle β of a standard law (working half-event of the six-segment profile)."""
+    return Parameter(
+        "rise_angle",
+        "degree",
+        70.0,
+        "rise duration β of a standard law; working half-event of the six-segment profile "
+        "(from 1°: shorter rises are not cams, and their h″ ∝ 1/β² overflows)",
+        MIN_RISE_ANGLE_DEG,
+        maximum,
+        source=source,
+    )
+
+
+def ramp_parameters(
+    height: float, width: float, velocity: float, source: str
+) -> tuple[Parameter, ...]:
+    """The six-segment profile's lash take-up ramp: height [mm], width [degree] and end
+    velocity [mm/rad] (defaults per scene; 0 height = no ramp)."""
+    return (
+        Parameter(
+            "ramp_height",
+            "mm",
+            height,
+            "lash take-up ramp height (0 = no ramp)",
+            0.0,
+            5.0,
+            source=source,
+        ),
+        Parameter(
+            "ramp_width",
+            "degree",
+            width,
+            "ramp width (constant acceleration, then velocity)",
+            0.0,
+            90.0,
+            source=source,
+        ),
+        Parameter(
+            "ramp_velocity", "mm/rad", velocity, "ramp end velocity", 0.0, 100.0, source=source
+        ),
+    )
+
+
 def segment_parameters() -> tuple[Parameter, ...]:
     out: list[Parameter] = []
     for k in range(6):

@@ -10,7 +10,12 @@ parameter says where its default comes from.
 from __future__ import annotations
 
 from studies.scenes.base import Curve, CurveAxis, Parameter, Response
-from studies.scenes.cam_laws import LAWS, MIN_RISE_ANGLE_DEG, segment_parameters
+from studies.scenes.cam_laws import (
+    LAWS,
+    ramp_parameters,
+    rise_angle_parameter,
+    segment_parameters,
+)
 
 SPEC3, SYNTHETIC = "SPEC §3", "synthetic cam (SPEC §3 suggestion)"
 ROCKER_LAWS = tuple(law for law in LAWS if law != "table")
@@ -40,35 +45,8 @@ CAM_LAW_PARAMETERS: tuple[Parameter, ...] = (
         True,
         source=SPEC3,
     ),
-    Parameter(
-        "rise_angle",
-        "degree",
-        70.0,
-        "rise duration β of a standard law; working half-event of the six-segment profile "
-        "(from 1°: shorter rises are not cams, and their h″ ∝ 1/β² overflows)",
-        MIN_RISE_ANGLE_DEG,
-        150.0,
-        source=SYNTHETIC,
-    ),
-    Parameter(
-        "ramp_height",
-        "mm",
-        0.0,
-        "six-segment lash take-up ramp height on the tappet (0 = no ramp)",
-        0.0,
-        5.0,
-        source=SYNTHETIC,
-    ),
-    Parameter("ramp_width", "degree", 0.0, "six-segment ramp width", 0.0, 90.0, source=SYNTHETIC),
-    Parameter(
-        "ramp_velocity",
-        "mm/rad",
-        0.0,
-        "six-segment ramp end velocity",
-        0.0,
-        100.0,
-        source=SYNTHETIC,
-    ),
+    rise_angle_parameter(150.0, SYNTHETIC),
+    *ramp_parameters(0.0, 0.0, 0.0, SYNTHETIC),
     *_SEGMENTS,
     Parameter(
         "polydyne_coefficients",

@@ -92,6 +92,7 @@ def test_what_check_passes_runs_and_what_it_refuses_run_refuses(
         cf_units.Unit(u)  # raises ValueError on a string UDUNITS cannot parse
     assert (folder / "analysis.txt").stat().st_size > 0
     assert (folder / "report.md").stat().st_size > 0
+    assert list(folder.glob("*.png")), "no figure rendered"  # each drawn with warnings as errors
 
 
 def test_every_unit_is_udunits_with_our_factor_to_si() -> None:

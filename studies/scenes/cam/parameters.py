@@ -7,7 +7,12 @@ values the source does not give; ``source`` on each parameter says which is whic
 from __future__ import annotations
 
 from studies.scenes.base import Curve, CurveAxis, Parameter, Response
-from studies.scenes.cam_laws import LAWS, MIN_RISE_ANGLE_DEG, segment_parameters
+from studies.scenes.cam_laws import (
+    LAWS,
+    ramp_parameters,
+    rise_angle_parameter,
+    segment_parameters,
+)
 
 SRC, ASSUMED = "12V150 source", "assumption"
 
@@ -37,35 +42,8 @@ PARAMETERS: tuple[Parameter, ...] = (
         100.0,
         source=SRC,
     ),
-    Parameter(
-        "rise_angle",
-        "degree",
-        70.0,
-        "rise duration β of a standard law; working half-event of the six-segment profile "
-        "(from 1°: shorter rises are not cams, and their h″ ∝ 1/β² overflows)",
-        MIN_RISE_ANGLE_DEG,
-        170.0,
-        source=SRC,
-    ),
-    Parameter(
-        "ramp_height",
-        "mm",
-        0.25,
-        "lash take-up ramp height (0 = no ramp)",
-        0.0,
-        5.0,
-        source=ASSUMED,
-    ),
-    Parameter(
-        "ramp_width",
-        "degree",
-        15.0,
-        "ramp width (constant acceleration, then velocity)",
-        0.0,
-        90.0,
-        source=ASSUMED,
-    ),
-    Parameter("ramp_velocity", "mm/rad", 1.2, "ramp end velocity", 0.0, 100.0, source=ASSUMED),
+    rise_angle_parameter(170.0, SRC),
+    *ramp_parameters(0.25, 15.0, 1.2, ASSUMED),
     *segment_parameters(),
     Parameter(
         "polydyne_coefficients",
