@@ -60,8 +60,10 @@ class Condition:
             raise ValueError(msg)
         field = "num" if isinstance(self.value, float) else "text"
         return (
-            "EXISTS (SELECT 1 FROM run_values v WHERE v.run_id = runs.run_id AND v.name = ? "
-            f"AND v.{field} {op} ?)",
+            (
+                "EXISTS (SELECT 1 FROM run_values v WHERE v.run_id = runs.run_id AND v.name = ? "
+                f"AND v.{field} {op} ?)"
+            ),
             [self.name, self.value],
         )
 
@@ -160,7 +162,7 @@ def with_values(outputs: Path, rows: list[dict[str, Any]]) -> list[dict[str, Any
                 entry[summary] = value
             else:
                 values[f"{v['kind']}s"][v["name"]] = value
-        row |= values
+        row.update(values)
     return rows
 
 
@@ -192,8 +194,10 @@ def as_csv(rows: list[dict[str, Any]]) -> str:
 
 def as_table(rows: list[dict[str, Any]]) -> str:
     lines = [
-        f"{'run id':<30} {'study':<20} {'status':<11} {'runs':>6} {'compile s':>10} "
-        f"{'run s':>8}  {'commit':<16} tags"
+        (
+            f"{'run id':<30} {'study':<20} {'status':<11} {'runs':>6} {'compile s':>10} "
+            f"{'run s':>8}  {'commit':<16} tags"
+        )
     ]
     for r in rows:
         dirty = "+dirty" if r["git_dirty"] else ""

@@ -191,9 +191,11 @@ def _response_values(results: Path) -> list[Value]:
                 continue
             values = ds[name].values[np.isfinite(ds[name].values)]
             units = str(ds[name].attrs.get("units", ""))
-            for summary, fn in zip(SUMMARIES, (np.min, np.mean, np.max), strict=True):
-                x = float(fn(values)) if values.size else math.nan
-                rows.append(_value("response", f"{name}.{summary}", x, units))
+            summaries = (
+                (values.min(), values.mean(), values.max()) if values.size else (math.nan,) * 3
+            )
+            for summary, x in zip(SUMMARIES, summaries, strict=True):
+                rows.append(_value("response", f"{name}.{summary}", float(x), units))
         return rows
 
 
