@@ -107,6 +107,11 @@ def _parser() -> argparse.ArgumentParser:
         metavar="ADDRESS",
         help="run chunks on a Dask cluster (scheduler address, or 'local')",
     )
+    run.add_argument(
+        "--mlflow",
+        metavar="URI",
+        help="also log the run to MLflow (tracking URI, e.g. file:./mlruns; optional extra)",
+    )
     run.set_defaults(func=_cmd_run)
 
     check = sub.add_parser("check", help="validate a study without running it")
@@ -195,7 +200,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from studies.study_run import resume_run, run_plan
 
     if args.resume:
-        _report(resume_run(args.resume, args.outputs, progress=not args.no_progress))
+        result = resume_run(args.resume, args.outputs, progress=not args.no_progress)
+        _report(result, args.mlflow)
         return 0
     if args.all == bool(args.study):
         print("error: name one study or use --all", file=sys.stderr)
@@ -225,7 +231,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
             not args.no_progress,
             executor,
         )
-        _report(result)
+        _report(result, args.mlflow)
         incomplete += result.record.points_without_value > 0
     if args.strict and incomplete:
         print(
@@ -236,7 +242,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _report(result: RunResult) -> None:
+def _report(result: RunResult, mlflow_uri: str | None = None) -> None:
     r = result.record
     t = r.timings
     print(
@@ -251,6 +257,10 @@ def _report(result: RunResult) -> None:
             f"value for any response (they did not run; reasons in {r.folder}/analysis.txt)",
             file=sys.stderr,
         )
+    if mlflow_uri:
+        from studies.mlflow_export import log_run
+
+        print(f"  logged to MLflow at {mlflow_uri} as run {log_run(mlflow_uri, r)}")
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
