@@ -163,7 +163,7 @@ def matched_points(reference: xr.Dataset, other: xr.Dataset, factors: list[str])
     names = [n for n in names if reference[n].dims == ("run",)]
     a = point_table(reference, factors, [str(n) for n in names])
     b = point_table(other, factors, [str(n) for n in names])
-    common = a.join(b, how="inner", rsuffix="_other")
+    common = a.join(b.add_suffix("_other"), how="inner")
     if common.empty:
         msg = f"the runs have no design point in common over {', '.join(factors)}"
         raise ValueError(msg)
@@ -201,7 +201,7 @@ def _flatten(table: dict[str, Any], prefix: str = "") -> dict[str, Any]:
     out: dict[str, Any] = {}
     for key, value in table.items():
         name = f"{prefix}{key}"
-        if isinstance(value, dict) and not prefix:
+        if isinstance(value, dict):
             out |= _flatten(value, f"{name}.")
         else:
             out[name] = value

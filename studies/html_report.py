@@ -99,8 +99,10 @@ def markdown_to_html(text: str, folder: Path) -> str:
             i = end
         elif line.strip():
             end = i
-            while end < len(lines) and lines[end].strip() and not lines[end].startswith(
-                ("#", "|", "```")
+            while (
+                end < len(lines)
+                and lines[end].strip()
+                and not lines[end].startswith(("#", "|", "```"))
             ):
                 end += 1
             out.append(f"<p>{_inline(' '.join(lines[i:end]), folder)}</p>")
