@@ -39,7 +39,7 @@ def log_run(uri: str, record: Any) -> str:
     """Log a finished run (its :class:`studies.tracking.RunRecord`) to the MLflow tracking
     server or store at ``uri``; return the MLflow run id."""
     try:
-        import mlflow
+        import mlflow  # noqa: PLC0415 (an optional extra: imported only when asked for)
     except ImportError:
         raise ValueError(f"--mlflow needs the optional mlflow package: {EXTRA}") from None
     folder = Path(record.folder)
