@@ -5,8 +5,13 @@ check STUDY            validate only: list every problem, run nothing
 list                   the shipped studies
 scenes [NAME]          document scenes: parameters, settings, responses, curves (units)
 analyze RESULTS.nc     range analysis + ANOVA tables and main-effect plots beside the file
-runs [--study S]       the run registry, newest first
+runs [--where EXPR]    the run registry, newest first, filtered (--json, --csv)
 show RUN_ID            one run's record
+compare RUN_A RUN_B…   what differs: definitions, code, versions, timings, responses
+regress BASE RUN       exit 1 when a response moved beyond tolerance
+tag RUN_ID TAG         name a run (tags work wherever a run id does); note RUN_ID TEXT
+rm RUN_ID, gc          remove runs (folder and registry rows together)
+export RUN_ID          the results as CSV or Parquet
 """
 
 from __future__ import annotations
@@ -18,6 +23,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from studies.definition import StudyError, catalog_names, read_study
+from studies.tracking_cli import add_commands
 
 if TYPE_CHECKING:
     from studies.plan import Plan
@@ -49,7 +55,8 @@ def main(argv: list[str] | None = None) -> int:
         )
         return EXIT_STUDY_ERROR
     except (FileNotFoundError, ValueError, KeyError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
+        print(f"error: {message}", file=sys.stderr)
         return EXIT_STUDY_ERROR
     except BrokenPipeError:  # output piped into `head` and the like
         sys.stderr.close()
@@ -100,6 +107,11 @@ def _parser() -> argparse.ArgumentParser:
         metavar="ADDRESS",
         help="run chunks on a Dask cluster (scheduler address, or 'local')",
     )
+    run.add_argument(
+        "--mlflow",
+        metavar="URI",
+        help="also log the run to MLflow (tracking URI, e.g. file:./mlruns; optional extra)",
+    )
     run.set_defaults(func=_cmd_run)
 
     check = sub.add_parser("check", help="validate a study without running it")
@@ -137,15 +149,8 @@ def _parser() -> argparse.ArgumentParser:
     )
     analyze.set_defaults(func=_cmd_analyze)
 
-    runs = sub.add_parser("runs", help="list recorded runs")
-    runs.add_argument("--study")
-    runs.add_argument("--outputs", type=Path, help=OUTPUTS_HELP)
-    runs.set_defaults(func=_cmd_runs)
+    add_commands(sub, OUTPUTS_HELP)
 
-    show = sub.add_parser("show", help="show one run's record")
-    show.add_argument("run_id")
-    show.add_argument("--outputs", type=Path, help=OUTPUTS_HELP)
-    show.set_defaults(func=_cmd_show)
     bench = sub.add_parser("bench", help="run benchmarks (cases/s, ratios)")
     bench.add_argument("name", help="benchmark name or 'all'")
     bench.add_argument("--cases", type=int, default=20000, help="design points per timing")
@@ -195,7 +200,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from studies.study_run import resume_run, run_plan
 
     if args.resume:
-        _report(resume_run(args.resume, args.outputs, progress=not args.no_progress))
+        result = resume_run(args.resume, args.outputs, progress=not args.no_progress)
+        _report(result, args.mlflow)
         return 0
     if args.all == bool(args.study):
         print("error: name one study or use --all", file=sys.stderr)
@@ -225,7 +231,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
             not args.no_progress,
             executor,
         )
-        _report(result)
+        _report(result, args.mlflow)
         incomplete += result.record.points_without_value > 0
     if args.strict and incomplete:
         print(
@@ -236,7 +242,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _report(result: RunResult) -> None:
+def _report(result: RunResult, mlflow_uri: str | None = None) -> None:
     r = result.record
     t = r.timings
     print(
@@ -251,6 +257,10 @@ def _report(result: RunResult) -> None:
             f"value for any response (they did not run; reasons in {r.folder}/analysis.txt)",
             file=sys.stderr,
         )
+    if mlflow_uri:
+        from studies.mlflow_export import log_run
+
+        print(f"  logged to MLflow at {mlflow_uri} as run {log_run(mlflow_uri, r)}")
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
@@ -309,51 +319,3 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     for f in files:
         print(f"wrote {f}")
     return 0
-
-
-def _cmd_runs(args: argparse.Namespace) -> int:
-    from studies.tracking import current_status, list_runs, resume_command
-
-    rows = list_runs(args.outputs, args.study)
-    if not rows:
-        print(f"no runs recorded under {args.outputs}")
-        return 0
-    print(
-        f"{'run id':<30} {'study':<20} {'status':<11} {'runs':>6} {'compile s':>10} "
-        f"{'run s':>8}  commit"
-    )
-    resumable = []
-    for r in rows:
-        dirty = "+dirty" if r["git_dirty"] else ""
-        status, _ = current_status(r)
-        if status in ("interrupted", "failed"):
-            resumable.append(r)
-        print(
-            f"{r['run_id']:<30} {r['study']:<20} {status:<11} {r['runs']:>6} "
-            f"{_num(r['compile_s']):>10} {_num(r['run_s']):>8}  {r['git_commit'][:10]}{dirty}"
-        )
-    for r in resumable:
-        print(f"resume {r['run_id']}: {resume_command(r['run_id'], args.outputs)}")
-    return 0
-
-
-def _cmd_show(args: argparse.Namespace) -> int:
-    from studies.tracking import current_status, find_run, resume_command
-
-    row = find_run(args.outputs, args.run_id)
-    if row is None:
-        raise KeyError(f"no unique run matches {args.run_id!r} under {args.outputs}")
-    status, record = current_status(row)
-    if record is None:
-        raise FileNotFoundError(
-            f"run {row['run_id']} is in the registry but its folder {row['folder']} is gone"
-        )
-    record["status"] = status
-    print(json.dumps(record, indent=2))
-    if status in ("interrupted", "failed"):
-        print(f"resume it with: {resume_command(row['run_id'], args.outputs)}")
-    return 0
-
-
-def _num(x: float | None) -> str:
-    return "-" if x is None else f"{x:.3f}"

@@ -5,7 +5,8 @@ everything else renders it. Orthogonal-array and full-factorial runs get range a
 ANOVA per response (interaction columns as terms), main-effect, S/N and interaction plots, and
 for full factorials the variance decomposition and a map over the strongest factor pair;
 sweeps get a table and a response-vs-factor plot per swept factor. ``report.md``
-(:mod:`studies.markdown_report`) adds S/N ratios, the predicted optimum and the confirmation run.
+(:mod:`studies.markdown_report`) adds S/N ratios, the predicted optimum and the confirmation run;
+``report.html`` (:mod:`studies.html_report`) is the same report as one self-contained page.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from studies import analysis, analysis_text, markdown_report, plots
+from studies import analysis, analysis_text, html_report, markdown_report, plots
 from studies.figure_layout import save_figures
 from studies.scenes import SCENES, get_scene
 
@@ -67,8 +68,9 @@ def write_analysis(
     text_path = folder / "analysis.txt"
     text_path.write_text("\n\n".join([header, *body]) + "\n", encoding="utf-8")
     reports = markdown_report.write_report(ds, an, folder, scalar, figures)
+    page = html_report.write_html(reports[0], figures)
     nc = analysis.write_analysis_nc(an, folder)
-    return [text_path, *reports, nc, *figures]
+    return [text_path, *reports, page, nc, *figures]
 
 
 def not_run_line(an: xr.Dataset, before: str = "") -> str:

@@ -1,7 +1,7 @@
 """Run records: one folder per run and a row per run in a local SQLite registry.
 
     outputs/
-      registry.sqlite              one row per run (id, study, status, commit, timings, folder)
+      registry.sqlite              one row per run, its values, tags and notes (studies.registry)
       <study>/<run-id>/
         study.toml                 exact copy of the definition that ran
         run.json                   id, status, git commit + dirty flag, versions, host,
@@ -21,34 +21,17 @@ import hashlib
 import json
 import os
 import platform
-import sqlite3
 from contextlib import closing
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+from studies import registry
 from studies.runner import DEFAULT_CHUNK_SIZE
 
-REGISTRY = "registry.sqlite"
 OUTPUTS_VARIABLE = "ENGINE_STUDIES_OUTPUTS"
 HEARTBEAT_S = 5.0  # a running run rewrites its heartbeat at most this often
 STALE_S = 600.0  # a heartbeat older than this marks a run on another host as interrupted
-COLUMNS = (
-    "run_id",
-    "study",
-    "scene",
-    "design",
-    "runs",
-    "status",
-    "started",
-    "finished",
-    "git_commit",
-    "git_dirty",
-    "compile_s",
-    "run_s",
-    "folder",
-    "definition_sha256",
-)
 
 
 @dataclass
@@ -194,27 +177,22 @@ def run_folder(outputs: Path, study: str, run_id: str) -> tuple[str, Path]:
 
 
 def register(outputs: Path, record: RunRecord) -> None:
-    """Insert or update the registry row of ``record``."""
+    """Insert or update the registry row of ``record`` (and its queryable values)."""
     row = {
-        **{k: getattr(record, k) for k in COLUMNS if hasattr(record, k)},
+        **{k: getattr(record, k) for k in registry.COLUMNS if hasattr(record, k)},
         "git_dirty": int(record.git_dirty),
         "compile_s": record.timings.get("compile_s"),
         "run_s": record.timings.get("run_s"),
     }
-    with closing(_connect(outputs)) as con, con:
-        placeholders = ", ".join("?" for _ in COLUMNS)
-        con.execute(
-            f"INSERT OR REPLACE INTO runs ({', '.join(COLUMNS)}) VALUES ({placeholders})",
-            [row.get(c) for c in COLUMNS],
-        )
+    with closing(registry.connect(outputs)) as con:
+        registry.upsert_run(con, row)
 
 
 def list_runs(outputs: Path, study: str | None = None) -> list[dict[str, Any]]:
     """Registry rows, newest first (optionally of one study)."""
-    if not (outputs / REGISTRY).exists():
+    if not (outputs / registry.REGISTRY).exists():
         return []
-    with closing(_connect(outputs)) as con:
-        con.row_factory = sqlite3.Row
+    with closing(registry.connect(outputs)) as con:
         query = "SELECT * FROM runs"
         args: tuple[str, ...] = ()
         if study:
@@ -234,17 +212,28 @@ def finished_identical(outputs: Path, definition_sha256: str, commit: str) -> di
 
 
 def find_run(outputs: Path, run_id: str) -> dict[str, Any] | None:
-    """The registry row whose id is ``run_id`` or starts with it (unique prefix)."""
+    """The registry row named by ``run_id``: a tag, the id, or a unique prefix of the id."""
+    if not (outputs / registry.REGISTRY).exists():
+        return None
+    run_id = registry.tagged_run(outputs, run_id) or run_id
     rows = [r for r in list_runs(outputs) if r["run_id"].startswith(run_id)]
-    return rows[0] if len(rows) == 1 else None
+    exact = [r for r in rows if r["run_id"] == run_id]
+    return (exact or rows)[0] if len(exact or rows) == 1 else None
 
 
-def _connect(outputs: Path) -> sqlite3.Connection:
-    outputs.mkdir(parents=True, exist_ok=True)
-    con = sqlite3.connect(outputs / REGISTRY)
-    con.execute(
-        "CREATE TABLE IF NOT EXISTS runs (run_id TEXT PRIMARY KEY, study TEXT, scene TEXT, "
-        "design TEXT, runs INTEGER, status TEXT, started TEXT, finished TEXT, git_commit TEXT, "
-        "git_dirty INTEGER, compile_s REAL, run_s REAL, folder TEXT, definition_sha256 TEXT)"
-    )
-    return con
+def resolve_run(outputs: Path, ref: str) -> dict[str, Any]:
+    """:func:`find_run`, or KeyError with one sentence on what was wrong."""
+    row = find_run(outputs, ref)
+    if row is not None:
+        return row
+    matches = [r["run_id"] for r in list_runs(outputs) if r["run_id"].startswith(ref)]
+    if matches:
+        msg = (
+            f"{ref!r} matches {len(matches)} runs ({', '.join(matches[:4])}…): give more of the id"
+        )
+    else:
+        msg = (
+            f"no run or tag {ref!r} under {outputs} "
+            "(`python -m studies runs` lists the runs and their tags)"
+        )
+    raise KeyError(msg)

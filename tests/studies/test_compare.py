@@ -1,0 +1,120 @@
+"""compare: what differs between runs, from their folders and the registry alone."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+from studies.cli import main
+from studies.compare import compare, load_run
+from studies.definition import find_study
+from studies.study_run import run_study
+from studies.tracking import list_runs
+
+CAM = """
+name = "cam_grid"
+scene = "cam"
+responses = ["max_jerk", "min_radius_of_curvature"]
+design = "full_factorial"
+[factors.base_radius]
+levels = {base_radius}
+[factors.cam_speed]
+levels = [1000.0, 1300.0]
+"""
+
+
+def valve_study(reference_rtol: str) -> str:
+    """valve_step_accuracy cut to two design points, with the reference tolerance given."""
+    text = find_study("valve_step_accuracy").read_text(encoding="utf-8")
+    for old, new in (
+        (
+            r'levels = \["lanes", "lanes_f32", "rk4", "rk4_switch_aware"\]',
+            'levels = ["rk4", "lanes"]',
+        ),
+        (r"levels = \[1.0, 0.5, 0.25, 0.125\]", "levels = [1.0]"),
+        (r"levels = \[3500.0, 6000.0\]", "levels = [3500.0]"),
+        (r"levels = \[5e4, 2e5\]", "levels = [5e4]"),
+        (r"reference_rtol = 1e-10", f"reference_rtol = {reference_rtol}"),
+    ):
+        text, count = re.subn(old, new, text)
+        assert count == 1, old
+    return text
+
+
+def run_text(tmp_path: Path, outputs: Path, name: str, text: str) -> str:
+    path = tmp_path / f"{name}.toml"
+    path.write_text(text, encoding="utf-8")
+    return run_study(path, outputs=outputs, progress=False).record.run_id
+
+
+@pytest.mark.slow
+def test_runs_differing_in_one_setting_name_it_and_the_responses_it_moved(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    outputs = tmp_path / "out"
+    a = run_text(tmp_path, outputs, "a", valve_study("1e-10"))
+    b = run_text(tmp_path, outputs, "b", valve_study("1e-5"))
+    c = compare([load_run(outputs, a), load_run(outputs, b)])
+    assert [(d.kind, d.name, d.values) for d in c.definition] == [
+        ("setting", "reference_rtol", ["1e-10", "1e-05"])
+    ]
+    moved = set(c.moved())
+    # the reference moved, so the error against it did; cost_per_case is a wall-clock timing
+    assert "reference_error" in moved
+    assert moved <= {"reference_error", "cost_per_case"}
+    assert {"max_lift", "error_estimate", "step_doubling_difference"}.isdisjoint(moved)
+
+    assert main(["compare", a, b, "--outputs", str(outputs)]) == 0
+    out = capsys.readouterr().out
+    assert re.search(r"setting reference_rtol\s+1e-10 \| 1e-05", out)
+    assert "reference_error [mm]" in out
+    assert "moved: reference_error" in out
+
+
+def test_different_designs_compare_on_their_common_points(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    outputs = tmp_path / "out"
+    a = run_text(tmp_path, outputs, "a", CAM.format(base_radius="[16.0, 18.0, 20.0]"))
+    b = run_text(tmp_path, outputs, "b", CAM.format(base_radius="[18.0, 20.0, 22.0, 24.0]"))
+    c = compare([load_run(outputs, a), load_run(outputs, b)])
+    assert c.matched_on == ["base_radius", "cam_speed"]
+    # common points: base radius 18 and 20 at both speeds; same definition there, same values
+    assert {ch.points for ch in c.changes} == {4}
+    assert c.moved() == []
+    assert [(d.kind, d.name) for d in c.definition] == [("factor", "base_radius.levels")]
+
+    assert (
+        main(["compare", a, b, "--plot", "--to", str(tmp_path / "fig"), "--outputs", str(outputs)])
+        == 0
+    )
+    assert sorted(p.name for p in (tmp_path / "fig").iterdir()) == [
+        "compare_max_jerk.png",
+        "compare_min_radius_of_curvature.png",
+    ]
+    assert "points" in capsys.readouterr().out
+
+
+def test_bad_input_is_one_line_and_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    outputs = tmp_path / "out"
+    a = run_text(tmp_path, outputs, "a", CAM.format(base_radius="[16.0, 18.0]"))
+    other = CAM.format(base_radius="[30.0, 32.0]")
+    b = run_text(tmp_path, outputs, "b", other)
+    no_shared = other.replace('["max_jerk", "min_radius_of_curvature"]', '["max_contact_stress"]')
+    c = run_text(tmp_path, outputs, "c", no_shared.replace("cam_grid", "cam_stress"))
+    cases = {
+        ("compare", a, "no_such_tag"): "no run or tag 'no_such_tag'",
+        ("compare", a, b): "no design point in common",
+        ("compare", a, c): "the runs share no response",
+        ("compare", a): "at least two runs",
+    }
+    for argv, message in cases.items():
+        assert main([*argv, "--outputs", str(outputs)]) == 2, argv
+        err = capsys.readouterr().err
+        assert message in err, (argv, err)
+        assert "Traceback" not in err
+    assert len(list_runs(outputs)) == 3

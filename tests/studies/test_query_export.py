@@ -1,0 +1,187 @@
+"""runs filters (--where, --json, --csv), export to CSV/Parquet and MLflow, report.html."""
+
+from __future__ import annotations
+
+import base64
+import csv
+import io
+import json
+from html.parser import HTMLParser
+from pathlib import Path
+
+import pandas as pd
+import pytest
+import xarray as xr
+
+from studies.cli import main
+from studies.mlflow_export import params_and_metrics
+from studies.study_run import run_study
+
+STUDY = """
+name = "speeds"
+scene = "cam"
+responses = ["max_jerk", "min_radius_of_curvature"]
+design = "full_factorial"
+[settings]
+angle_step = {step}
+[factors.base_radius]
+levels = [16.0, 18.0]
+units = "mm"
+[factors.cam_speed]
+levels = {speeds}
+units = "rpm"
+"""
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str, str]:
+    """Two runs: slow speeds (1000, 2000 rpm) and fast ones (4000, 6000 rpm)."""
+    tmp = tmp_path_factory.mktemp("q")
+    outputs = tmp / "out"
+    ids = []
+    for name, speeds, step in (
+        ("slow", "[1000.0, 2000.0]", 0.5),
+        ("fast", "[4000.0, 6000.0]", 0.25),
+    ):
+        path = tmp / f"{name}.toml"
+        path.write_text(STUDY.format(speeds=speeds, step=step), encoding="utf-8")
+        ids.append(run_study(path, outputs=outputs, progress=False).record.run_id)
+    return outputs, ids[0], ids[1]
+
+
+def runs_out(capsys: pytest.CaptureFixture[str], outputs: Path, *args: str) -> str:
+    assert main(["runs", "--outputs", str(outputs), *args]) == 0
+    return capsys.readouterr().out
+
+
+def test_where_filters_on_factors_settings_and_response_summaries(
+    recorded, capsys: pytest.CaptureFixture[str]
+) -> None:
+    outputs, slow, fast = recorded
+    assert fast in runs_out(capsys, outputs, "--where", "cam_speed>=5000")
+    assert slow not in runs_out(capsys, outputs, "--where", "cam_speed>=5000")
+    both = runs_out(capsys, outputs, "--where", "cam_speed>=2000", "--status", "finished")
+    assert slow in both
+    assert fast in both
+    assert slow in runs_out(capsys, outputs, "--where", "angle_step=0.5")
+    assert fast not in runs_out(capsys, outputs, "--where", "angle_step=0.5")
+    assert "no runs" in runs_out(capsys, outputs, "--where", "cam_speed>6000")
+    assert "no runs" in runs_out(capsys, outputs, "--since", "2999-01-01")
+    rows = json.loads(runs_out(capsys, outputs, "--json", "--study", "speeds", "--scene", "cam"))
+    by_id = {r["run_id"]: r for r in rows}
+    assert by_id[fast]["factors"]["cam_speed"] == [4000.0, 6000.0]
+    assert by_id[slow]["settings"]["angle_step"] == 0.5
+    jerk = by_id[fast]["responses"]["max_jerk"]
+    assert jerk["units"] == "mm/rad^3"
+    assert jerk["min"] <= jerk["mean"] <= jerk["max"]
+    # the summaries are those of the results file
+    with xr.open_dataset(Path(by_id[fast]["folder"]) / "results.nc") as ds:
+        assert jerk["max"] == pytest.approx(float(ds["max_jerk"].max()))
+    below = f"max_jerk.max<{jerk['max'] * (1 + 1e-9)}"
+    assert fast in runs_out(capsys, outputs, "--where", below)
+    table = list(csv.DictReader(io.StringIO(runs_out(capsys, outputs, "--csv"))))
+    assert {r["run_id"] for r in table} == {slow, fast}
+    assert {r["cam_speed"] for r in table} == {"1000.0|2000.0", "4000.0|6000.0"}
+    assert "max_jerk.max [mm/rad^3]" in table[0]
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--where", "cam_speed>>5"], "cannot read --where"),
+        (["--where", "no_such_name>1"], "--where names 'no_such_name'"),
+        (["--where", "max_jerk<1"], "filter on max_jerk.min, .mean or .max"),
+        (["--since", "last week"], "is not a date"),
+    ],
+)
+def test_bad_filters_are_one_line_and_exit_2(
+    recorded, args: list[str], message: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    outputs, _, _ = recorded
+    assert main(["runs", "--outputs", str(outputs), *args]) == 2
+    err = capsys.readouterr().err
+    assert message in err
+    assert len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("file_format", ["csv", "parquet"])
+def test_export_has_every_design_point_with_units(
+    recorded, tmp_path: Path, file_format: str
+) -> None:
+    if file_format == "parquet":
+        pytest.importorskip("pyarrow")
+    outputs, _, fast = recorded
+    to = tmp_path / f"fast.{file_format}"
+    argv = ["export", fast, "--format", file_format, "--to", str(to), "--outputs", str(outputs)]
+    assert main(argv) == 0
+    table = pd.read_csv(to, index_col="run") if file_format == "csv" else pd.read_parquet(to)
+    assert sorted(set(table["cam_speed [rpm]"])) == [4000.0, 6000.0]
+    assert len(table) == 4
+    (folder,) = [p for p in (outputs / "speeds").iterdir() if p.name == fast]
+    with xr.open_dataset(folder / "results.nc") as ds:
+        assert list(table["max_jerk [mm/rad^3]"]) == pytest.approx(ds["max_jerk"].values.tolist())
+
+
+class _Page(HTMLParser):
+    def __init__(self) -> None:
+        super().__init__()
+        self.images: list[str] = []
+        self.outside: list[str] = []
+        self.tables = 0
+
+    def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
+        found = dict(attrs)
+        if tag == "img":
+            self.images.append(found.get("src") or "")
+        if tag == "table":
+            self.tables += 1
+        for key in ("src", "href"):
+            if found.get(key) and not str(found[key]).startswith("data:"):
+                self.outside.append(str(found[key]))
+
+
+def test_report_html_is_self_contained_with_every_figure(recorded) -> None:
+    outputs, slow, _ = recorded
+    folder = outputs / "speeds" / slow
+    page = _Page()
+    page.feed((folder / "report.html").read_text(encoding="utf-8"))
+    figures = sorted(folder.glob("*.png"))
+    assert figures
+    assert len(page.images) == len(figures)
+    embedded = {base64.b64decode(src.split(",", 1)[1]) for src in page.images}
+    assert embedded == {f.read_bytes() for f in figures}
+    assert all(src.startswith("data:image/png;base64,") for src in page.images)
+    assert page.outside == []  # nothing loaded from anywhere
+    assert page.tables >= 2
+    assert 'addEventListener("click"' in (folder / "report.html").read_text(encoding="utf-8")
+
+
+def test_mlflow_round_trips_params_and_metrics(
+    recorded, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    mlflow = pytest.importorskip("mlflow")
+    from studies.mlflow_export import log_run
+    from studies.tracking import RunRecord
+
+    monkeypatch.setenv("MLFLOW_ALLOW_FILE_STORE", "true")  # a local file store, no server
+    outputs, _, fast = recorded
+    folder = outputs / "speeds" / fast
+    record = RunRecord(**json.loads((folder / "run.json").read_text(encoding="utf-8")))
+    uri = (tmp_path / "mlruns").as_uri()
+    mlflow_id = log_run(uri, record)
+    mlflow.set_tracking_uri(uri)
+    (row,) = mlflow.search_runs(experiment_names=["speeds"]).to_dict("records")
+    assert row["run_id"] == mlflow_id
+    assert row["tags.run_id"] == fast
+    assert row["params.factor.cam_speed"] == "4000.0|6000.0"
+    assert row["params.angle_step"] == "0.25"
+    with xr.open_dataset(folder / "results.nc") as ds:
+        assert row["metrics.max_jerk.max"] == pytest.approx(float(ds["max_jerk"].max()))
+        assert row["metrics.min_radius_of_curvature.min"] == pytest.approx(
+            float(ds["min_radius_of_curvature"].min())
+        )
+    params, metrics = params_and_metrics(folder)
+    assert {f"params.{k}" for k in params} <= set(row)
+    assert {f"metrics.{k}" for k in metrics} <= set(row)
+    artifacts = mlflow.artifacts.list_artifacts(run_id=mlflow_id)
+    assert {"results.nc", "report.html", "run.json"} <= {Path(a.path).name for a in artifacts}
