@@ -178,9 +178,9 @@ def point_label(index: Any, factors: list[str]) -> str:
 def _change(common: pd.DataFrame, response: str, units: str, run_id: str) -> ResponseChange:
     a = common[response].to_numpy()
     b = common[f"{response}_other"].to_numpy()
-    both_nan = np.isnan(a) & np.isnan(b)
+    same = (a == b) | (np.isnan(a) & np.isnan(b))  # equal, the same infinity, or both NaN
     with np.errstate(invalid="ignore", divide="ignore"):
-        diff = np.where(both_nan, 0.0, np.abs(b - a))
+        diff = np.where(same, 0.0, np.abs(b - a))
         diff = np.where(np.isnan(diff), np.inf, diff)  # NaN in one run only: it moved
         rel = np.where(diff == 0, 0.0, diff / np.abs(a))
     order = [i for i in np.argsort(-diff, kind="stable")[:TOP_POINTS] if diff[i] > 0]

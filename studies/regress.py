@@ -123,8 +123,8 @@ def _check(
     rtol, atol = (0.0, 0.0) if exact else (tol.rtol, tol.atol)
     with np.errstate(invalid="ignore"):
         diff = np.abs(actual - expected)
-        same = np.isnan(actual) & np.isnan(expected)
-        inside = same | (diff <= atol + rtol * np.abs(expected))
+        same = (actual == expected) | (np.isnan(actual) & np.isnan(expected))  # incl. ±inf
+        inside = same | (np.isfinite(diff) & (diff <= atol + rtol * np.abs(expected)))
         if math.isinf(rtol) or math.isinf(atol):
             inside[:] = True
         diff = np.where(same, 0.0, np.where(np.isnan(diff), np.inf, diff))

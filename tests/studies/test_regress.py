@@ -135,3 +135,18 @@ def test_assert_results_close_matches_points_by_factor_values(tmp_path: Path) ->
     other_units["y"].attrs["units"] = "m"
     with pytest.raises(AssertionError, match="units 'm'"):
         assert_results_close(other_units, baseline)
+
+
+def test_equal_infinities_and_nans_are_unchanged(tmp_path: Path) -> None:
+    # A concave cam has an infinite contact stress, a point that never separates a NaN jump
+    # start: the same inf or NaN in both runs has not moved (was: inf − inf = NaN, a failure).
+    baseline = xr.Dataset(
+        {"y": ("run", [1.0, math.inf, math.nan], {"units": "MPa"})},
+        coords={"a": ("run", [10.0, 20.0, 30.0])},
+        attrs={"factors": '["a"]', "responses": '["y"]'},
+    )
+    assert_results_close(baseline.copy(deep=True), baseline, rtol=0)
+    flipped = baseline.copy(deep=True)
+    flipped["y"].values[1] = -math.inf
+    with pytest.raises(AssertionError, match="a=20"):
+        assert_results_close(flipped, baseline)
