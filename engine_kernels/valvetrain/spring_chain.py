@@ -141,7 +141,7 @@ def chain_spectral_radius(params):
     coil_c = 4.0 * (damper + cc) / coil_mass
     valve_k = (k + kz + 2.0 * (rate + kc)) / valve_mass
     valve_c = (b + bz + gamma + 2.0 * (damper + cc)) / valve_mass
-    return max(math.sqrt(max(coil_k, valve_k)), max(coil_c, valve_c))
+    return max(math.sqrt(max(coil_k, valve_k)), coil_c, valve_c)
 
 
 @jit
