@@ -15,6 +15,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 MODES = ("first", "second", "third", "fourth")
+HATCHES = ("//", "\\\\", "..", "xx")
 MAX_LABELS = 8  # crossings labelled with order and speed when there are no more than this
 MIN_ORDERS = 6  # orders drawn at least (more when a crossing has a higher one)
 
@@ -47,12 +48,15 @@ def campbell_figure(ds: xr.Dataset) -> Figure | None:
         lo, hi = float(np.nanmin(values)), float(np.nanmax(values))
         colour = f"C{j}"
         label = (
-            f"{m} mode {lo:.4g} Hz" if hi <= lo * (1 + 1e-9) else f"{m} mode {lo:.4g}–{hi:.4g} Hz"
+            f"{m} mode {lo:.4g} Hz"
+            if hi <= lo * (1 + 1e-9)
+            else f"{m} mode over the designs: {lo:.4g}–{hi:.4g} Hz"
         )
         if lo > highest:
             label += " (above every order line)"
-        if hi > lo * (1 + 1e-9):
-            ax.axhspan(lo, hi, color=colour, alpha=0.25, lw=0, zorder=2, label=label)
+        if hi > lo * (1 + 1e-9):  # hatched and outlined: overlapping bands stay apart
+            ax.axhspan(lo, hi, facecolor="none", edgecolor=colour, hatch=HATCHES[j % 4], lw=1.0,
+                       zorder=2, label=label)  # fmt: skip
         else:
             ax.axhline(lo, color=colour, lw=1.5, zorder=2, label=label)
     if crossings:
