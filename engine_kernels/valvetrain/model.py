@@ -160,8 +160,9 @@ def specific_acceleration(lift, velocity, drive, seat, record, at, w):
     :func:`specific_forces`. Branch-free (selects only), so it vectorises inside loops over
     SIMD lanes.
     """
-    depth = record[at + K_SEAT_DEPTH * w]
-    seat = positive_part(seat) if lift < depth else ZERO
+    # Clipped after the select, so the seat force is computed for every lane: computed only
+    # where y < δ0, its coefficients would be loaded under that condition (masked loads).
+    seat = positive_part(seat if lift < record[at + K_SEAT_DEPTH * w] else ZERO)
     # Grouped so the spring terms are computed alongside the contact forces: a shorter
     # dependency chain per RK4 stage.
     return (positive_part(drive) + seat) - (
