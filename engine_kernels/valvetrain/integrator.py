@@ -49,8 +49,7 @@ from engine_kernels.valvetrain.layout import (
 from engine_kernels.valvetrain.model import (
     drive_push,
     excitation_lift_slope,
-    specific_acceleration,
-    specific_forces,
+    specific_point,
     valve_coefficients,
 )
 from engine_kernels.valvetrain.observations import (
@@ -78,15 +77,6 @@ def _observe_substep(record, prev_lift, prev_velocity, prev_acc, lift, past_nose
     """
     if observe_closure(record, 0, 1, lift, past_nose):
         record_closure_events(record, 0, 1, prev_lift, prev_velocity, prev_acc)
-
-
-@jit_inline
-def _point(record, lift, velocity, drive_lift, slope):
-    """Drive and seat forces per unit mass [N/kg] and acceleration [m/s²] of the case at a
-    point of excitation Y [m], Y' [m/rad] (``specific_forces``, ``specific_acceleration``)."""
-    push = drive_push(drive_lift, slope, record, 0, 1)
-    drive, seat = specific_forces(lift, velocity, push, record, 0, 1)
-    return drive, seat, specific_acceleration(lift, velocity, drive, seat, record, 0, 1)
 
 
 @jit
@@ -131,7 +121,7 @@ def _integrate(
         drive_lift = excitation[0, node]
         slope = excitation[1, node]
         drive_velocity = speed * slope
-        drive, seat, acc = _point(record, lift, velocity, drive_lift, slope)
+        drive, seat, acc = specific_point(lift, velocity, drive_lift, slope, record, 0, 1)
         angle = table_start + n * grid_step
         if n == 0:
             start_observations(
@@ -178,7 +168,7 @@ def _integrate(
                         record, prev_lift, prev_velocity, prev_acc, lift, start >= nose
                     )
                     prev_lift, prev_velocity = lift, velocity
-                    _, _, prev_acc = _point(record, lift, velocity, y0, s0)
+                    _, _, prev_acc = specific_point(lift, velocity, y0, s0, record, 0, 1)
                 stop = node + 2.0 * half * (j + 1) / substeps
                 lift, velocity, _ = switch_aware_step(
                     excitation, table_step, start, stop, lift, velocity, params
@@ -206,7 +196,7 @@ def _integrate(
                 y1, s1 = excitation_lift_slope(
                     excitation, table_step, node + 2.0 * half * (j + 1) / substeps
                 )
-                _, _, a0 = _point(record, lift, velocity, y0, s0)
+                _, _, a0 = specific_point(lift, velocity, y0, s0, record, 0, 1)
                 if j > 0:
                     _observe_substep(
                         record, prev_lift, prev_velocity, prev_acc, lift, position >= nose

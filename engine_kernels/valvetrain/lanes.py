@@ -40,8 +40,7 @@ from engine_kernels.valvetrain.layout import (
 from engine_kernels.valvetrain.model import (
     drive_push,
     excitation_lift_slope,
-    specific_acceleration,
-    specific_forces,
+    specific_point,
 )
 from engine_kernels.valvetrain.observations import (
     nose_position,
@@ -75,17 +74,8 @@ def _lane_point(data, l, drive_lift, slope):
     """
     lift = data[R_LIFT * LANES + l]
     velocity = data[R_VELOCITY * LANES + l]
-    drive, seat, acc = _lane_forces(data, l, lift, velocity, drive_lift, slope)
+    drive, seat, acc = specific_point(lift, velocity, drive_lift, slope, data, l, LANES)
     return lift, velocity, drive, seat, acc
-
-
-@jit_inline
-def _lane_forces(data, l, lift, velocity, drive_lift, slope):
-    """Forces and acceleration of lane ``l`` in state (lift [m], velocity [m/s]) (_lane_point)."""
-    push = drive_push(drive_lift, slope, data, l, LANES)
-    drive, seat = specific_forces(lift, velocity, push, data, l, LANES)
-    acc = specific_acceleration(lift, velocity, drive, seat, data, l, LANES)
-    return drive, seat, acc
 
 
 @jit_inline
@@ -156,7 +146,7 @@ def _record_events_lanes(data, prev_drive_lift, prev_slope):
     for l in range(LANES):
         lift = data[R_PREV_LIFT * LANES + l]
         velocity = data[R_PREV_VELOCITY * LANES + l]
-        _, _, acc = _lane_forces(data, l, lift, velocity, prev_drive_lift, prev_slope)
+        _, _, acc = specific_point(lift, velocity, prev_drive_lift, prev_slope, data, l, LANES)
         record_closure_events(data, l, LANES, lift, velocity, acc)
 
 

@@ -9,9 +9,9 @@ is pre-compressed by ``δ0 = Ps0/kz``::
 
 Parameter rows and the other data layouts (``P_*``, ``O_*``, ``C_*``, ``S_*``) are in
 :mod:`engine_kernels.valvetrain.layout`; the integrators use the coefficients per unit mass,
-written once per case into the ``K_*`` rows of its record by :func:`valve_coefficients`. The excitation is a table of the theoretical valve
-lift Y(θ) and its angle derivatives (rows Y [m], Y' [m/rad], Y'' [m/rad²]) read by
-:func:`excitation_at`. Reference: SPEC §4 and the motorcycle OHC valve-train thesis data quoted there.
+written once per case into the ``K_*`` rows of its record by :func:`valve_coefficients`. The
+excitation is a table of the theoretical valve lift Y(θ) and its angle derivatives (rows Y [m],
+Y' [m/rad], Y'' [m/rad²]) read by :func:`excitation_at`. Reference: SPEC §4 and the motorcycle OHC valve-train thesis data quoted there.
 """
 
 from __future__ import annotations
@@ -181,6 +181,19 @@ def drive_push(drive_lift, slope, record, at, w):
     record, at, w : Coefficients ``K_*`` of the case (:func:`valve_coefficients`).
     """
     return record[at + K_STIFFNESS * w] * drive_lift + record[at + K_DAMPING_SPEED * w] * slope
+
+
+@jit_inline
+def specific_point(lift, velocity, drive_lift, slope, record, at, w):
+    """Forces and acceleration of a case in state (y [m], ẏ [m/s]) at excitation Y [m], Y' [m/rad].
+
+    Returns the drive and seat forces per unit mass before clipping [N/kg]
+    (:func:`specific_forces`) and the acceleration ÿ [m/s²] (:func:`specific_acceleration`).
+    record, at, w : Coefficients ``K_*`` of the case (:func:`valve_coefficients`).
+    """
+    push = drive_push(drive_lift, slope, record, at, w)
+    drive, seat = specific_forces(lift, velocity, push, record, at, w)
+    return drive, seat, specific_acceleration(lift, velocity, drive, seat, record, at, w)
 
 
 @jit
