@@ -36,6 +36,7 @@ from engine_kernels.valvetrain.model import (
     ONE,
     TWO,
     ZERO,
+    case_coefficients,
     larger,
     positive_part,
     valve_energy,
@@ -74,7 +75,7 @@ def observe_energy(record, at, w, lift, velocity, drive_lift, drive_velocity, dr
     The grid time step Δθ/ω is the record's ``K_TIME_STEP`` row; arguments as in
     :func:`engine_kernels.valvetrain.observations.start_observations`.
     """
-    energy = valve_energy(lift, velocity, drive_lift, record, at, w)
+    energy = valve_energy(lift, velocity, drive_lift, case_coefficients(record, at, w))
     initial = record[at + ST_ENERGY0 * w]
     initial = energy if math.isnan(initial) else initial
     record[at + ST_ENERGY0 * w] = initial

@@ -47,6 +47,7 @@ from engine_kernels.valvetrain.layout import (
     VALVE_CURVE_NAMES,
 )
 from engine_kernels.valvetrain.model import (
+    case_coefficients,
     drive_push,
     excitation_lift_slope,
     specific_point,
@@ -106,9 +107,10 @@ def _integrate(
     n_steps = (excitation.shape[1] - 1) // (2 * half)
     grid_step = 2.0 * half * table_step
     valve_time_steps(record, 0, 1, grid_step, substeps)
-    speed = record[K_SPEED]
-    mass = record[K_MASS]
-    depth = record[K_SEAT_DEPTH]
+    c = case_coefficients(record, 0, 1)
+    speed = c[K_SPEED]
+    mass = c[K_MASS]
+    depth = c[K_SEAT_DEPTH]
     lift = params[P_INITIAL_LIFT]
     velocity = params[P_INITIAL_VELOCITY]
     prev_lift, prev_velocity, prev_acc = lift, velocity, 0.0  # set before they are read
@@ -121,7 +123,7 @@ def _integrate(
         drive_lift = excitation[0, node]
         slope = excitation[1, node]
         drive_velocity = speed * slope
-        drive, seat, acc = specific_point(lift, velocity, drive_lift, slope, record, 0, 1)
+        drive, seat, acc = specific_point(lift, velocity, drive_lift, slope, c)
         angle = table_start + n * grid_step
         if n == 0:
             start_observations(
@@ -168,7 +170,7 @@ def _integrate(
                         record, prev_lift, prev_velocity, prev_acc, lift, start >= nose
                     )
                     prev_lift, prev_velocity = lift, velocity
-                    _, _, prev_acc = specific_point(lift, velocity, y0, s0, record, 0, 1)
+                    _, _, prev_acc = specific_point(lift, velocity, y0, s0, c)
                 stop = node + 2.0 * half * (j + 1) / substeps
                 lift, velocity, _ = switch_aware_step(
                     excitation, table_step, start, stop, lift, velocity, params
@@ -178,13 +180,9 @@ def _integrate(
                 lift,
                 velocity,
                 acc,
-                drive_push(excitation[0, node + half], excitation[1, node + half], record, 0, 1),
-                drive_push(
-                    excitation[0, node + 2 * half], excitation[1, node + 2 * half], record, 0, 1
-                ),
-                record,
-                0,
-                1,
+                drive_push(excitation[0, node + half], excitation[1, node + half], c),
+                drive_push(excitation[0, node + 2 * half], excitation[1, node + 2 * half], c),
+                c,
             )
         else:
             for j in range(substeps):
@@ -196,7 +194,7 @@ def _integrate(
                 y1, s1 = excitation_lift_slope(
                     excitation, table_step, node + 2.0 * half * (j + 1) / substeps
                 )
-                _, _, a0 = specific_point(lift, velocity, y0, s0, record, 0, 1)
+                _, _, a0 = specific_point(lift, velocity, y0, s0, c)
                 if j > 0:
                     _observe_substep(
                         record, prev_lift, prev_velocity, prev_acc, lift, position >= nose
@@ -206,11 +204,9 @@ def _integrate(
                     lift,
                     velocity,
                     a0,
-                    drive_push(ym, sm, record, 0, 1),
-                    drive_push(y1, s1, record, 0, 1),
-                    record,
-                    0,
-                    1,
+                    drive_push(ym, sm, c),
+                    drive_push(y1, s1, c),
+                    c,
                 )
     finish_observations(record, 0, 1, grid_step, lift, velocity, out)
     return difference

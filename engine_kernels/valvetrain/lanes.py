@@ -38,6 +38,7 @@ from engine_kernels.valvetrain.layout import (
     P_INITIAL_VELOCITY,
 )
 from engine_kernels.valvetrain.model import (
+    case_coefficients,
     drive_push,
     excitation_lift_slope,
     specific_point,
@@ -74,23 +75,17 @@ def _lane_point(data, l, drive_lift, slope):
     """
     lift = data[R_LIFT * LANES + l]
     velocity = data[R_VELOCITY * LANES + l]
-    drive, seat, acc = specific_point(lift, velocity, drive_lift, slope, data, l, LANES)
+    c = case_coefficients(data, l, LANES)
+    drive, seat, acc = specific_point(lift, velocity, drive_lift, slope, c)
     return lift, velocity, drive, seat, acc
 
 
 @jit_inline
 def _lane_step(data, l, lift, velocity, acc, ym, sm, y1, s1):
     """RK4 step of lane ``l`` from its first-stage ``acc``; excitation Y [m], Y' [m/rad]."""
-    lift, velocity = rk4_valve_step(
-        lift,
-        velocity,
-        acc,
-        drive_push(ym, sm, data, l, LANES),
-        drive_push(y1, s1, data, l, LANES),
-        data,
-        l,
-        LANES,
-    )
+    c = case_coefficients(data, l, LANES)
+    push_mid = drive_push(ym, sm, c)
+    lift, velocity = rk4_valve_step(lift, velocity, acc, push_mid, drive_push(y1, s1, c), c)
     data[R_LIFT * LANES + l] = lift
     data[R_VELOCITY * LANES + l] = velocity
 
@@ -146,7 +141,8 @@ def _record_events_lanes(data, prev_drive_lift, prev_slope):
     for l in range(LANES):
         lift = data[R_PREV_LIFT * LANES + l]
         velocity = data[R_PREV_VELOCITY * LANES + l]
-        _, _, acc = specific_point(lift, velocity, prev_drive_lift, prev_slope, data, l, LANES)
+        c = case_coefficients(data, l, LANES)
+        _, _, acc = specific_point(lift, velocity, prev_drive_lift, prev_slope, c)
         record_closure_events(data, l, LANES, lift, velocity, acc)
 
 

@@ -148,7 +148,9 @@ PHASE_BOUNCING = np.float32(3.0)
 # engine_kernels.valvetrain.step.valve_time_steps) and its running observations (``ST_*``,
 # engine_kernels.valvetrain.observations). Row r of the case sits at ``at + r*w`` of a flat
 # array: the one-case kernel has w = 1, the lane kernel w = LANES and ``at`` the lane, so both
-# read every coefficient through this one layout.
+# read every coefficient through this one layout. The arithmetic of a case reads its K_* rows
+# once, as the tuple of engine_kernels.valvetrain.model.case_coefficients (element r = row r,
+# so c[K_X] is row K_X): the K_* rows stay first and contiguous, up to K_TIME_STEP.
 K_STIFFNESS = 0  # k' = k/M [1/s²]
 K_DAMPING = 1  # b' = b/M [1/s]
 K_SPRING_RATE = 2  # ks' = ks/M [1/s²]

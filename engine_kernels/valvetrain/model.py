@@ -133,7 +133,37 @@ def valve_coefficients(params, record, at, w):
 
 
 @jit_inline
-def specific_forces(lift, velocity, push, record, at, w):
+def case_coefficients(record, at, w):
+    """The ``K_*`` rows of a case record as a tuple: element r is row r, so ``c[K_STIFFNESS]``
+    is k' as ``record[at + K_STIFFNESS·w]`` is.
+
+    Read once where a case's arithmetic starts (a lane of a lane loop, a run of the one-case
+    kernel), the coefficients stay in registers: every row is loaded unconditionally, and
+    stores to other rows cannot force them to be reloaded. Rows no caller uses cost nothing
+    (Numba inlines this, LLVM drops the unused loads).
+    """
+    return (
+        record[at],
+        record[at + w],
+        record[at + 2 * w],
+        record[at + 3 * w],
+        record[at + 4 * w],
+        record[at + 5 * w],
+        record[at + 6 * w],
+        record[at + 7 * w],
+        record[at + 8 * w],
+        record[at + 9 * w],
+        record[at + 10 * w],
+        record[at + 11 * w],
+        record[at + 12 * w],
+        record[at + 13 * w],
+        record[at + 14 * w],
+        record[at + 15 * w],
+    )
+
+
+@jit_inline
+def specific_forces(lift, velocity, push, c):
     """Drive and seat forces per unit mass before clipping [V2] [N/kg].
 
     Drive ``k'(Y − y) + b'(Ẏ − ẏ) = push − k'y − b'ẏ``; seat ``kz'(δ0 − y) − bz'ẏ =
@@ -141,59 +171,51 @@ def specific_forces(lift, velocity, push, record, at, w):
 
     lift, velocity : float  Valve lift y [m] and velocity ẏ [m/s].
     push           : float  ``k'Y + b'Ẏ`` of the excitation (:func:`drive_push`) [m/s²].
-    record, at, w  : Coefficients ``K_*`` of the case (:func:`valve_coefficients`).
+    c              : Coefficients ``K_*`` of the case (:func:`case_coefficients`).
     """
-    drive = push - record[at + K_STIFFNESS * w] * lift - record[at + K_DAMPING * w] * velocity
-    seat = (
-        record[at + K_PRELOAD * w]
-        - record[at + K_SEAT_STIFFNESS * w] * lift
-        - record[at + K_SEAT_DAMPING * w] * velocity
-    )
+    drive = push - c[K_STIFFNESS] * lift - c[K_DAMPING] * velocity
+    seat = c[K_PRELOAD] - c[K_SEAT_STIFFNESS] * lift - c[K_SEAT_DAMPING] * velocity
     return drive, seat
 
 
 @jit_inline
-def specific_acceleration(lift, velocity, drive, seat, record, at, w):
+def specific_acceleration(lift, velocity, drive, seat, c):
     """Valve acceleration ÿ [m/s²] from the specific forces of :func:`specific_forces` [V2].
 
     The drive only pushes; the seat only pushes, and only while y < δ0. Coefficients as in
     :func:`specific_forces`. Branch-free (selects only), so it vectorises inside loops over
     SIMD lanes.
     """
-    # Clipped after the select, so the seat force is computed for every lane: computed only
-    # where y < δ0, its coefficients would be loaded under that condition (masked loads).
-    seat = positive_part(seat if lift < record[at + K_SEAT_DEPTH * w] else ZERO)
+    seat = positive_part(seat) if lift < c[K_SEAT_DEPTH] else ZERO
     # Grouped so the spring terms are computed alongside the contact forces: a shorter
     # dependency chain per RK4 stage.
     return (positive_part(drive) + seat) - (
-        record[at + K_PRELOAD * w]
-        + record[at + K_SPRING_RATE * w] * lift
-        + record[at + K_EXTERNAL_DAMPING * w] * velocity
+        c[K_PRELOAD] + c[K_SPRING_RATE] * lift + c[K_EXTERNAL_DAMPING] * velocity
     )
 
 
 @jit_inline
-def drive_push(drive_lift, slope, record, at, w):
+def drive_push(drive_lift, slope, c):
     """Excitation term ``k'Y + b'Ẏ`` of the drive force per unit mass [m/s²].
 
     drive_lift    : float  Theoretical valve lift Y [m].
     slope         : float  Y' = dY/dθ [m/rad] (Ẏ = ω Y').
-    record, at, w : Coefficients ``K_*`` of the case (:func:`valve_coefficients`).
+    c             : Coefficients ``K_*`` of the case (:func:`case_coefficients`).
     """
-    return record[at + K_STIFFNESS * w] * drive_lift + record[at + K_DAMPING_SPEED * w] * slope
+    return c[K_STIFFNESS] * drive_lift + c[K_DAMPING_SPEED] * slope
 
 
 @jit_inline
-def specific_point(lift, velocity, drive_lift, slope, record, at, w):
+def specific_point(lift, velocity, drive_lift, slope, c):
     """Forces and acceleration of a case in state (y [m], ẏ [m/s]) at excitation Y [m], Y' [m/rad].
 
     Returns the drive and seat forces per unit mass before clipping [N/kg]
     (:func:`specific_forces`) and the acceleration ÿ [m/s²] (:func:`specific_acceleration`).
-    record, at, w : Coefficients ``K_*`` of the case (:func:`valve_coefficients`).
+    c             : Coefficients ``K_*`` of the case (:func:`case_coefficients`).
     """
-    push = drive_push(drive_lift, slope, record, at, w)
-    drive, seat = specific_forces(lift, velocity, push, record, at, w)
-    return drive, seat, specific_acceleration(lift, velocity, drive, seat, record, at, w)
+    push = drive_push(drive_lift, slope, c)
+    drive, seat = specific_forces(lift, velocity, push, c)
+    return drive, seat, specific_acceleration(lift, velocity, drive, seat, c)
 
 
 @jit
@@ -210,9 +232,10 @@ def valve_acceleration(lift, velocity, drive_lift, drive_velocity, params):
     """
     record = np.empty(N_RECORD)
     valve_coefficients(params, record, 0, 1)
-    push = record[K_STIFFNESS] * drive_lift + record[K_DAMPING] * drive_velocity
-    drive, seat = specific_forces(lift, velocity, push, record, 0, 1)
-    return specific_acceleration(lift, velocity, drive, seat, record, 0, 1)
+    c = case_coefficients(record, 0, 1)
+    push = c[K_STIFFNESS] * drive_lift + c[K_DAMPING] * drive_velocity
+    drive, seat = specific_forces(lift, velocity, push, c)
+    return specific_acceleration(lift, velocity, drive, seat, c)
 
 
 @jit
@@ -234,7 +257,7 @@ def valve_spectral_radius(params):
 
 
 @jit_inline
-def valve_energy(lift, velocity, drive_lift, record, at, w):
+def valve_energy(lift, velocity, drive_lift, c):
     """Valve-train energy per unit mass above the rest state [J/kg].
 
     ``E/M = ½ẏ² + ½ks' y² + Ps0' y + ½kz' ((δ0 − y)²·[y < δ0] − δ0²) + ½k' (Y − y)²·[Y > y]``.
@@ -243,15 +266,15 @@ def valve_energy(lift, velocity, drive_lift, record, at, w):
     through the drive. lift y [m], velocity ẏ [m/s], drive_lift Y [m]; coefficients as in
     :func:`specific_forces`.
     """
-    depth = record[at + K_SEAT_DEPTH * w]
+    depth = c[K_SEAT_DEPTH]
     seat = depth - lift if lift < depth else ZERO
     drive = drive_lift - lift if drive_lift > lift else ZERO
     return (
         HALF * velocity * velocity
-        + HALF * record[at + K_SPRING_RATE * w] * lift * lift
-        + record[at + K_PRELOAD * w] * lift
-        + HALF * record[at + K_SEAT_STIFFNESS * w] * (seat * seat - depth * depth)
-        + HALF * record[at + K_STIFFNESS * w] * drive * drive
+        + HALF * c[K_SPRING_RATE] * lift * lift
+        + c[K_PRELOAD] * lift
+        + HALF * c[K_SEAT_STIFFNESS] * (seat * seat - depth * depth)
+        + HALF * c[K_STIFFNESS] * drive * drive
     )
 
 

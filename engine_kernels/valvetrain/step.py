@@ -32,31 +32,29 @@ def valve_time_steps(record, at, w, grid_step, substeps):
 
 
 @jit_inline
-def rk4_valve_step(lift, velocity, acc, push_mid, push_end, record, at, w):
+def rk4_valve_step(lift, velocity, acc, push_mid, push_end, c):
     """One classic RK4 step of [V2] from the first-stage acceleration ``acc`` [m/s²].
 
     push_mid, push_end : float  Excitation term ``k'Y + b'Ẏ`` at the half step and the end
                                 (:func:`engine_kernels.valvetrain.model.drive_push`) [m/s²].
-    record, at, w      : Coefficients and time steps of the case (:func:`valve_time_steps`,
-                         :func:`engine_kernels.valvetrain.model.valve_coefficients`).
+    c                  : Coefficients and time steps ``K_*`` of the case
+                         (:func:`engine_kernels.valvetrain.model.case_coefficients`).
     Returns the lift [m] and velocity [m/s] at the step end. Reference: Hairer, Nørsett &
     Wanner, *Solving ODEs I*, §II.1.
     """
-    tau = record[at + K_TAU * w]
-    half_tau = record[at + K_HALF_TAU * w]
-    sixth_tau = record[at + K_SIXTH_TAU * w]
+    tau, half_tau, sixth_tau = c[K_TAU], c[K_HALF_TAU], c[K_SIXTH_TAU]
     p2 = lift + half_tau * velocity
     v2 = velocity + half_tau * acc
-    drive, seat = specific_forces(p2, v2, push_mid, record, at, w)
-    a2 = specific_acceleration(p2, v2, drive, seat, record, at, w)
+    drive, seat = specific_forces(p2, v2, push_mid, c)
+    a2 = specific_acceleration(p2, v2, drive, seat, c)
     p3 = lift + half_tau * v2
     v3 = velocity + half_tau * a2
-    drive, seat = specific_forces(p3, v3, push_mid, record, at, w)
-    a3 = specific_acceleration(p3, v3, drive, seat, record, at, w)
+    drive, seat = specific_forces(p3, v3, push_mid, c)
+    a3 = specific_acceleration(p3, v3, drive, seat, c)
     p4 = lift + tau * v3
     v4 = velocity + tau * a3
-    drive, seat = specific_forces(p4, v4, push_end, record, at, w)
-    a4 = specific_acceleration(p4, v4, drive, seat, record, at, w)
+    drive, seat = specific_forces(p4, v4, push_end, c)
+    a4 = specific_acceleration(p4, v4, drive, seat, c)
     return (
         lift + sixth_tau * (velocity + TWO * (v2 + v3) + v4),
         velocity + sixth_tau * (acc + TWO * (a2 + a3) + a4),
