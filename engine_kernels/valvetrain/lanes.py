@@ -15,9 +15,10 @@ unit mass, time steps, observations; then the state) are rows of one flat array,
 lane ``l`` at ``r·LANES + l``: with compile-time row offsets the compiler can
 prove that rows never overlap. What else keeps the lane loops vectorised (checked in
 tests/engine_kernels/test_valve_lanes.py): every helper called in them is inlined by Numba
-(``jit_inline``) and takes scalars or this array but calls nothing itself (Numba's builtin
-``max``/``min`` are calls: ``model.larger`` and friends are selects), and no row is loaded
-under a condition.
+(``jit_inline``) and takes scalars, this array or the coefficient tuple read from it but
+calls nothing itself (Numba's builtin ``max``/``min`` are calls: ``model.larger`` and friends
+are selects), and no row is loaded under a condition: a lane reads its coefficients once, at
+the top of the loop body (``model.case_coefficients``).
 
 Precision follows the excitation table: a float64 table gives the numbers of the one-case
 kernel; a float32 table runs the lanes in single precision, twice the lanes per vector (8
