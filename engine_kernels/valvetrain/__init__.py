@@ -3,10 +3,10 @@
 One physical concept per module:
 
 * :mod:`~engine_kernels.valvetrain.rocker` — rocker kinematics [R1]–[R6], tappet law;
-* :mod:`~engine_kernels.valvetrain.layout` — parameter, output, curve, settings and
-  observation rows of the valve kernels;
-* :mod:`~engine_kernels.valvetrain.model` — forces, energy and stiffest mode of [V2], the
-  excitation table;
+* :mod:`~engine_kernels.valvetrain.layout` — parameter, output, curve and settings rows of
+  the valve kernels, and the case record (coefficients, time steps, observations) they share;
+* :mod:`~engine_kernels.valvetrain.model` — coefficients, forces, energy and stiffest mode of
+  [V2], the excitation table;
 * :mod:`~engine_kernels.valvetrain.rk4` — RK4 stability and Hermite interpolation;
   :mod:`~engine_kernels.valvetrain.step` — one RK4 step of [V2];
 * :mod:`~engine_kernels.valvetrain.guard` — input checks and stable sub-step counts;
@@ -59,7 +59,7 @@ from engine_kernels.valvetrain.layout import (
     C_SEAT_FORCE,
     C_VELOCITY,
     DEFAULT_MAX_SUBSTEPS,
-    N_STATS,
+    N_RECORD,
     O_BOUNCE_COUNT,
     O_BOUNCE_HEIGHT,
     O_ERROR_ESTIMATE,
@@ -107,14 +107,13 @@ from engine_kernels.valvetrain.layout import (
     valve_settings,
 )
 from engine_kernels.valvetrain.model import (
+    TRANSITION_BAND,
     equivalent_mass,
     excitation_at,
     valve_acceleration,
+    valve_coefficients,
     valve_energy,
     valve_spectral_radius,
-)
-from engine_kernels.valvetrain.observations import (
-    TRANSITION_BAND,
 )
 from engine_kernels.valvetrain.step import (
     ERROR_ORDER_DIVISOR,
@@ -142,7 +141,7 @@ __all__ = [
     "JUMP_NONE_IN_RANGE",
     "JUMP_RUN_FAILED",
     "JUMP_STATUS_NAMES",
-    "N_STATS",
+    "N_RECORD",
     "O_BOUNCE_COUNT",
     "O_BOUNCE_HEIGHT",
     "O_ERROR_ESTIMATE",
@@ -201,6 +200,7 @@ __all__ = [
     "stability_substeps_batch",
     "valid_valve_parameters",
     "valve_acceleration",
+    "valve_coefficients",
     "valve_energy",
     "valve_response",
     "valve_response_batch",

@@ -16,6 +16,9 @@ import numpy as np
 
 from engine_kernels._jit import jit, jit_inline
 from engine_kernels.valvetrain.layout import (
+    K_PRELOAD,
+    K_SEAT_DEPTH,
+    K_TIME_STEP,
     PHASE_CLOSED,
     ST_ENERGY0,
     ST_EXCESS,
@@ -33,6 +36,7 @@ from engine_kernels.valvetrain.model import (
     ONE,
     TWO,
     ZERO,
+    case_coefficients,
     larger,
     positive_part,
     valve_energy,
@@ -55,22 +59,7 @@ def drive_power(drive, drive_velocity):
 
 
 @jit_inline
-def observe_energy(
-    stats,
-    at,
-    w,
-    time_step,
-    lift,
-    velocity,
-    drive_lift,
-    drive_velocity,
-    drive,
-    stiffness,
-    spring_rate,
-    preload,
-    seat_stiffness,
-    seat_depth,
-):
+def observe_energy(record, at, w, lift, velocity, drive_lift, drive_velocity, drive):
     """Energy checks (every ``ENERGY_INTERVAL`` grid points and at the end).
 
     The exact solution keeps ``E(t) − E(0) ≤ W(t)``, the work done by the cam through the
@@ -83,52 +72,38 @@ def observe_energy(
     checks beyond ``ENERGY_REST_RISE`` for :func:`finish_observations`. Energy and work are
     per unit mass [J/kg]; W is the trapezoidal sum of the power over the grid points.
 
-    time_step      : float  Grid time step Δθ/ω [s].
-    stiffness      : float  k' = k/M [1/s²];  spring_rate : float  ks' = ks/M [1/s²].
-    preload        : float  Ps0' = Ps0/M [m/s²]; seat_stiffness : float  kz' = kz/M [1/s²].
-    Other arguments as in :func:`start_observations`.
+    The grid time step Δθ/ω is the record's ``K_TIME_STEP`` row; arguments as in
+    :func:`engine_kernels.valvetrain.observations.start_observations`.
     """
-    energy = valve_energy(
-        lift,
-        velocity,
-        drive_lift,
-        ONE,
-        stiffness,
-        spring_rate,
-        preload,
-        seat_stiffness,
-        seat_depth,
-    )
-    initial = stats[at + ST_ENERGY0 * w]
+    energy = valve_energy(lift, velocity, drive_lift, case_coefficients(record, at, w))
+    initial = record[at + ST_ENERGY0 * w]
     initial = energy if math.isnan(initial) else initial
-    stats[at + ST_ENERGY0 * w] = initial
+    record[at + ST_ENERGY0 * w] = initial
     power = drive_power(drive, drive_velocity)
-    trapezoid = TWO * stats[at + ST_POWER_SUM * w] - stats[at + ST_POWER_FIRST * w] - power
-    work = HALF * time_step * trapezoid
-    stats[at + ST_EXCESS * w] = larger(stats[at + ST_EXCESS * w], energy - initial - work)
-    stats[at + ST_WORK_MAX * w] = larger(stats[at + ST_WORK_MAX * w], abs(work))
+    trapezoid = TWO * record[at + ST_POWER_SUM * w] - record[at + ST_POWER_FIRST * w] - power
+    work = HALF * record[at + K_TIME_STEP * w] * trapezoid
+    record[at + ST_EXCESS * w] = larger(record[at + ST_EXCESS * w], energy - initial - work)
+    record[at + ST_WORK_MAX * w] = larger(record[at + ST_WORK_MAX * w], abs(work))
 
-    closed = stats[at + ST_PHASE * w] >= PHASE_CLOSED
+    closed = record[at + ST_PHASE * w] >= PHASE_CLOSED
     resting = closed & (drive_lift == ZERO) & (drive_velocity == ZERO)
-    before = stats[at + ST_REST_ENERGY * w]
+    before = record[at + ST_REST_ENERGY * w]
     rise = energy - (ONE + ENERGY_REST_RISE) * before
     rise = rise if resting & (not math.isnan(before)) else -INF
-    stats[at + ST_REST_RISE * w] = larger(stats[at + ST_REST_RISE * w], rise)
-    stats[at + ST_REST_ENERGY * w] = energy if resting else NAN
+    record[at + ST_REST_RISE * w] = larger(record[at + ST_REST_RISE * w], rise)
+    record[at + ST_REST_ENERGY * w] = energy if resting else NAN
 
 
 @jit
-def energy_pumped(stats, at, w, preload, seat_depth):
+def energy_pumped(record, at, w):
     """True if a run broke the energy balance checked by :func:`observe_energy`.
 
     That is, if the energy ever exceeded its start value plus the cam's work by more than
     ``ENERGY_SLACK`` times the largest work, or the resting energy after closure rose by more
     than ``ENERGY_REST_RISE`` between checks (both plus ``ENERGY_FLOOR_FRACTION·Ps0·δ0``).
 
-    stats, at, w : Observations of the case (see :func:`observe_energy`).
-    preload      : float  Ps0' = Ps0/M [m/s²].
-    seat_depth   : float  δ0 = Ps0/kz [m].
+    record, at, w : Record of the case (see :func:`observe_energy`); Ps0' and δ0 set the floor.
     """
-    floor = ENERGY_FLOOR_FRACTION * preload * seat_depth
-    pumped = stats[at + ST_EXCESS * w] > ENERGY_SLACK * stats[at + ST_WORK_MAX * w] + floor
-    return pumped or stats[at + ST_REST_RISE * w] > floor
+    floor = ENERGY_FLOOR_FRACTION * record[at + K_PRELOAD * w] * record[at + K_SEAT_DEPTH * w]
+    pumped = record[at + ST_EXCESS * w] > ENERGY_SLACK * record[at + ST_WORK_MAX * w] + floor
+    return pumped or record[at + ST_REST_RISE * w] > floor

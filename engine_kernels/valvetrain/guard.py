@@ -71,15 +71,7 @@ def stability_substeps(params, grid_step):
     params    : 1-D array  Parameter row (``P_*``).
     grid_step : float      Grid step Δθ [rad]; the time step is Δθ/ω.
     """
-    radius = valve_spectral_radius(
-        params[P_MASS],
-        params[P_DRIVE_STIFFNESS],
-        params[P_DRIVE_DAMPING],
-        params[P_SPRING_RATE],
-        params[P_SEAT_STIFFNESS],
-        params[P_SEAT_DAMPING],
-        params[P_EXTERNAL_DAMPING],
-    )
+    radius = valve_spectral_radius(params)
     step = grid_step / params[P_SPEED]
     return stable_substeps(step, radius, STEP_RATIO_TARGET), step * radius
 

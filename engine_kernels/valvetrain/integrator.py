@@ -35,31 +35,25 @@ from engine_kernels.valvetrain.layout import (
     C_LIFT,
     C_SEAT_FORCE,
     C_VELOCITY,
-    N_STATS,
+    K_MASS,
+    K_SEAT_DEPTH,
+    K_SPEED,
+    N_RECORD,
     O_ERROR_ESTIMATE,
-    P_DRIVE_DAMPING,
-    P_DRIVE_STIFFNESS,
-    P_EXTERNAL_DAMPING,
     P_INITIAL_LIFT,
     P_INITIAL_VELOCITY,
-    P_MASS,
-    P_PRELOAD,
-    P_SEAT_DAMPING,
-    P_SEAT_STIFFNESS,
-    P_SPRING_RATE,
     S_ESTIMATE_ERROR,
     S_SWITCH_AWARE,
     VALVE_CURVE_NAMES,
 )
 from engine_kernels.valvetrain.model import (
+    case_coefficients,
     drive_push,
     excitation_lift_slope,
-    specific_acceleration,
-    specific_coefficients,
-    specific_forces,
+    specific_point,
+    valve_coefficients,
 )
 from engine_kernels.valvetrain.observations import (
-    TRANSITION_BAND,
     finish_observations,
     nose_position,
     observe_closure,
@@ -67,12 +61,12 @@ from engine_kernels.valvetrain.observations import (
     record_closure_events,
     start_observations,
 )
-from engine_kernels.valvetrain.step import ERROR_ORDER_DIVISOR, rk4_valve_step
+from engine_kernels.valvetrain.step import ERROR_ORDER_DIVISOR, rk4_valve_step, valve_time_steps
 from engine_kernels.valvetrain.switching import switch_aware_step
 
 
 @jit_inline
-def _observe_substep(stats, prev_lift, prev_velocity, prev_acc, lift, seat_depth, past_nose):
+def _observe_substep(record, prev_lift, prev_velocity, prev_acc, lift, past_nose):
     """Seat phase at an RK4 sub-step point inside a grid step (``observe_closure``).
 
     A contact with a stiff seat can begin and end between two grid points, but it lasts
@@ -82,8 +76,8 @@ def _observe_substep(stats, prev_lift, prev_velocity, prev_acc, lift, seat_depth
     sub-step point (lift [m], velocity [m/s], acceleration [m/s²]); ``past_nose``: this one
     is at or past the cam's nose.
     """
-    if observe_closure(stats, 0, 1, lift, seat_depth, past_nose):
-        record_closure_events(stats, 0, 1, prev_lift, prev_velocity, prev_acc, seat_depth)
+    if observe_closure(record, 0, 1, lift, past_nose):
+        record_closure_events(record, 0, 1, prev_lift, prev_velocity, prev_acc)
 
 
 @jit
@@ -95,7 +89,7 @@ def _integrate(
     params,
     substeps,
     switch_aware,
-    stats,
+    record,
     out,
     curves,
     trace,
@@ -103,52 +97,40 @@ def _integrate(
 ):
     """Integrate one case over the table with RK4 grid step ``2·stride·table_step``.
 
+    record : 1-D array  The case record (layout in :mod:`engine_kernels.valvetrain.layout`),
+                        coefficients ``K_*`` already written by ``valve_coefficients``.
     Fills ``out`` (``O_*`` rows from :func:`finish_observations`), the curves if
     ``curves`` has columns, and either records the lift at each grid point into ``trace`` or
     (``compare``) returns the largest difference from a trace recorded at half this step.
     """
-    k, b, ks, ps0, kz, bz, gamma, depth, speed, b_speed = specific_coefficients(params)
-    mass = params[P_MASS]
-    band = TRANSITION_BAND * ps0
     half = stride
     n_steps = (excitation.shape[1] - 1) // (2 * half)
     grid_step = 2.0 * half * table_step
-    tau = grid_step / speed / substeps
-    half_tau = 0.5 * tau
-    sixth_tau = tau / 6.0
+    valve_time_steps(record, 0, 1, grid_step, substeps)
+    c = case_coefficients(record, 0, 1)
+    speed = c[K_SPEED]
+    mass = c[K_MASS]
+    depth = c[K_SEAT_DEPTH]
     lift = params[P_INITIAL_LIFT]
     velocity = params[P_INITIAL_VELOCITY]
     prev_lift, prev_velocity, prev_acc = lift, velocity, 0.0  # set before they are read
     nose = nose_position(excitation)
     store = curves.shape[1] > 0
-    record = trace.shape[0] > 0
+    record_trace = trace.shape[0] > 0
     difference = 0.0
     for n in range(n_steps + 1):
         node = 2 * half * n
         drive_lift = excitation[0, node]
         slope = excitation[1, node]
         drive_velocity = speed * slope
-        push = drive_push(drive_lift, slope, k, b_speed)
-        drive, seat = specific_forces(lift, velocity, push, k, b, ps0, kz, bz)
-        acc = specific_acceleration(lift, velocity, drive, seat, ks, ps0, gamma, depth)
+        drive, seat, acc = specific_point(lift, velocity, drive_lift, slope, c)
         angle = table_start + n * grid_step
         if n == 0:
             start_observations(
-                stats,
-                0,
-                1,
-                angle,
-                lift,
-                velocity,
-                acc,
-                drive_lift,
-                drive_velocity,
-                drive,
-                seat,
-                depth,
+                record, 0, 1, angle, lift, velocity, acc, drive_lift, drive_velocity, drive, seat
             )
         elif observe_valve(
-            stats,
+            record,
             0,
             1,
             angle,
@@ -159,28 +141,11 @@ def _integrate(
             drive_velocity,
             drive,
             seat,
-            depth,
-            band,
             node >= nose,
         ):
-            record_closure_events(stats, 0, 1, prev_lift, prev_velocity, prev_acc, depth)
+            record_closure_events(record, 0, 1, prev_lift, prev_velocity, prev_acc)
         if n % ENERGY_INTERVAL == 0 or n == n_steps:
-            observe_energy(
-                stats,
-                0,
-                1,
-                grid_step / speed,
-                lift,
-                velocity,
-                drive_lift,
-                drive_velocity,
-                drive,
-                k,
-                ks,
-                ps0,
-                kz,
-                depth,
-            )
+            observe_energy(record, 0, 1, lift, velocity, drive_lift, drive_velocity, drive)
         if store:
             curves[C_LIFT, n] = lift
             curves[C_VELOCITY, n] = velocity
@@ -188,7 +153,7 @@ def _integrate(
             curves[C_DRIVE_FORCE, n] = mass * max(0.0, drive)
             seated = (seat > 0.0) & (lift < depth)
             curves[C_SEAT_FORCE, n] = mass * seat if seated else 0.0
-        if record:
+        if record_trace:
             if compare:
                 difference = max(difference, abs(lift - trace[2 * n]))
             else:
@@ -197,61 +162,27 @@ def _integrate(
             break
         prev_lift, prev_velocity, prev_acc = lift, velocity, acc
         if switch_aware:
-            inv_mass = 1.0 / mass
             for j in range(substeps):
                 start = node + 2.0 * half * j / substeps
                 if j > 0:
                     y0, s0 = excitation_lift_slope(excitation, table_step, start)
-                    past = start >= nose
-                    _observe_substep(stats, prev_lift, prev_velocity, prev_acc, lift, depth, past)
-                    push = drive_push(y0, s0, k, b_speed)
-                    drive, seat = specific_forces(lift, velocity, push, k, b, ps0, kz, bz)
-                    prev_lift, prev_velocity = lift, velocity
-                    prev_acc = specific_acceleration(
-                        lift, velocity, drive, seat, ks, ps0, gamma, depth
+                    _observe_substep(
+                        record, prev_lift, prev_velocity, prev_acc, lift, start >= nose
                     )
+                    prev_lift, prev_velocity = lift, velocity
+                    _, _, prev_acc = specific_point(lift, velocity, y0, s0, c)
                 stop = node + 2.0 * half * (j + 1) / substeps
                 lift, velocity, _ = switch_aware_step(
-                    excitation,
-                    table_step,
-                    start,
-                    stop,
-                    speed,
-                    lift,
-                    velocity,
-                    inv_mass,
-                    params[P_DRIVE_STIFFNESS],
-                    params[P_DRIVE_DAMPING],
-                    params[P_SPRING_RATE],
-                    params[P_PRELOAD],
-                    params[P_SEAT_STIFFNESS],
-                    params[P_SEAT_DAMPING],
-                    params[P_EXTERNAL_DAMPING],
-                    depth,
+                    excitation, table_step, start, stop, lift, velocity, params
                 )
         elif substeps == 1:
             lift, velocity = rk4_valve_step(
                 lift,
                 velocity,
                 acc,
-                tau,
-                half_tau,
-                sixth_tau,
-                drive_push(excitation[0, node + half], excitation[1, node + half], k, b_speed),
-                drive_push(
-                    excitation[0, node + 2 * half],
-                    excitation[1, node + 2 * half],
-                    k,
-                    b_speed,
-                ),
-                k,
-                b,
-                ks,
-                ps0,
-                kz,
-                bz,
-                gamma,
-                depth,
+                drive_push(excitation[0, node + half], excitation[1, node + half], c),
+                drive_push(excitation[0, node + 2 * half], excitation[1, node + 2 * half], c),
+                c,
             )
         else:
             for j in range(substeps):
@@ -263,32 +194,21 @@ def _integrate(
                 y1, s1 = excitation_lift_slope(
                     excitation, table_step, node + 2.0 * half * (j + 1) / substeps
                 )
-                push = drive_push(y0, s0, k, b_speed)
-                drive, seat = specific_forces(lift, velocity, push, k, b, ps0, kz, bz)
-                a0 = specific_acceleration(lift, velocity, drive, seat, ks, ps0, gamma, depth)
+                _, _, a0 = specific_point(lift, velocity, y0, s0, c)
                 if j > 0:
-                    past = position >= nose
-                    _observe_substep(stats, prev_lift, prev_velocity, prev_acc, lift, depth, past)
+                    _observe_substep(
+                        record, prev_lift, prev_velocity, prev_acc, lift, position >= nose
+                    )
                     prev_lift, prev_velocity, prev_acc = lift, velocity, a0
                 lift, velocity = rk4_valve_step(
                     lift,
                     velocity,
                     a0,
-                    tau,
-                    half_tau,
-                    sixth_tau,
-                    drive_push(ym, sm, k, b_speed),
-                    drive_push(y1, s1, k, b_speed),
-                    k,
-                    b,
-                    ks,
-                    ps0,
-                    kz,
-                    bz,
-                    gamma,
-                    depth,
+                    drive_push(ym, sm, c),
+                    drive_push(y1, s1, c),
+                    c,
                 )
-    finish_observations(stats, 0, 1, grid_step, lift, velocity, mass, ps0, depth, out)
+    finish_observations(record, 0, 1, grid_step, lift, velocity, out)
     return difference
 
 
@@ -314,7 +234,8 @@ def valve_response(excitation, table_step, table_start, params, settings, out, c
         return
     switch_aware = settings[S_SWITCH_AWARE] != 0
     estimate = settings[S_ESTIMATE_ERROR] != 0 and excitation.shape[1] >= 5
-    stats = np.empty(N_STATS)
+    record = np.empty(N_RECORD)
+    valve_coefficients(params, record, 0, 1)
     trace = np.empty((excitation.shape[1] - 1) // 2 + 1 if estimate else 0)
     _integrate(
         excitation,
@@ -324,7 +245,7 @@ def valve_response(excitation, table_step, table_start, params, settings, out, c
         params,
         substeps,
         switch_aware,
-        stats,
+        record,
         out,
         curves,
         trace,
@@ -340,7 +261,7 @@ def valve_response(excitation, table_step, table_start, params, settings, out, c
             params,
             substeps,
             switch_aware,
-            stats,
+            record,
             scratch,
             curves[:, :0],
             trace,

@@ -19,27 +19,14 @@ from engine_kernels.valvetrain.guard import error_estimate_is_stable, prepare_ca
 from engine_kernels.valvetrain.lanes import (
     LANES,
     N_LANE_ROWS,
-    R_B,
-    R_B_SPEED,
-    R_BAND,
-    R_BZ,
-    R_DEPTH,
     R_DIFFERENCE,
-    R_GAMMA,
-    R_K,
-    R_KS,
-    R_KZ,
     R_LIFT,
-    R_MASS,
-    R_PS0,
-    R_SPEED,
-    R_STATS,
     R_VELOCITY,
     lane_pass,
 )
-from engine_kernels.valvetrain.layout import N_STATS, O_ERROR_ESTIMATE, P_MASS, S_ESTIMATE_ERROR
-from engine_kernels.valvetrain.model import specific_coefficients
-from engine_kernels.valvetrain.observations import TRANSITION_BAND, finish_observations
+from engine_kernels.valvetrain.layout import O_ERROR_ESTIMATE, S_ESTIMATE_ERROR
+from engine_kernels.valvetrain.model import valve_coefficients
+from engine_kernels.valvetrain.observations import finish_observations
 from engine_kernels.valvetrain.step import ERROR_ORDER_DIVISOR
 
 
@@ -47,25 +34,12 @@ from engine_kernels.valvetrain.step import ERROR_ORDER_DIVISOR
 def block_data(excitation, params, cases):
     """Per-lane rows of a block, in the precision of the excitation table.
 
-    cases : 1-D int64  Parameter row of each of the ``LANES`` lanes.
+    cases : 1-D int64  Parameter row of each of the ``LANES`` lanes (their coefficients
+                       ``K_*`` are written, ``valve_coefficients``).
     """
-    data = np.empty((N_LANE_ROWS + N_STATS) * LANES, excitation.dtype)
+    data = np.empty(N_LANE_ROWS * LANES, excitation.dtype)
     for l in range(LANES):
-        k, b, ks, ps0, kz, bz, gamma, depth, speed, b_speed = specific_coefficients(
-            params[cases[l]]
-        )
-        data[R_K * LANES + l] = k
-        data[R_B * LANES + l] = b
-        data[R_KS * LANES + l] = ks
-        data[R_PS0 * LANES + l] = ps0
-        data[R_KZ * LANES + l] = kz
-        data[R_BZ * LANES + l] = bz
-        data[R_GAMMA * LANES + l] = gamma
-        data[R_DEPTH * LANES + l] = depth
-        data[R_SPEED * LANES + l] = speed
-        data[R_B_SPEED * LANES + l] = b_speed
-        data[R_BAND * LANES + l] = TRANSITION_BAND * ps0
-        data[R_MASS * LANES + l] = params[cases[l], P_MASS]
+        valve_coefficients(params[cases[l]], data, l, LANES)
     return data
 
 
@@ -77,18 +51,9 @@ def finish_lanes(data, count, step_angle, cases, out):
     cases      : 1-D int64  Output row of each lane.
     """
     for l in range(count):
-        finish_observations(
-            data,
-            R_STATS + l,
-            LANES,
-            step_angle,
-            data[R_LIFT * LANES + l],
-            data[R_VELOCITY * LANES + l],
-            data[R_MASS * LANES + l],
-            data[R_PS0 * LANES + l],
-            data[R_DEPTH * LANES + l],
-            out[cases[l]],
-        )
+        lift = data[R_LIFT * LANES + l]
+        velocity = data[R_VELOCITY * LANES + l]
+        finish_observations(data, l, LANES, step_angle, lift, velocity, out[cases[l]])
 
 
 @jit

@@ -10,13 +10,15 @@ Sub-stepped blocks also follow the seat phase at every sub-step point, where a l
 stiff seat cannot hide. Only when some lane's seat phase changed (first closure, a bounce)
 does a scalar loop record it.
 
-Per-lane data (coefficients per unit mass, state, observations) are rows of one flat array,
-row ``r`` of lane ``l`` at ``r·LANES + l``: with compile-time row offsets the compiler can
+Per-lane data (the case record of :mod:`engine_kernels.valvetrain.layout`: coefficients per
+unit mass, time steps, observations; then the state) are rows of one flat array, row ``r`` of
+lane ``l`` at ``r·LANES + l``: with compile-time row offsets the compiler can
 prove that rows never overlap. What else keeps the lane loops vectorised (checked in
 tests/engine_kernels/test_valve_lanes.py): every helper called in them is inlined by Numba
-(``jit_inline``) and takes scalars or this array but calls nothing itself (Numba's builtin
-``max``/``min`` are calls: ``model.larger`` and friends are selects), and no row is loaded
-under a condition.
+(``jit_inline``) and takes scalars, this array or the coefficient tuple read from it but
+calls nothing itself (Numba's builtin ``max``/``min`` are calls: ``model.larger`` and friends
+are selects), and no row is loaded under a condition: a lane reads its coefficients once, at
+the top of the loop body (``model.case_coefficients``).
 
 Precision follows the excitation table: a float64 table gives the numbers of the one-case
 kernel; a float32 table runs the lanes in single precision, twice the lanes per vector (8
@@ -31,14 +33,16 @@ from __future__ import annotations
 from engine_kernels._jit import jit, jit_inline
 from engine_kernels.valvetrain.energy_balance import ENERGY_INTERVAL, observe_energy
 from engine_kernels.valvetrain.layout import (
+    K_SPEED,
+    N_RECORD,
     P_INITIAL_LIFT,
     P_INITIAL_VELOCITY,
 )
 from engine_kernels.valvetrain.model import (
+    case_coefficients,
     drive_push,
     excitation_lift_slope,
-    specific_acceleration,
-    specific_forces,
+    specific_point,
 )
 from engine_kernels.valvetrain.observations import (
     nose_position,
@@ -47,37 +51,20 @@ from engine_kernels.valvetrain.observations import (
     record_closure_events,
     start_observations,
 )
-from engine_kernels.valvetrain.step import rk4_valve_step
+from engine_kernels.valvetrain.step import rk4_valve_step, valve_time_steps
 
 LANES = 32
 
-# Rows of the flat per-block array, followed by the N_STATS observation rows. Coefficients
-# are per unit mass (see engine_kernels.valvetrain.model.specific_coefficients).
-R_K = 0
-R_B = 1
-R_KS = 2
-R_PS0 = 3
-R_KZ = 4
-R_BZ = 5
-R_GAMMA = 6
-R_DEPTH = 7
-R_SPEED = 8
-R_B_SPEED = 9
-R_BAND = 10
-R_MASS = 11
-R_TAU = 12
-R_HALF_TAU = 13
-R_SIXTH_TAU = 14
-R_TIME_STEP = 15
-R_LIFT = 16
-R_VELOCITY = 17
-R_ACC = 18
-R_PREV_LIFT = 19
-R_PREV_VELOCITY = 20
-R_DIFFERENCE = 21
-R_ANGLE = 22
-N_LANE_ROWS = 23
-R_STATS = N_LANE_ROWS * LANES
+# Rows of the flat per-block array after the case records (coefficients, time steps and
+# observations, engine_kernels.valvetrain.layout): the state of each lane, and the angle.
+R_LIFT = N_RECORD
+R_VELOCITY = N_RECORD + 1
+R_ACC = N_RECORD + 2
+R_PREV_LIFT = N_RECORD + 3
+R_PREV_VELOCITY = N_RECORD + 4
+R_DIFFERENCE = N_RECORD + 5
+R_ANGLE = N_RECORD + 6
+N_LANE_ROWS = N_RECORD + 7
 
 
 @jit_inline
@@ -89,60 +76,17 @@ def _lane_point(data, l, drive_lift, slope):
     """
     lift = data[R_LIFT * LANES + l]
     velocity = data[R_VELOCITY * LANES + l]
-    drive, seat, acc = _lane_forces(data, l, lift, velocity, drive_lift, slope)
+    c = case_coefficients(data, l, LANES)
+    drive, seat, acc = specific_point(lift, velocity, drive_lift, slope, c)
     return lift, velocity, drive, seat, acc
-
-
-@jit_inline
-def _lane_forces(data, l, lift, velocity, drive_lift, slope):
-    """Forces and acceleration of lane ``l`` in state (lift [m], velocity [m/s]) (_lane_point)."""
-    push = drive_push(drive_lift, slope, data[R_K * LANES + l], data[R_B_SPEED * LANES + l])
-    drive, seat = specific_forces(
-        lift,
-        velocity,
-        push,
-        data[R_K * LANES + l],
-        data[R_B * LANES + l],
-        data[R_PS0 * LANES + l],
-        data[R_KZ * LANES + l],
-        data[R_BZ * LANES + l],
-    )
-    acc = specific_acceleration(
-        lift,
-        velocity,
-        drive,
-        seat,
-        data[R_KS * LANES + l],
-        data[R_PS0 * LANES + l],
-        data[R_GAMMA * LANES + l],
-        data[R_DEPTH * LANES + l],
-    )
-    return drive, seat, acc
 
 
 @jit_inline
 def _lane_step(data, l, lift, velocity, acc, ym, sm, y1, s1):
     """RK4 step of lane ``l`` from its first-stage ``acc``; excitation Y [m], Y' [m/rad]."""
-    k = data[R_K * LANES + l]
-    b_speed = data[R_B_SPEED * LANES + l]
-    lift, velocity = rk4_valve_step(
-        lift,
-        velocity,
-        acc,
-        data[R_TAU * LANES + l],
-        data[R_HALF_TAU * LANES + l],
-        data[R_SIXTH_TAU * LANES + l],
-        drive_push(ym, sm, k, b_speed),
-        drive_push(y1, s1, k, b_speed),
-        k,
-        data[R_B * LANES + l],
-        data[R_KS * LANES + l],
-        data[R_PS0 * LANES + l],
-        data[R_KZ * LANES + l],
-        data[R_BZ * LANES + l],
-        data[R_GAMMA * LANES + l],
-        data[R_DEPTH * LANES + l],
-    )
+    c = case_coefficients(data, l, LANES)
+    push_mid = drive_push(ym, sm, c)
+    lift, velocity = rk4_valve_step(lift, velocity, acc, push_mid, drive_push(y1, s1, c), c)
     data[R_LIFT * LANES + l] = lift
     data[R_VELOCITY * LANES + l] = velocity
 
@@ -153,19 +97,9 @@ def _start_lanes(data, angle, drive_lift, slope):
     for l in range(LANES):
         lift, velocity, drive, seat, acc = _lane_point(data, l, drive_lift, slope)
         data[R_ACC * LANES + l] = acc
+        drive_velocity = data[K_SPEED * LANES + l] * slope
         start_observations(
-            data,
-            R_STATS + l,
-            LANES,
-            angle,
-            lift,
-            velocity,
-            acc,
-            drive_lift,
-            data[R_SPEED * LANES + l] * slope,
-            drive,
-            seat,
-            data[R_DEPTH * LANES + l],
+            data, l, LANES, angle, lift, velocity, acc, drive_lift, drive_velocity, drive, seat
         )
 
 
@@ -182,18 +116,16 @@ def _observe_lanes(data, angle, drive_lift, slope, past_nose):
         data[R_ACC * LANES + l] = acc
         event = observe_valve(
             data,
-            R_STATS + l,
+            l,
             LANES,
             angle,
             lift,
             velocity,
             acc,
             drive_lift,
-            data[R_SPEED * LANES + l] * slope,
+            data[K_SPEED * LANES + l] * slope,
             drive,
             seat,
-            data[R_DEPTH * LANES + l],
-            data[R_BAND * LANES + l],
             past_nose,
         )
         changed |= event
@@ -210,10 +142,9 @@ def _record_events_lanes(data, prev_drive_lift, prev_slope):
     for l in range(LANES):
         lift = data[R_PREV_LIFT * LANES + l]
         velocity = data[R_PREV_VELOCITY * LANES + l]
-        _, _, acc = _lane_forces(data, l, lift, velocity, prev_drive_lift, prev_slope)
-        record_closure_events(
-            data, R_STATS + l, LANES, lift, velocity, acc, data[R_DEPTH * LANES + l]
-        )
+        c = case_coefficients(data, l, LANES)
+        _, _, acc = specific_point(lift, velocity, prev_drive_lift, prev_slope, c)
+        record_closure_events(data, l, LANES, lift, velocity, acc)
 
 
 @jit
@@ -221,22 +152,8 @@ def _energy_lanes(data, drive_lift, slope):
     """Energy checks of every lane at a grid point (``observe_energy``)."""
     for l in range(LANES):
         lift, velocity, drive, _, _ = _lane_point(data, l, drive_lift, slope)
-        observe_energy(
-            data,
-            R_STATS + l,
-            LANES,
-            data[R_TIME_STEP * LANES + l],
-            lift,
-            velocity,
-            drive_lift,
-            data[R_SPEED * LANES + l] * slope,
-            drive,
-            data[R_K * LANES + l],
-            data[R_KS * LANES + l],
-            data[R_PS0 * LANES + l],
-            data[R_KZ * LANES + l],
-            data[R_DEPTH * LANES + l],
-        )
+        drive_velocity = data[K_SPEED * LANES + l] * slope
+        observe_energy(data, l, LANES, lift, velocity, drive_lift, drive_velocity, drive)
 
 
 @jit
@@ -277,14 +194,7 @@ def _observe_seat_lanes(data, past_nose):
     """
     changed = False
     for l in range(LANES):
-        changed |= observe_closure(
-            data,
-            R_STATS + l,
-            LANES,
-            data[R_LIFT * LANES + l],
-            data[R_DEPTH * LANES + l],
-            past_nose,
-        )
+        changed |= observe_closure(data, l, LANES, data[R_LIFT * LANES + l], past_nose)
     return changed
 
 
@@ -314,12 +224,7 @@ def lane_pass(excitation, table_step, table_start, half, substeps, params, cases
     record = trace.shape[0] > 0
     compare = half == 2
     for l in range(LANES):
-        speed = data[R_SPEED * LANES + l]
-        tau = grid_step / speed / substeps
-        data[R_TAU * LANES + l] = tau
-        data[R_HALF_TAU * LANES + l] = 0.5 * tau
-        data[R_SIXTH_TAU * LANES + l] = tau / 6.0
-        data[R_TIME_STEP * LANES + l] = grid_step / speed
+        valve_time_steps(data, l, LANES, grid_step, substeps)
         data[R_LIFT * LANES + l] = params[cases[l], P_INITIAL_LIFT]
         data[R_VELOCITY * LANES + l] = params[cases[l], P_INITIAL_VELOCITY]
         data[R_DIFFERENCE * LANES + l] = 0.0

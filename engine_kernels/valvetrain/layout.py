@@ -2,9 +2,10 @@
 
 Parameters are rows indexed by the ``P_*`` constants (SI units, ``VALVE_PARAM_UNITS``),
 outputs by the ``O_*`` constants, curves by the ``C_*`` constants, integer settings by the
-``S_*`` constants (build them with :func:`valve_settings`), status codes ``STATUS_*``; the
-running observations of a run are the ``ST_*`` rows of a flat array
-(:mod:`engine_kernels.valvetrain.observations`), its seat phase one of the ``PHASE_*`` values.
+``S_*`` constants (build them with :func:`valve_settings`), status codes ``STATUS_*``. What
+the kernels carry for a case (coefficients ``K_*``, time steps, running observations ``ST_*``)
+is one record of ``N_RECORD`` rows of a flat array; a run's seat phase is one of the
+``PHASE_*`` values.
 The model itself is in :mod:`engine_kernels.valvetrain.model`.
 """
 
@@ -142,31 +143,54 @@ PHASE_OPEN = np.float32(1.0)
 PHASE_CLOSED = np.float32(2.0)
 PHASE_BOUNCING = np.float32(3.0)
 
-# Rows of the running observations of one case (engine_kernels.valvetrain.observations).
-ST_MAX_LIFT = 0
-ST_MAX_V = 1
-ST_MIN_V = 2
-ST_MAX_A = 3
-ST_MIN_A = 4
-ST_MAX_FORCE = 5
-ST_JUMP_START = 6
-ST_JUMP_STEPS = 7
-ST_JUMP_GAP = 8
-ST_PHASE = 9
-ST_BOUNCE_HEIGHT = 10
-ST_CONTACT = 11
-ST_SEATED = 12
-ST_TRANSITIONS = 13
-ST_POWER_SUM = 14
-ST_POWER_FIRST = 15
-ST_SEAT_Y0 = 16
-ST_SEAT_V0 = 17
-ST_SEAT_A0 = 18
-ST_CAPTURED = 19
-ST_BOUNCES = 20
-ST_ENERGY0 = 21
-ST_EXCESS = 22
-ST_WORK_MAX = 23
-ST_REST_ENERGY = 24
-ST_REST_RISE = 25
-N_STATS = 26
+# The record of a case: its coefficients of [V2] per unit mass (``K_*``, built from a ``P_*``
+# row by engine_kernels.valvetrain.model.valve_coefficients), its time steps (``K_TAU`` ...,
+# engine_kernels.valvetrain.step.valve_time_steps) and its running observations (``ST_*``,
+# engine_kernels.valvetrain.observations). Row r of the case sits at ``at + r*w`` of a flat
+# array: the one-case kernel has w = 1, the lane kernel w = LANES and ``at`` the lane, so both
+# read every coefficient through this one layout. The arithmetic of a case reads its K_* rows
+# once, as the tuple of engine_kernels.valvetrain.model.case_coefficients (element r = row r,
+# so c[K_X] is row K_X): the K_* rows stay first and contiguous, up to K_TIME_STEP.
+K_STIFFNESS = 0  # k' = k/M [1/s²]
+K_DAMPING = 1  # b' = b/M [1/s]
+K_SPRING_RATE = 2  # ks' = ks/M [1/s²]
+K_PRELOAD = 3  # Ps0' = Ps0/M [m/s²]
+K_SEAT_STIFFNESS = 4  # kz' = kz/M [1/s²]
+K_SEAT_DAMPING = 5  # bz' = bz/M [1/s]
+K_EXTERNAL_DAMPING = 6  # γ' = γ/M [1/s]
+K_SEAT_DEPTH = 7  # δ0 = Ps0/kz [m]
+K_SPEED = 8  # ω [rad/s]
+K_DAMPING_SPEED = 9  # b'ω [1/(s rad)]
+K_BAND = 10  # dead band of the mode changes per unit mass [N/kg]
+K_MASS = 11  # M [kg]
+K_TAU = 12  # RK4 (sub-)step h [s]
+K_HALF_TAU = 13  # h/2 [s]
+K_SIXTH_TAU = 14  # h/6 [s]
+K_TIME_STEP = 15  # grid time step Δθ/ω [s]
+ST_MAX_LIFT = 16
+ST_MAX_V = 17
+ST_MIN_V = 18
+ST_MAX_A = 19
+ST_MIN_A = 20
+ST_MAX_FORCE = 21
+ST_JUMP_START = 22
+ST_JUMP_STEPS = 23
+ST_JUMP_GAP = 24
+ST_PHASE = 25
+ST_BOUNCE_HEIGHT = 26
+ST_CONTACT = 27
+ST_SEATED = 28
+ST_TRANSITIONS = 29
+ST_POWER_SUM = 30
+ST_POWER_FIRST = 31
+ST_SEAT_Y0 = 32
+ST_SEAT_V0 = 33
+ST_SEAT_A0 = 34
+ST_CAPTURED = 35
+ST_BOUNCES = 36
+ST_ENERGY0 = 37
+ST_EXCESS = 38
+ST_WORK_MAX = 39
+ST_REST_ENERGY = 40
+ST_REST_RISE = 41
+N_RECORD = 42

@@ -8,9 +8,10 @@ is pre-compressed by ``δ0 = Ps0/kz``::
         − ks y − Ps0 − γ ẏ
 
 Parameter rows and the other data layouts (``P_*``, ``O_*``, ``C_*``, ``S_*``) are in
-:mod:`engine_kernels.valvetrain.layout`. The excitation is a table of the theoretical valve
-lift Y(θ) and its angle derivatives (rows Y [m], Y' [m/rad], Y'' [m/rad²]) read by
-:func:`excitation_at`. Reference: SPEC §4 and the motorcycle OHC valve-train thesis data quoted there.
+:mod:`engine_kernels.valvetrain.layout`; the integrators use the coefficients per unit mass,
+written once per case into the ``K_*`` rows of its record by :func:`valve_coefficients`. The
+excitation is a table of the theoretical valve lift Y(θ) and its angle derivatives (rows Y [m],
+Y' [m/rad], Y'' [m/rad²]) read by :func:`excitation_at`. Reference: SPEC §4 and the motorcycle OHC valve-train thesis data quoted there.
 """
 
 from __future__ import annotations
@@ -19,6 +20,19 @@ import numpy as np
 
 from engine_kernels._jit import jit, jit_inline
 from engine_kernels.valvetrain.layout import (
+    K_BAND,
+    K_DAMPING,
+    K_DAMPING_SPEED,
+    K_EXTERNAL_DAMPING,
+    K_MASS,
+    K_PRELOAD,
+    K_SEAT_DAMPING,
+    K_SEAT_DEPTH,
+    K_SEAT_STIFFNESS,
+    K_SPEED,
+    K_SPRING_RATE,
+    K_STIFFNESS,
+    N_RECORD,
     P_DRIVE_DAMPING,
     P_DRIVE_STIFFNESS,
     P_EXTERNAL_DAMPING,
@@ -40,6 +54,9 @@ ONE = np.float32(1.0)
 TWO = np.float32(2.0)
 INF = np.float32(np.inf)
 NAN = np.float32(np.nan)
+
+# Dead band of the contact and seat mode changes, per unit of the preload force [-].
+TRANSITION_BAND = 1e-6
 
 # Selects for loops over SIMD lanes. Numba's builtin max and min are function calls, and a
 # call inside a lane loop stops it from vectorising, so these are conditional expressions
@@ -82,9 +99,71 @@ def equivalent_mass(valve_group_mass, spring_mass, rocker_inertia, valve_arm):
 
 
 @jit_inline
-def specific_forces(
-    lift, velocity, push, stiffness, damping, preload, seat_stiffness, seat_damping
-):
+def seat_depth(params):
+    """Seat pre-compression ``δ0 = Ps0/kz`` [m] of a ``P_*`` row."""
+    return params[P_PRELOAD] / params[P_SEAT_STIFFNESS]
+
+
+@jit
+def valve_coefficients(params, record, at, w):
+    """Write the coefficients of [V2] per unit mass of a ``P_*`` row into a case record.
+
+    params : 1-D array  Parameter row (``P_*``, SI units).
+    record : 1-D array  Flat records (layout in :mod:`engine_kernels.valvetrain.layout`); the
+                        ``K_*`` rows of this case at ``at + K_*·w`` are written (k', b', ks',
+                        Ps0', kz', bz', γ', δ0, ω, b'ω, the mode dead band and M), computed
+                        in float64 whatever the precision of ``record``.
+    at, w  : int        Offset of this case's row 0 and row stride (1, or lanes per block).
+    """
+    inv_mass = 1.0 / params[P_MASS]
+    damping = params[P_DRIVE_DAMPING] * inv_mass
+    preload = params[P_PRELOAD] * inv_mass
+    record[at + K_STIFFNESS * w] = params[P_DRIVE_STIFFNESS] * inv_mass
+    record[at + K_DAMPING * w] = damping
+    record[at + K_SPRING_RATE * w] = params[P_SPRING_RATE] * inv_mass
+    record[at + K_PRELOAD * w] = preload
+    record[at + K_SEAT_STIFFNESS * w] = params[P_SEAT_STIFFNESS] * inv_mass
+    record[at + K_SEAT_DAMPING * w] = params[P_SEAT_DAMPING] * inv_mass
+    record[at + K_EXTERNAL_DAMPING * w] = params[P_EXTERNAL_DAMPING] * inv_mass
+    record[at + K_SEAT_DEPTH * w] = seat_depth(params)
+    record[at + K_SPEED * w] = params[P_SPEED]
+    record[at + K_DAMPING_SPEED * w] = damping * params[P_SPEED]
+    record[at + K_BAND * w] = TRANSITION_BAND * preload
+    record[at + K_MASS * w] = params[P_MASS]
+
+
+@jit_inline
+def case_coefficients(record, at, w):
+    """The ``K_*`` rows of a case record as a tuple: element r is row r, so ``c[K_STIFFNESS]``
+    is k' as ``record[at + K_STIFFNESS·w]`` is.
+
+    Read once where a case's arithmetic starts (a lane of a lane loop, a run of the one-case
+    kernel), the coefficients stay in registers: every row is loaded unconditionally, and
+    stores to other rows cannot force them to be reloaded. Rows no caller uses cost nothing
+    (Numba inlines this, LLVM drops the unused loads).
+    """
+    return (
+        record[at],
+        record[at + w],
+        record[at + 2 * w],
+        record[at + 3 * w],
+        record[at + 4 * w],
+        record[at + 5 * w],
+        record[at + 6 * w],
+        record[at + 7 * w],
+        record[at + 8 * w],
+        record[at + 9 * w],
+        record[at + 10 * w],
+        record[at + 11 * w],
+        record[at + 12 * w],
+        record[at + 13 * w],
+        record[at + 14 * w],
+        record[at + 15 * w],
+    )
+
+
+@jit_inline
+def specific_forces(lift, velocity, push, c):
     """Drive and seat forces per unit mass before clipping [V2] [N/kg].
 
     Drive ``k'(Y − y) + b'(Ẏ − ẏ) = push − k'y − b'ẏ``; seat ``kz'(δ0 − y) − bz'ẏ =
@@ -92,189 +171,110 @@ def specific_forces(
 
     lift, velocity : float  Valve lift y [m] and velocity ẏ [m/s].
     push           : float  ``k'Y + b'Ẏ`` of the excitation (:func:`drive_push`) [m/s²].
-    stiffness      : float  k' = k/M [1/s²];  damping        : float  b' = b/M [1/s].
-    preload        : float  Ps0' = Ps0/M [m/s²].
-    seat_stiffness : float  kz' = kz/M [1/s²]; seat_damping  : float  bz' = bz/M [1/s].
+    c              : Coefficients ``K_*`` of the case (:func:`case_coefficients`).
     """
-    drive = push - stiffness * lift - damping * velocity
-    seat = preload - seat_stiffness * lift - seat_damping * velocity
+    drive = push - c[K_STIFFNESS] * lift - c[K_DAMPING] * velocity
+    seat = c[K_PRELOAD] - c[K_SEAT_STIFFNESS] * lift - c[K_SEAT_DAMPING] * velocity
     return drive, seat
 
 
 @jit_inline
-def specific_acceleration(
-    lift, velocity, drive, seat, spring_rate, preload, external_damping, seat_depth
-):
+def specific_acceleration(lift, velocity, drive, seat, c):
     """Valve acceleration ÿ [m/s²] from the specific forces of :func:`specific_forces` [V2].
 
-    The drive only pushes; the seat only pushes, and only while y < δ0.
-    spring_rate      : float  ks' = ks/M [1/s²];  preload : float  Ps0' = Ps0/M [m/s²].
-    external_damping : float  γ' = γ/M [1/s];     seat_depth : float  δ0 = Ps0/kz [m].
-    Branch-free (selects only), so it vectorises inside loops over SIMD lanes.
+    The drive only pushes; the seat only pushes, and only while y < δ0. Coefficients as in
+    :func:`specific_forces`. Branch-free (selects only), so it vectorises inside loops over
+    SIMD lanes.
     """
-    seat = positive_part(seat) if lift < seat_depth else ZERO
+    seat = positive_part(seat) if lift < c[K_SEAT_DEPTH] else ZERO
     # Grouped so the spring terms are computed alongside the contact forces: a shorter
     # dependency chain per RK4 stage.
     return (positive_part(drive) + seat) - (
-        preload + spring_rate * lift + external_damping * velocity
+        c[K_PRELOAD] + c[K_SPRING_RATE] * lift + c[K_EXTERNAL_DAMPING] * velocity
     )
 
 
 @jit_inline
-def drive_push(drive_lift, slope, stiffness, damping_speed):
+def drive_push(drive_lift, slope, c):
     """Excitation term ``k'Y + b'Ẏ`` of the drive force per unit mass [m/s²].
 
     drive_lift    : float  Theoretical valve lift Y [m].
-    slope         : float  Y' = dY/dθ [m/rad].
-    stiffness     : float  k' = k/M [1/s²].
-    damping_speed : float  b'ω = bω/M [1/(s rad)] (Ẏ = ω Y').
+    slope         : float  Y' = dY/dθ [m/rad] (Ẏ = ω Y').
+    c             : Coefficients ``K_*`` of the case (:func:`case_coefficients`).
     """
-    return stiffness * drive_lift + damping_speed * slope
+    return c[K_STIFFNESS] * drive_lift + c[K_DAMPING_SPEED] * slope
 
 
 @jit_inline
-def valve_acceleration(
-    lift,
-    velocity,
-    drive_lift,
-    drive_velocity,
-    inv_mass,
-    drive_stiffness,
-    drive_damping,
-    spring_rate,
-    preload,
-    seat_stiffness,
-    seat_damping,
-    external_damping,
-    seat_depth,
-):
-    """Valve acceleration ÿ from the one-sided drive and seat forces [V2].
+def specific_point(lift, velocity, drive_lift, slope, c):
+    """Forces and acceleration of a case in state (y [m], ẏ [m/s]) at excitation Y [m], Y' [m/rad].
 
-    lift, velocity   : float  Valve lift y [m] and velocity ẏ [m/s].
-    drive_lift       : float  Theoretical valve lift Y (drive side) [m].
-    drive_velocity   : float  Ẏ = ω Y' [m/s].
-    inv_mass         : float  1/M [1/kg].
-    drive_stiffness  : float  k [N/m];  drive_damping : float  b [N s/m].
-    spring_rate      : float  ks [N/m]; preload       : float  Ps0 [N].
-    seat_stiffness   : float  kz [N/m]; seat_damping  : float  bz [N s/m].
-    external_damping : float  γ [N s/m].
-    seat_depth       : float  Seat pre-compression δ0 = Ps0/kz [m].
-
-    The integrators use the same law per unit mass (:func:`specific_forces`,
-    :func:`specific_acceleration`), with the coefficients divided by M once per case.
+    Returns the drive and seat forces per unit mass before clipping [N/kg]
+    (:func:`specific_forces`) and the acceleration ÿ [m/s²] (:func:`specific_acceleration`).
+    c             : Coefficients ``K_*`` of the case (:func:`case_coefficients`).
     """
-    k = drive_stiffness * inv_mass
-    b = drive_damping * inv_mass
-    ps0 = preload * inv_mass
-    drive, seat = specific_forces(
-        lift,
-        velocity,
-        k * drive_lift + b * drive_velocity,
-        k,
-        b,
-        ps0,
-        seat_stiffness * inv_mass,
-        seat_damping * inv_mass,
-    )
-    return specific_acceleration(
-        lift,
-        velocity,
-        drive,
-        seat,
-        spring_rate * inv_mass,
-        ps0,
-        external_damping * inv_mass,
-        seat_depth,
-    )
-
-
-@jit_inline
-def specific_coefficients(params):
-    """Coefficients of [V2] per unit mass for the integrators, from a ``P_*`` row.
-
-    Returns k', b', ks', Ps0', kz', bz', γ' (each divided by M), δ0 = Ps0/kz [m],
-    ω [rad/s] and b'ω [1/(s rad)] (see :func:`specific_forces`, :func:`drive_push`).
-    """
-    inv_mass = 1.0 / params[P_MASS]
-    damping = params[P_DRIVE_DAMPING] * inv_mass
-    return (
-        params[P_DRIVE_STIFFNESS] * inv_mass,
-        damping,
-        params[P_SPRING_RATE] * inv_mass,
-        params[P_PRELOAD] * inv_mass,
-        params[P_SEAT_STIFFNESS] * inv_mass,
-        params[P_SEAT_DAMPING] * inv_mass,
-        params[P_EXTERNAL_DAMPING] * inv_mass,
-        params[P_PRELOAD] / params[P_SEAT_STIFFNESS],
-        params[P_SPEED],
-        damping * params[P_SPEED],
-    )
+    push = drive_push(drive_lift, slope, c)
+    drive, seat = specific_forces(lift, velocity, push, c)
+    return drive, seat, specific_acceleration(lift, velocity, drive, seat, c)
 
 
 @jit
-def valve_spectral_radius(
-    mass,
-    drive_stiffness,
-    drive_damping,
-    spring_rate,
-    seat_stiffness,
-    seat_damping,
-    external_damping,
-):
+def valve_acceleration(lift, velocity, drive_lift, drive_velocity, params):
+    """Valve acceleration ÿ [m/s²] from the one-sided drive and seat forces [V2].
+
+    lift, velocity : float      Valve lift y [m] and velocity ẏ [m/s].
+    drive_lift     : float      Theoretical valve lift Y (drive side) [m].
+    drive_velocity : float      Ẏ = ω Y' [m/s].
+    params         : 1-D array  Parameter row (``P_*``, SI units).
+
+    The integrators use the same law per unit mass (:func:`specific_forces`,
+    :func:`specific_acceleration`), with the coefficients of :func:`valve_coefficients`.
+    """
+    record = np.empty(N_RECORD)
+    valve_coefficients(params, record, 0, 1)
+    c = case_coefficients(record, 0, 1)
+    push = c[K_STIFFNESS] * drive_lift + c[K_DAMPING] * drive_velocity
+    drive, seat = specific_forces(lift, velocity, push, c)
+    return specific_acceleration(lift, velocity, drive, seat, c)
+
+
+@jit
+def valve_spectral_radius(params):
     """Largest eigenvalue modulus over the four linear modes of [V2] [1/s].
 
     Modes: contact+seat ``(k + kz + ks, b + bz + γ)``, contact ``(k + ks, b + γ)``, seat
-    ``(kz + ks, bz + γ)``, free ``(ks, γ)`` (SPEC §4, stability). Arguments as in
-    :func:`valve_acceleration` ([kg], [N/m], [N s/m]).
+    ``(kz + ks, bz + γ)``, free ``(ks, γ)`` (SPEC §4, stability).
+    params : 1-D array  Parameter row (``P_*``, SI units).
     """
-    radius = oscillator_spectral_radius(
-        mass,
-        drive_damping + seat_damping + external_damping,
-        drive_stiffness + seat_stiffness + spring_rate,
-    )
-    radius = max(
-        radius,
-        oscillator_spectral_radius(
-            mass, drive_damping + external_damping, drive_stiffness + spring_rate
-        ),
-    )
-    radius = max(
-        radius,
-        oscillator_spectral_radius(
-            mass, seat_damping + external_damping, seat_stiffness + spring_rate
-        ),
-    )
-    return max(radius, oscillator_spectral_radius(mass, external_damping, spring_rate))
+    mass = params[P_MASS]
+    k, b = params[P_DRIVE_STIFFNESS], params[P_DRIVE_DAMPING]
+    ks, gamma = params[P_SPRING_RATE], params[P_EXTERNAL_DAMPING]
+    kz, bz = params[P_SEAT_STIFFNESS], params[P_SEAT_DAMPING]
+    radius = oscillator_spectral_radius(mass, b + bz + gamma, k + kz + ks)
+    radius = max(radius, oscillator_spectral_radius(mass, b + gamma, k + ks))
+    radius = max(radius, oscillator_spectral_radius(mass, bz + gamma, kz + ks))
+    return max(radius, oscillator_spectral_radius(mass, gamma, ks))
 
 
 @jit_inline
-def valve_energy(
-    lift,
-    velocity,
-    drive_lift,
-    mass,
-    drive_stiffness,
-    spring_rate,
-    preload,
-    seat_stiffness,
-    seat_depth,
-):
-    """Valve-train energy above the rest state [J].
+def valve_energy(lift, velocity, drive_lift, c):
+    """Valve-train energy per unit mass above the rest state [J/kg].
 
-    ``E = ½Mẏ² + ½ks y² + Ps0 y + ½kz ((δ0 − y)²·[y < δ0] − δ0²) + ½k (Y − y)²·[Y > y]``.
+    ``E/M = ½ẏ² + ½ks' y² + Ps0' y + ½kz' ((δ0 − y)²·[y < δ0] − δ0²) + ½k' (Y − y)²·[Y > y]``.
     Along any solution of [V2] ``dE/dt ≤ F_drive·Ẏ``: the one-sided drive and seat, with
     their dampers, only ever remove energy, so E can grow only by the work the cam does
-    through the drive. Arguments as in :func:`valve_acceleration` ([m], [m/s], [kg], [N/m],
-    [N]).
+    through the drive. lift y [m], velocity ẏ [m/s], drive_lift Y [m]; coefficients as in
+    :func:`specific_forces`.
     """
-    seat = seat_depth - lift if lift < seat_depth else ZERO
+    depth = c[K_SEAT_DEPTH]
+    seat = depth - lift if lift < depth else ZERO
     drive = drive_lift - lift if drive_lift > lift else ZERO
     return (
-        HALF * mass * velocity * velocity
-        + HALF * spring_rate * lift * lift
-        + preload * lift
-        + HALF * seat_stiffness * (seat * seat - seat_depth * seat_depth)
-        + HALF * drive_stiffness * drive * drive
+        HALF * velocity * velocity
+        + HALF * c[K_SPRING_RATE] * lift * lift
+        + c[K_PRELOAD] * lift
+        + HALF * c[K_SEAT_STIFFNESS] * (seat * seat - depth * depth)
+        + HALF * c[K_STIFFNESS] * drive * drive
     )
 
 

@@ -12,10 +12,11 @@ stiff seat can begin and end between grid points, though not between sub-step po
 
 Forces and power are per unit mass (the integrators work with the coefficients of [V2]
 divided by M, see :func:`engine_kernels.valvetrain.model.specific_forces`); the outputs are
-scaled back to newtons. The observations of a case are the ``ST_*`` rows
-(:mod:`engine_kernels.valvetrain.layout`) of a flat array: row ``r`` of lane ``l`` sits at
-``at + r·width`` with ``at = base + l``; one flat array with compile-time row offsets lets the
-compiler see that lanes and rows never overlap. The one-case kernel uses ``width = 1``.
+scaled back to newtons. The observations of a case are the ``ST_*`` rows of its record
+(:mod:`engine_kernels.valvetrain.layout`), beside the coefficients ``K_*`` they read: row ``r``
+of lane ``l`` sits at ``at + r·w`` of a flat array, with ``at = l`` and ``w`` the lanes per
+block; one flat array with compile-time row offsets lets the compiler see that lanes and rows
+never overlap. The one-case kernel uses ``at = 0`` and ``w = 1``.
 
 The status of a run comes from the physics: the energy balance
 (:mod:`engine_kernels.valvetrain.energy_balance`) and a finite end state. The count of
@@ -34,7 +35,10 @@ import numpy as np
 from engine_kernels._jit import jit, jit_inline
 from engine_kernels.valvetrain.energy_balance import drive_power, energy_pumped
 from engine_kernels.valvetrain.layout import (
-    N_STATS,
+    K_BAND,
+    K_MASS,
+    K_SEAT_DEPTH,
+    N_RECORD,
     O_BOUNCE_COUNT,
     O_BOUNCE_HEIGHT,
     O_JUMP_DURATION,
@@ -91,12 +95,10 @@ from engine_kernels.valvetrain.model import (
     smaller,
 )
 
-TRANSITION_BAND = 1e-6
-
 
 @jit_inline
 def start_observations(
-    stats,
+    record,
     at,
     w,
     angle,
@@ -107,11 +109,11 @@ def start_observations(
     drive_velocity,
     drive,
     seat,
-    seat_depth,
 ):
     """Start the observations of one case with its first grid point.
 
-    stats          : 1-D array  Flat observations; this case's rows at ``at + r·w``.
+    record         : 1-D array  Flat case records; this case's rows at ``at + r·w``
+                                (coefficients ``K_*`` read, observations ``ST_*`` written).
     at, w          : int        Offset of row 0 and row stride (lanes per block) [-].
     angle          : float      Cam angle of the grid point [rad].
     lift, velocity : float      Valve lift y [m] and velocity ẏ [m/s].
@@ -119,35 +121,35 @@ def start_observations(
     drive_lift     : float      Theoretical valve lift Y [m]; drive_velocity: Ẏ [m/s].
     drive, seat    : float      Drive and seat forces per unit mass before clipping [N/kg]
                                 (:func:`engine_kernels.valvetrain.model.specific_forces`).
-    seat_depth     : float      δ0 = Ps0/kz [m].
     The contact and seat modes start from the sign of their forces (no dead band yet).
     """
-    for row in range(N_STATS):
-        stats[at + row * w] = ZERO
-    stats[at + ST_MAX_LIFT * w] = -INF
-    stats[at + ST_MAX_V * w] = -INF
-    stats[at + ST_MIN_V * w] = INF
-    stats[at + ST_MAX_A * w] = -INF
-    stats[at + ST_MIN_A * w] = INF
-    stats[at + ST_JUMP_START * w] = INF
-    stats[at + ST_ENERGY0 * w] = NAN
-    stats[at + ST_EXCESS * w] = -INF
-    stats[at + ST_REST_ENERGY * w] = NAN
-    stats[at + ST_REST_RISE * w] = -INF
-    stats[at + ST_PHASE * w] = PHASE_OPEN if lift > seat_depth else PHASE_SEATED
-    stats[at + ST_CONTACT * w] = ONE if drive > ZERO else ZERO
+    seat_depth = record[at + K_SEAT_DEPTH * w]
+    for row in range(ST_MAX_LIFT, N_RECORD):  # the observation rows
+        record[at + row * w] = ZERO
+    record[at + ST_MAX_LIFT * w] = -INF
+    record[at + ST_MAX_V * w] = -INF
+    record[at + ST_MIN_V * w] = INF
+    record[at + ST_MAX_A * w] = -INF
+    record[at + ST_MIN_A * w] = INF
+    record[at + ST_JUMP_START * w] = INF
+    record[at + ST_ENERGY0 * w] = NAN
+    record[at + ST_EXCESS * w] = -INF
+    record[at + ST_REST_ENERGY * w] = NAN
+    record[at + ST_REST_RISE * w] = -INF
+    record[at + ST_PHASE * w] = PHASE_OPEN if lift > seat_depth else PHASE_SEATED
+    record[at + ST_CONTACT * w] = ONE if drive > ZERO else ZERO
     seat = seat if lift < seat_depth else -INF
-    stats[at + ST_SEATED * w] = ONE if seat > ZERO else ZERO
+    record[at + ST_SEATED * w] = ONE if seat > ZERO else ZERO
     power = drive_power(drive, drive_velocity)
-    stats[at + ST_POWER_SUM * w] = power
-    stats[at + ST_POWER_FIRST * w] = power
-    observe_extremes(stats, at, w, lift, velocity, acceleration, drive)
-    observe_separation(stats, at, w, angle, lift, drive_lift, drive, seat_depth)
+    record[at + ST_POWER_SUM * w] = power
+    record[at + ST_POWER_FIRST * w] = power
+    observe_extremes(record, at, w, lift, velocity, acceleration, drive)
+    observe_separation(record, at, w, angle, lift, drive_lift, drive)
 
 
 @jit_inline
 def observe_valve(
-    stats,
+    record,
     at,
     w,
     angle,
@@ -158,8 +160,6 @@ def observe_valve(
     drive_velocity,
     drive,
     seat,
-    seat_depth,
-    band,
     past_nose,
 ):
     """Update the running observations of one case at a grid point after the first.
@@ -169,48 +169,47 @@ def observe_valve(
     bounce height, mode transitions, and the cam's work for the energy balance. Returns True
     if the seat phase changed in a way :func:`record_closure_events` must record.
 
-    band      : float  Dead band of the mode changes per unit mass [N/kg].
     past_nose : bool   The cam is at or past its nose (see :func:`observe_closure`).
     Other arguments as in :func:`start_observations`.
     """
-    observe_extremes(stats, at, w, lift, velocity, acceleration, drive)
-    observe_separation(stats, at, w, angle, lift, drive_lift, drive, seat_depth)
-    event = observe_closure(stats, at, w, lift, seat_depth, past_nose)
-    observe_transitions(stats, at, w, lift, drive, seat, seat_depth, band)
-    stats[at + ST_POWER_SUM * w] += drive_power(drive, drive_velocity)
+    observe_extremes(record, at, w, lift, velocity, acceleration, drive)
+    observe_separation(record, at, w, angle, lift, drive_lift, drive)
+    event = observe_closure(record, at, w, lift, past_nose)
+    observe_transitions(record, at, w, lift, drive, seat)
+    record[at + ST_POWER_SUM * w] += drive_power(drive, drive_velocity)
     return event
 
 
 @jit_inline
-def observe_extremes(stats, at, w, lift, velocity, acceleration, drive):
+def observe_extremes(record, at, w, lift, velocity, acceleration, drive):
     """Running extremes of lift, velocity, acceleration and drive force (observe_valve)."""
-    stats[at + ST_MAX_LIFT * w] = larger(stats[at + ST_MAX_LIFT * w], lift)
-    stats[at + ST_MAX_V * w] = larger(stats[at + ST_MAX_V * w], velocity)
-    stats[at + ST_MIN_V * w] = smaller(stats[at + ST_MIN_V * w], velocity)
-    stats[at + ST_MAX_A * w] = larger(stats[at + ST_MAX_A * w], acceleration)
-    stats[at + ST_MIN_A * w] = smaller(stats[at + ST_MIN_A * w], acceleration)
-    stats[at + ST_MAX_FORCE * w] = larger(stats[at + ST_MAX_FORCE * w], drive)
+    record[at + ST_MAX_LIFT * w] = larger(record[at + ST_MAX_LIFT * w], lift)
+    record[at + ST_MAX_V * w] = larger(record[at + ST_MAX_V * w], velocity)
+    record[at + ST_MIN_V * w] = smaller(record[at + ST_MIN_V * w], velocity)
+    record[at + ST_MAX_A * w] = larger(record[at + ST_MAX_A * w], acceleration)
+    record[at + ST_MIN_A * w] = smaller(record[at + ST_MIN_A * w], acceleration)
+    record[at + ST_MAX_FORCE * w] = larger(record[at + ST_MAX_FORCE * w], drive)
 
 
 @jit_inline
-def observe_separation(stats, at, w, angle, lift, drive_lift, drive, seat_depth):
+def observe_separation(record, at, w, angle, lift, drive_lift, drive):
     """Jump: drive force ≤ 0 while the valve is off its seat before its first closure.
 
     After the first closure the cam is on its base circle and leaving the seat is a bounce
     (:func:`observe_closure`), not a jump: counting it here would turn the jump speed into a
     bounce speed. The angle only grows, so the first separated angle is the smallest one.
     """
-    not_closed = stats[at + ST_PHASE * w] < PHASE_CLOSED
-    separated = (lift > seat_depth) & (drive <= ZERO) & not_closed
+    not_closed = record[at + ST_PHASE * w] < PHASE_CLOSED
+    separated = (lift > record[at + K_SEAT_DEPTH * w]) & (drive <= ZERO) & not_closed
     start = angle if separated else INF
-    stats[at + ST_JUMP_START * w] = smaller(stats[at + ST_JUMP_START * w], start)
-    stats[at + ST_JUMP_STEPS * w] += ONE if separated else ZERO
+    record[at + ST_JUMP_START * w] = smaller(record[at + ST_JUMP_START * w], start)
+    record[at + ST_JUMP_STEPS * w] += ONE if separated else ZERO
     gap = lift - drive_lift if separated else ZERO
-    stats[at + ST_JUMP_GAP * w] = larger(stats[at + ST_JUMP_GAP * w], gap)
+    record[at + ST_JUMP_GAP * w] = larger(record[at + ST_JUMP_GAP * w], gap)
 
 
 @jit_inline
-def observe_closure(stats, at, w, lift, seat_depth, past_nose):
+def observe_closure(record, at, w, lift, past_nose):
     """Seat phase and bounce height (observe_valve); True at first closure or a bounce.
 
     past_nose : bool  The cam angle is at or past the nose, the first maximum of Y
@@ -220,15 +219,16 @@ def observe_closure(stats, at, w, lift, seat_depth, past_nose):
     seat before the nose (the valve kicked off the seat by the lash impact, falling back
     while the cam still rises) puts the phase back to seated: the event has not ended.
     """
-    phase = stats[at + ST_PHASE * w]
+    seat_depth = record[at + K_SEAT_DEPTH * w]
+    phase = record[at + ST_PHASE * w]
     off_seat = lift > seat_depth
     closed = phase >= PHASE_CLOSED
     closing = (phase == PHASE_OPEN) & (not off_seat) & past_nose
     on_seat_phase = PHASE_CLOSED if closed | closing else PHASE_SEATED
     off_seat_phase = PHASE_BOUNCING if closed else PHASE_OPEN
-    stats[at + ST_PHASE * w] = off_seat_phase if off_seat else on_seat_phase
+    record[at + ST_PHASE * w] = off_seat_phase if off_seat else on_seat_phase
     height = lift - seat_depth if off_seat & closed else ZERO
-    stats[at + ST_BOUNCE_HEIGHT * w] = larger(stats[at + ST_BOUNCE_HEIGHT * w], height)
+    record[at + ST_BOUNCE_HEIGHT * w] = larger(record[at + ST_BOUNCE_HEIGHT * w], height)
     rising = (phase == PHASE_CLOSED) & off_seat
     return closing | rising
 
@@ -240,7 +240,7 @@ def nose_position(excitation):
 
 
 @jit
-def record_closure_events(stats, at, w, prev_lift, prev_velocity, prev_acceleration, seat_depth):
+def record_closure_events(record, at, w, prev_lift, prev_velocity, prev_acceleration):
     """Record first closure and count bounces after :func:`observe_closure` flagged an event.
 
     prev_lift, prev_velocity : float  State at the previous (sub-)step point [m], [m/s].
@@ -249,72 +249,72 @@ def record_closure_events(stats, at, w, prev_lift, prev_velocity, prev_accelerat
     :func:`finish_observations`); a bounce is the phase turning to bouncing from on the seat.
     Harmless on points without an event.
     """
-    phase = stats[at + ST_PHASE * w]
-    if phase >= PHASE_CLOSED and stats[at + ST_CAPTURED * w] == ZERO:
-        stats[at + ST_SEAT_Y0 * w] = prev_lift
-        stats[at + ST_SEAT_V0 * w] = prev_velocity
-        stats[at + ST_SEAT_A0 * w] = prev_acceleration
-        stats[at + ST_CAPTURED * w] = ONE
-    if phase == PHASE_BOUNCING and not prev_lift > seat_depth:
-        stats[at + ST_BOUNCES * w] += ONE
+    phase = record[at + ST_PHASE * w]
+    if phase >= PHASE_CLOSED and record[at + ST_CAPTURED * w] == ZERO:
+        record[at + ST_SEAT_Y0 * w] = prev_lift
+        record[at + ST_SEAT_V0 * w] = prev_velocity
+        record[at + ST_SEAT_A0 * w] = prev_acceleration
+        record[at + ST_CAPTURED * w] = ONE
+    if phase == PHASE_BOUNCING and not prev_lift > record[at + K_SEAT_DEPTH * w]:
+        record[at + ST_BOUNCES * w] += ONE
 
 
 @jit_inline
-def observe_transitions(stats, at, w, lift, drive, seat, seat_depth, band):
+def observe_transitions(record, at, w, lift, drive, seat):
     """Count changes of the contact and seat modes between grid points (observe_valve).
 
     A mode only changes once its force leaves a dead band ``±band`` around zero, so round-off
-    in a force that is zero on the base circle is not counted as chatter.
+    in a force that is zero on the base circle is not counted as chatter (``K_BAND``).
     """
-    previous = stats[at + ST_CONTACT * w]
-    before = stats[at + ST_SEATED * w]
+    band = record[at + K_BAND * w]
+    previous = record[at + ST_CONTACT * w]
+    before = record[at + ST_SEATED * w]
     contact = previous if drive >= -band else ZERO
     contact = ONE if drive > band else contact
-    seat = seat if lift < seat_depth else -INF
+    seat = seat if lift < record[at + K_SEAT_DEPTH * w] else -INF
     seated = before if seat >= -band else ZERO
     seated = ONE if seat > band else seated
-    stats[at + ST_TRANSITIONS * w] += abs(contact - previous) + abs(seated - before)
-    stats[at + ST_CONTACT * w] = contact
-    stats[at + ST_SEATED * w] = seated
+    record[at + ST_TRANSITIONS * w] += abs(contact - previous) + abs(seated - before)
+    record[at + ST_CONTACT * w] = contact
+    record[at + ST_SEATED * w] = seated
 
 
 @jit
-def finish_observations(stats, at, w, step_angle, lift, velocity, mass, preload, seat_depth, out):
+def finish_observations(record, at, w, step_angle, lift, velocity, out):
     """Write the ``O_*`` outputs of one case from its observations and final state.
 
     step_angle : float      Grid step Δθ [rad] (jump duration = separated grid points × Δθ).
-    mass       : float      Equivalent mass M [kg] (forces back to newtons).
-    preload    : float      Ps0' = Ps0/M [m/s²].
     out        : 1-D array  Output row (``O_*``).
     The status is ``STATUS_NONFINITE`` for a non-finite final state, ``STATUS_UNSTABLE`` if
     the energy balance was broken (:func:`engine_kernels.valvetrain.energy_balance.energy_pumped`),
     else ``STATUS_OK``. Other arguments as in :func:`start_observations`.
     """
-    out[O_MAX_LIFT] = stats[at + ST_MAX_LIFT * w]
-    out[O_MAX_VELOCITY] = stats[at + ST_MAX_V * w]
-    out[O_MIN_VELOCITY] = stats[at + ST_MIN_V * w]
-    out[O_MAX_ACCELERATION] = stats[at + ST_MAX_A * w]
-    out[O_MIN_ACCELERATION] = stats[at + ST_MIN_A * w]
-    start = stats[at + ST_JUMP_START * w]
+    out[O_MAX_LIFT] = record[at + ST_MAX_LIFT * w]
+    out[O_MAX_VELOCITY] = record[at + ST_MAX_V * w]
+    out[O_MIN_VELOCITY] = record[at + ST_MIN_V * w]
+    out[O_MAX_ACCELERATION] = record[at + ST_MAX_A * w]
+    out[O_MIN_ACCELERATION] = record[at + ST_MIN_A * w]
+    start = record[at + ST_JUMP_START * w]
     out[O_JUMP_START] = start if start < math.inf else math.nan
-    out[O_JUMP_DURATION] = stats[at + ST_JUMP_STEPS * w] * step_angle
-    out[O_JUMP_GAP] = stats[at + ST_JUMP_GAP * w]
-    out[O_BOUNCE_COUNT] = stats[at + ST_BOUNCES * w]
-    out[O_BOUNCE_HEIGHT] = stats[at + ST_BOUNCE_HEIGHT * w]
+    out[O_JUMP_DURATION] = record[at + ST_JUMP_STEPS * w] * step_angle
+    out[O_JUMP_GAP] = record[at + ST_JUMP_GAP * w]
+    out[O_BOUNCE_COUNT] = record[at + ST_BOUNCES * w]
+    out[O_BOUNCE_HEIGHT] = record[at + ST_BOUNCE_HEIGHT * w]
     # Speed where the lift reaches δ0, at constant acceleration from the last point above the
     # seat: no seat force acts before the crossing, while after it a stiff seat reverses the
     # valve within a step, so interpolating towards the next point would understate the
     # speed (tests/engine_kernels/test_valve.py measures it against the scipy reference).
     out[O_SEATING_VELOCITY] = math.nan
-    if stats[at + ST_CAPTURED * w] == 1.0:
-        y0 = stats[at + ST_SEAT_Y0 * w]
-        v0 = stats[at + ST_SEAT_V0 * w]
-        squared = v0 * v0 + 2.0 * stats[at + ST_SEAT_A0 * w] * (seat_depth - y0)
+    if record[at + ST_CAPTURED * w] == 1.0:
+        y0 = record[at + ST_SEAT_Y0 * w]
+        v0 = record[at + ST_SEAT_V0 * w]
+        depth = record[at + K_SEAT_DEPTH * w]
+        squared = v0 * v0 + 2.0 * record[at + ST_SEAT_A0 * w] * (depth - y0)
         out[O_SEATING_VELOCITY] = math.sqrt(max(squared, 0.0))
-    out[O_MAX_CONTACT_FORCE] = mass * stats[at + ST_MAX_FORCE * w]
-    out[O_TRANSITIONS] = stats[at + ST_TRANSITIONS * w]
+    out[O_MAX_CONTACT_FORCE] = record[at + K_MASS * w] * record[at + ST_MAX_FORCE * w]
+    out[O_TRANSITIONS] = record[at + ST_TRANSITIONS * w]
     status = STATUS_OK
-    if energy_pumped(stats, at, w, preload, seat_depth):
+    if energy_pumped(record, at, w):
         status = STATUS_UNSTABLE
     if not (math.isfinite(lift) and math.isfinite(velocity)):
         status = STATUS_NONFINITE

@@ -16,7 +16,14 @@ from __future__ import annotations
 import math
 
 from engine_kernels._jit import jit
-from engine_kernels.valvetrain.model import excitation_at
+from engine_kernels.valvetrain.layout import (
+    P_DRIVE_DAMPING,
+    P_DRIVE_STIFFNESS,
+    P_SEAT_DAMPING,
+    P_SEAT_STIFFNESS,
+    P_SPEED,
+)
+from engine_kernels.valvetrain.model import excitation_at, seat_depth
 from engine_kernels.valvetrain.modes import consistent_modes, mode_acceleration, mode_step
 from engine_kernels.valvetrain.rk4 import hermite_value
 
@@ -34,22 +41,20 @@ def _guards(
     drive_acceleration,
     contact,
     seated,
-    k,
-    b,
-    kz,
-    bz,
-    depth,
+    params,
 ):
     """Switching guards of the current mode and their time derivatives.
 
     A guard is positive while the mode is consistent: contact ``±(k(Y − y) + b(Ẏ − ẏ))``;
     seated ``δ0 − y`` and ``kz(δ0 − y) − bz ẏ``; unseated the negative of whichever of the
-    two is still positive.
+    two is still positive. params: the ``P_*`` row.
     """
+    k, b = params[P_DRIVE_STIFFNESS], params[P_DRIVE_DAMPING]
+    kz, bz = params[P_SEAT_STIFFNESS], params[P_SEAT_DAMPING]
     sign = 1.0 if contact else -1.0
     g0 = sign * (k * (drive_lift - lift) + b * (drive_velocity - velocity))
     d0 = sign * (k * (drive_velocity - velocity) + b * (drive_acceleration - acceleration))
-    gap = depth - lift
+    gap = seat_depth(params) - lift
     force = kz * gap - bz * velocity
     force_rate = -kz * velocity - bz * acceleration
     if seated:
@@ -96,26 +101,9 @@ def _cubic_root(g0, d0, g1, d1):
 
 
 @jit
-def _guard_values(
-    excitation,
-    table_step,
-    position,
-    speed,
-    lift,
-    velocity,
-    contact,
-    seated,
-    inv_mass,
-    k,
-    b,
-    ks,
-    ps0,
-    kz,
-    bz,
-    gamma,
-    depth,
-):
+def _guard_values(excitation, table_step, position, lift, velocity, contact, seated, params):
     """Guards and time derivatives at a table position (see :func:`_guards`)."""
+    speed = params[P_SPEED]
     drive_lift, drive_velocity = excitation_at(excitation, table_step, position, speed)
     index = min(int(position), excitation.shape[1] - 2)
     s = position - index
@@ -124,72 +112,29 @@ def _guard_values(
         * speed
         * (excitation[2, index] + s * (excitation[2, index + 1] - excitation[2, index]))
     )
-    acc = mode_acceleration(
-        lift,
-        velocity,
-        drive_lift,
-        drive_velocity,
-        contact,
-        seated,
-        inv_mass,
-        k,
-        b,
-        ks,
-        ps0,
-        kz,
-        bz,
-        gamma,
-        depth,
-    )
+    acc = mode_acceleration(lift, velocity, drive_lift, drive_velocity, contact, seated, params)
     return _guards(
-        lift,
-        velocity,
-        acc,
-        drive_lift,
-        drive_velocity,
-        drive_acc,
-        contact,
-        seated,
-        k,
-        b,
-        kz,
-        bz,
-        depth,
+        lift, velocity, acc, drive_lift, drive_velocity, drive_acc, contact, seated, params
     )
 
 
 @jit
-def switch_aware_step(
-    excitation,
-    table_step,
-    start,
-    stop,
-    speed,
-    lift,
-    velocity,
-    inv_mass,
-    k,
-    b,
-    ks,
-    ps0,
-    kz,
-    bz,
-    gamma,
-    depth,
-):
+def switch_aware_step(excitation, table_step, start, stop, lift, velocity, params):
     """RK4 from table position ``start`` to ``stop`` with located contact and seat switches.
 
     excitation : 2-D array  Excitation table (3, n) [m, m/rad, m/rad²] at spacing
                             ``table_step`` [rad].
     start, stop: float      Table positions of the step [-] (table intervals from node 0).
-    speed      : float      Camshaft speed ω [rad/s].
     lift, velocity : float  State at ``start`` [m], [m/s].
-    Coefficients as in :func:`engine_kernels.valvetrain.model.valve_acceleration`. Returns the end
-    state and the number of located switches (at most ``SWITCHES_PER_STEP``).
+    params     : 1-D array  Parameter row (``P_*``, SI units; the camshaft speed ω is its
+                            ``P_SPEED``). Returns the end state and the number of located
+                            switches (at most ``SWITCHES_PER_STEP``).
     """
+    speed = params[P_SPEED]
     drive_lift, drive_velocity = excitation_at(excitation, table_step, start, speed)
+    seated = lift < seat_depth(params)
     contact, seated = consistent_modes(
-        lift, velocity, drive_lift, drive_velocity, False, lift < depth, k, b, kz, bz, depth
+        lift, velocity, drive_lift, drive_velocity, False, seated, params
     )
     position = start
     switches = 0
@@ -197,64 +142,15 @@ def switch_aware_step(
         span = stop - position
         tau = span * table_step / speed
         new_lift, new_velocity = mode_step(
-            excitation,
-            table_step,
-            position,
-            stop,
-            speed,
-            lift,
-            velocity,
-            contact,
-            seated,
-            inv_mass,
-            k,
-            b,
-            ks,
-            ps0,
-            kz,
-            bz,
-            gamma,
-            depth,
+            excitation, table_step, position, stop, lift, velocity, contact, seated, params
         )
         if switches == SWITCHES_PER_STEP:
             return new_lift, new_velocity, switches
         ga0, da0, gb0, db0, gc0, dc0 = _guard_values(
-            excitation,
-            table_step,
-            position,
-            speed,
-            lift,
-            velocity,
-            contact,
-            seated,
-            inv_mass,
-            k,
-            b,
-            ks,
-            ps0,
-            kz,
-            bz,
-            gamma,
-            depth,
+            excitation, table_step, position, lift, velocity, contact, seated, params
         )
         ga1, da1, gb1, db1, gc1, dc1 = _guard_values(
-            excitation,
-            table_step,
-            stop,
-            speed,
-            new_lift,
-            new_velocity,
-            contact,
-            seated,
-            inv_mass,
-            k,
-            b,
-            ks,
-            ps0,
-            kz,
-            bz,
-            gamma,
-            depth,
+            excitation, table_step, stop, new_lift, new_velocity, contact, seated, params
         )
         first = 2.0
         which = -1
@@ -275,43 +171,10 @@ def switch_aware_step(
         for _newton in range(4):
             target = position + fraction * span
             trial_lift, trial_velocity = mode_step(
-                excitation,
-                table_step,
-                position,
-                target,
-                speed,
-                lift,
-                velocity,
-                contact,
-                seated,
-                inv_mass,
-                k,
-                b,
-                ks,
-                ps0,
-                kz,
-                bz,
-                gamma,
-                depth,
+                excitation, table_step, position, target, lift, velocity, contact, seated, params
             )
             guards = _guard_values(
-                excitation,
-                table_step,
-                target,
-                speed,
-                trial_lift,
-                trial_velocity,
-                contact,
-                seated,
-                inv_mass,
-                k,
-                b,
-                ks,
-                ps0,
-                kz,
-                bz,
-                gamma,
-                depth,
+                excitation, table_step, target, trial_lift, trial_velocity, contact, seated, params
             )
             g = guards[2 * which]
             dg = guards[2 * which + 1] * tau
@@ -324,7 +187,7 @@ def switch_aware_step(
         switches += 1
         drive_lift, drive_velocity = excitation_at(excitation, table_step, position, speed)
         new_contact, new_seated = consistent_modes(
-            lift, velocity, drive_lift, drive_velocity, contact, seated, k, b, kz, bz, depth
+            lift, velocity, drive_lift, drive_velocity, contact, seated, params
         )
         if new_contact == contact and new_seated == seated:
             if which == 0:

@@ -393,9 +393,7 @@ def test_acceleration_is_the_one_sided_force_law(lift, velocity, drive_lift, dri
     drive = max(0.0, k * (drive_lift - lift) + b * (drive_velocity - velocity))
     seat = max(0.0, kz * (depth - lift) - bz * velocity) if lift < depth else 0.0
     expected = (drive + seat - ks * lift - ps0 - gamma * velocity) / mass
-    got = valve.valve_acceleration(
-        lift, velocity, drive_lift, drive_velocity, 1 / mass, k, b, ks, ps0, kz, bz, gamma, depth
-    )
+    got = valve.valve_acceleration(lift, velocity, drive_lift, drive_velocity, PARAMS)
     assert got == pytest.approx(expected, rel=1e-12, abs=1e-9)
 
 

@@ -176,7 +176,7 @@ def test_lane_loops_vectorise(loop):
     # that silently, so look at the LLVM IR of a fresh (uncached) compilation.
     function = getattr(lane_loops, loop).py_func
     compiled = numba.njit(fastmath=FASTMATH)(function)
-    data = np.zeros((lane_loops.N_LANE_ROWS + valve.N_STATS) * lane_loops.LANES)
+    data = np.zeros(lane_loops.N_LANE_ROWS * lane_loops.LANES)
     arguments = {
         "_observe_lanes": (0.0, 0.0, 0.0, True),
         "_step_lanes": (0.0,) * 4,
@@ -306,7 +306,7 @@ def test_single_precision_loops_fill_the_host_vectors(loop, arguments):
     # pinned to one instruction set (expected_lanes: 8 on AVX2, 16 or 8 on AVX-512).
     lanes = expected_lanes(np.float32)
     function = numba.njit(fastmath=FASTMATH)(getattr(lane_loops, loop).py_func)
-    data = np.zeros((lane_loops.N_LANE_ROWS + valve.N_STATS) * lane_loops.LANES, np.float32)
+    data = np.zeros(lane_loops.N_LANE_ROWS * lane_loops.LANES, np.float32)
     function(data, *(np.float32(a) if isinstance(a, float) else a for a in arguments))
     llvm = function.inspect_llvm(function.signatures[0])
     assert widest_vector(llvm, np.float32) >= lanes
