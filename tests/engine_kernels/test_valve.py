@@ -429,3 +429,19 @@ def test_thesis_reference_speeds():
     fast, _ = run(excitation, step, start, params(camshaft_speed=6000 * RPM))
     assert fast[valve.O_JUMP_DURATION] > 0.0
     assert fast[valve.O_JUMP_START] < 0.0
+
+
+@pytest.mark.parametrize("width", [1, 4, 8])
+def test_case_coefficients_are_the_record_rows_in_order(width) -> None:
+    # The hot arithmetic indexes the tuple with the K_* row names: element r must be row r of
+    # the record at stride ``width`` (1 for one case, LANES for a lane block), for every K_*.
+    from engine_kernels.valvetrain import layout, model
+
+    names = sorted((v, k) for k, v in vars(layout).items() if k.startswith("K_"))
+    assert [v for v, _ in names] == list(range(len(names)))  # rows 0, 1, … without gaps
+    at = 3
+    record = np.arange(at + width * layout.N_RECORD, dtype=np.float64) * 1.5
+    coefficients = model.case_coefficients(record, at, width)
+    assert len(coefficients) == len(names)
+    for row, name in names:
+        assert coefficients[row] == record[at + row * width], name
