@@ -11,6 +11,7 @@ from contextlib import closing
 from pathlib import Path
 
 import pytest
+from registry_writers import RUNS_EACH, register_many
 
 from studies import registry, tracking
 from studies.cli import main
@@ -32,7 +33,6 @@ V1_SCHEMA = (
     "compile_s REAL, run_s REAL, folder TEXT, definition_sha256 TEXT)"
 )
 WRITERS = 4
-RUNS_EACH = 25
 
 
 def tiny_run(tmp_path: Path, outputs: Path, cam_speed: float = 1000.0) -> str:
@@ -76,24 +76,10 @@ def test_a_newer_registry_is_refused_with_exit_2(
     assert "upgrade engine-studies" in capsys.readouterr().err
 
 
-def _register_many(outputs: str, writer: int) -> None:
-    for i in range(RUNS_EACH):
-        folder = Path(outputs) / "many" / f"{writer}-{i}"
-        folder.mkdir(parents=True)
-        record = tracking.RunRecord(
-            run_id=f"{writer}-{i}", study="many", scene="cam", design="sweep", runs=1,
-            status="running", started=tracking.now(), git_commit="c", git_dirty=False,
-            definition_sha256="d", folder=str(folder),
-        )  # fmt: skip
-        tracking.register(Path(outputs), record)
-        record.status = "finished"
-        tracking.register(Path(outputs), record)
-
-
 def test_four_processes_registering_at_once_leave_the_registry_intact(tmp_path: Path) -> None:
     context = multiprocessing.get_context("spawn")
     workers = [
-        context.Process(target=_register_many, args=(str(tmp_path), w)) for w in range(WRITERS)
+        context.Process(target=register_many, args=(str(tmp_path), w)) for w in range(WRITERS)
     ]
     for w in workers:
         w.start()
