@@ -30,8 +30,10 @@ levels = [1000.0, 1300.0, 1600.0]
 RESPONSES = ("max_jerk", "min_radius_of_curvature")
 
 
-def skip_unless_modes_are_enforced(tmp_path: Path) -> None:
-    """Skip where permission bits do not bind this process (root with CAP_DAC_OVERRIDE)."""
+def enforce_modes(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Make permission bits bind: where they already do (a normal user) nothing changes; where
+    they do not (root, CAP_DAC_OVERRIDE) creating in a folder without its write bit and
+    opening a file without its read bit raise EACCES, as the kernel would for a user."""
     probe = tmp_path / "probe"
     probe.mkdir(mode=0o500)
     probe.chmod(0o500)
@@ -41,7 +43,23 @@ def skip_unless_modes_are_enforced(tmp_path: Path) -> None:
         return
     finally:
         probe.chmod(0o700)
-    pytest.skip("permission bits do not bind this process (root): run as a user to test")
+    mkdir, open_ = Path.mkdir, Path.open
+
+    def denied(path: Path) -> PermissionError:
+        return PermissionError(errno.EACCES, os.strerror(errno.EACCES), str(path))
+
+    def checked_mkdir(self: Path, *args: object, **kwargs: object) -> None:
+        if self.parent.exists() and not self.parent.stat().st_mode & 0o200 and not self.exists():
+            raise denied(self)
+        mkdir(self, *args, **kwargs)  # type: ignore[arg-type]
+
+    def checked_open(self: Path, mode: str = "r", *args: object, **kwargs: object):
+        if "r" in mode and self.exists() and not self.stat().st_mode & 0o400:
+            raise denied(self)
+        return open_(self, mode, *args, **kwargs)  # type: ignore[call-overload]
+
+    monkeypatch.setattr(Path, "mkdir", checked_mkdir)
+    monkeypatch.setattr(Path, "open", checked_open)
 
 
 @pytest.fixture
@@ -78,9 +96,9 @@ def assert_identical_to_an_uninterrupted_run(outputs: Path, study: Path, tmp_pat
 
 
 def test_a_read_only_outputs_folder_is_one_line_and_a_rerun_works(
-    tmp_path: Path, study: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, study: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    skip_unless_modes_are_enforced(tmp_path)
+    enforce_modes(tmp_path, monkeypatch)
     outputs = tmp_path / "outputs"
     outputs.mkdir(mode=0o555)
     outputs.chmod(0o555)
@@ -164,7 +182,7 @@ def test_an_unreadable_checkpoint_is_named_and_the_run_resumes_once_readable(
     monkeypatch: pytest.MonkeyPatch,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    skip_unless_modes_are_enforced(tmp_path)
+    enforce_modes(tmp_path, monkeypatch)
     outputs = tmp_path / "outputs"
     folder = failed_run(outputs, study, monkeypatch)
     capsys.readouterr()
