@@ -24,6 +24,7 @@ PANEL_SIZE = (3.0, 3.0)  # inches per factor panel
 DPI = 120
 TITLE_CHARS_PER_INCH = 11  # what fits at the default title size
 MAP_TEXT_CELLS = 150  # maps with at most this many cells show their values
+MAP_TICKS = 12  # level labels per map axis at most (every k-th level beyond)
 MARKER_LEVELS = 40  # from this many levels on, main effects are a line without markers
 
 
@@ -232,8 +233,9 @@ def map_figure(an: xr.Dataset, response: str) -> Figure | None:
                 ax.text(
                     col, row, f"{value:.3g}", ha="center", va="center", fontsize=7, color=colour
                 )
-    ax.set_xticks(np.arange(nx), labels_x, rotation=30 if nx > 6 else 0)
-    ax.set_yticks(np.arange(ny), labels_y)
+    every_x, every_y = -(-nx // MAP_TICKS), -(-ny // MAP_TICKS)  # at most MAP_TICKS labels
+    ax.set_xticks(np.arange(nx)[::every_x], labels_x[::every_x], rotation=30 if nx > 6 else 0)
+    ax.set_yticks(np.arange(ny)[::every_y], labels_y[::every_y])
     ax.set_xlabel(axis_label(fx, str(an["term_units"].sel(term=fx).values)))
     ax.set_ylabel(axis_label(fy, str(an["term_units"].sel(term=fy).values)))
     others = an.sizes.get("factor", 0) > 2

@@ -26,9 +26,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import xarray as xr
 
 from studies.definition import parse_study
+from studies.results import open_results
 
 REGISTRY = "registry.sqlite"
 SCHEMA_VERSION = 2
@@ -180,7 +180,7 @@ def _definition_values(study: Path) -> list[Value]:
 
 def _response_values(results: Path) -> list[Value]:
     try:
-        ds = xr.open_dataset(results)
+        ds = open_results(results)  # lazily, one response at a time: flat memory
     except (OSError, ValueError):
         return []
     with ds:
@@ -189,7 +189,8 @@ def _response_values(results: Path) -> list[Value]:
         for name in names:
             if name not in ds or ds[name].dims != ("run",) or ds[name].dtype.kind != "f":
                 continue
-            values = ds[name].values[np.isfinite(ds[name].values)]
+            stored = ds[name].values
+            values = stored[np.isfinite(stored)]
             units = str(ds[name].attrs.get("units", ""))
             summaries = (
                 (values.min(), values.mean(), values.max()) if values.size else (math.nan,) * 3
