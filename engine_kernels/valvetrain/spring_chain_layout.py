@@ -12,61 +12,54 @@ chain row keeps the valve-side mass without any spring share (``SC_VALVE_MASS`` 
 
 from __future__ import annotations
 
-SC_SPEED = 0
-SC_VALVE_MASS = 1
-SC_DRIVE_STIFFNESS = 2
-SC_DRIVE_DAMPING = 3
-SC_SPRING_RATE = 4
-SC_PRELOAD = 5
-SC_SEAT_STIFFNESS = 6
-SC_SEAT_DAMPING = 7
-SC_EXTERNAL_DAMPING = 8
-SC_INITIAL_LIFT = 9
-SC_INITIAL_VELOCITY = 10
-SC_SPRING_MASS = 11
-SC_SPRING_MASSES = 12
-SC_SPRING_DAMPING_RATIO = 13
-SC_CLASH_TRAVEL = 14
-SC_CLASH_STIFFNESS = 15
-SC_CLASH_DAMPING = 16
+from engine_kernels.valvetrain.layout import (
+    P_DRIVE_DAMPING,
+    P_DRIVE_STIFFNESS,
+    P_EXTERNAL_DAMPING,
+    P_INITIAL_LIFT,
+    P_INITIAL_VELOCITY,
+    P_MASS,
+    P_PRELOAD,
+    P_SEAT_DAMPING,
+    P_SEAT_STIFFNESS,
+    P_SPEED,
+    P_SPRING_RATE,
+    VALVE_PARAM_NAMES,
+    VALVE_PARAM_UNITS,
+)
+
+# The lumped row's entries first, in its order (the mass without the spring's share) ...
+SC_SPEED = P_SPEED
+SC_VALVE_MASS = P_MASS
+SC_DRIVE_STIFFNESS = P_DRIVE_STIFFNESS
+SC_DRIVE_DAMPING = P_DRIVE_DAMPING
+SC_SPRING_RATE = P_SPRING_RATE
+SC_PRELOAD = P_PRELOAD
+SC_SEAT_STIFFNESS = P_SEAT_STIFFNESS
+SC_SEAT_DAMPING = P_SEAT_DAMPING
+SC_EXTERNAL_DAMPING = P_EXTERNAL_DAMPING
+SC_INITIAL_LIFT = P_INITIAL_LIFT
+SC_INITIAL_VELOCITY = P_INITIAL_VELOCITY
+# ... then the spring's own.
+SC_SPRING_MASS = len(VALVE_PARAM_NAMES)
+SC_SPRING_MASSES = SC_SPRING_MASS + 1
+SC_SPRING_DAMPING_RATIO = SC_SPRING_MASS + 2
+SC_CLASH_TRAVEL = SC_SPRING_MASS + 3
+SC_CLASH_STIFFNESS = SC_SPRING_MASS + 4
+SC_CLASH_DAMPING = SC_SPRING_MASS + 5
+_SPRING = (
+    ("spring_mass", "kg"),
+    ("spring_masses", "1"),
+    ("spring_damping_ratio", "1"),
+    ("clash_travel", "m"),
+    ("clash_stiffness", "N/m"),
+    ("clash_damping", "N s/m"),
+)
 CHAIN_PARAM_NAMES = (
-    "camshaft_speed",
-    "valve_mass",
-    "drive_stiffness",
-    "drive_damping",
-    "spring_rate",
-    "spring_preload",
-    "seat_stiffness",
-    "seat_damping",
-    "external_damping",
-    "initial_lift",
-    "initial_velocity",
-    "spring_mass",
-    "spring_masses",
-    "spring_damping_ratio",
-    "clash_travel",
-    "clash_stiffness",
-    "clash_damping",
+    *(("valve_mass" if k == P_MASS else n) for k, n in enumerate(VALVE_PARAM_NAMES)),
+    *(n for n, _ in _SPRING),
 )
-CHAIN_PARAM_UNITS = (
-    "rad/s",
-    "kg",
-    "N/m",
-    "N s/m",
-    "N/m",
-    "N",
-    "N/m",
-    "N s/m",
-    "N s/m",
-    "m",
-    "m/s",
-    "kg",
-    "1",
-    "1",
-    "m",
-    "N/m",
-    "N s/m",
-)
+CHAIN_PARAM_UNITS = (*VALVE_PARAM_UNITS, *(u for _, u in _SPRING))
 
 # Valid numbers of coil masses (SPEC [V4], issue 12: 1–24).
 MIN_SPRING_MASSES = 1
