@@ -84,10 +84,11 @@ def _plan(definition: StudyDefinition | None, problems: list[str], source: str) 
         else definition.settings[s.name]
         for s in scene.settings
     }
+    asked, curves = list(definition.responses), list(definition.curves)
     point_problems = scene.check_points(points, settings)
+    point_problems += scene.request_problems(settings, asked, curves)
     if point_problems:
         raise StudyError(source, point_problems)
-    asked, curves = list(definition.responses), list(definition.curves)
     stages = scene.stages_for(asked, curves)
     stored = scene.stored_responses(asked, curves)
     clashes = _name_clashes(definition, scene, design, stored)

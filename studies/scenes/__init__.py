@@ -20,7 +20,7 @@ from studies.scenes.crank import CrankScene
 from studies.scenes.luffing import LuffingScene
 from studies.scenes.reed import ReedScene
 from studies.scenes.rocker import RockerScene
-from studies.scenes.valve import ValveAccuracyScene, ValveScene
+from studies.scenes.valve import ValveAccuracyScene, ValveScene, ValveSpringLadderScene
 
 ENTRY_POINTS = "engine_studies.scenes"
 BUILT_IN: dict[str, type[Scene]] = {
@@ -31,6 +31,7 @@ BUILT_IN: dict[str, type[Scene]] = {
     RockerScene.name: RockerScene,
     ValveScene.name: ValveScene,
     ValveAccuracyScene.name: ValveAccuracyScene,
+    ValveSpringLadderScene.name: ValveSpringLadderScene,
 }
 
 

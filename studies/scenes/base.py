@@ -241,6 +241,13 @@ class Scene(ABC):
         """Cross-parameter physical checks over all design points (SI values); problems."""
         return []
 
+    def request_problems(
+        self, settings: dict[str, Any], responses: list[str], curves: list[str]
+    ) -> list[str]:
+        """Responses or curves these settings cannot answer (SI settings); problems. None by
+        default."""
+        return []
+
     def point_warnings(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
         """Design points that will run but give no value (e.g. a concave cam), with advice;
         ``check`` and ``run`` print them. None by default."""

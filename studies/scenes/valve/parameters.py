@@ -42,6 +42,12 @@ from studies.scenes.chain_parameters import CURVES as ROCKER_CURVES
 from studies.scenes.chain_parameters import PARAMETERS as ROCKER_PARAMETERS
 from studies.scenes.chain_parameters import RESPONSES as ROCKER_RESPONSES
 from studies.scenes.chain_parameters import TAPPET_STEP
+from studies.scenes.valve.spring_parameters import (
+    SPRING_PARAMETERS,
+    SPRING_SETTINGS,
+    SURGE_CURVES,
+    SURGE_RESPONSES,
+)
 
 THESIS, ASSUMED = "SPEC §4 thesis", "assumption"
 INTEGRATORS = ("lanes", "lanes_f32", "rk4", "rk4_switch_aware")
@@ -107,7 +113,7 @@ DYNAMICS_PARAMETERS: tuple[Parameter, ...] = (
     ),
 )
 
-PARAMETERS = ROCKER_PARAMETERS + DYNAMICS_PARAMETERS
+PARAMETERS = ROCKER_PARAMETERS + DYNAMICS_PARAMETERS + SPRING_PARAMETERS
 
 INTEGRATOR = Parameter(
     "integrator",
@@ -179,6 +185,7 @@ SETTINGS: tuple[Parameter, ...] = (
     ),
     TAPPET_STEP,
     *WINDOW_SETTINGS,
+    *SPRING_SETTINGS,
 )
 
 DYN = ("tappet", "rocker", "dynamics")
@@ -263,7 +270,7 @@ DYNAMIC_RESPONSES: tuple[Response, ...] = (
         codes=(*valve.JUMP_STATUS_NAMES, "not_run"),
     ),
 )
-RESPONSES = ROCKER_RESPONSES + DYNAMIC_RESPONSES
+RESPONSES = ROCKER_RESPONSES + DYNAMIC_RESPONSES + SURGE_RESPONSES
 
 DYNAMIC_CURVES: tuple[Curve, ...] = (
     Curve("actual_lift", "mm", "actual valve lift y (NaN outside the integration window)", DYN),
@@ -272,4 +279,4 @@ DYNAMIC_CURVES: tuple[Curve, ...] = (
     Curve("drive_force", "N", "drive (rocker–valve) contact force", DYN),
     Curve("seat_force", "N", "valve-seat contact force", DYN),
 )
-CURVES = ROCKER_CURVES + DYNAMIC_CURVES
+CURVES = ROCKER_CURVES + DYNAMIC_CURVES + SURGE_CURVES

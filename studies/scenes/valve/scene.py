@@ -29,6 +29,7 @@ import numpy as np
 from engine_kernels import valvetrain as valve
 from engine_kernels.valvetrain import lane_batch as valve_lanes
 from engine_kernels.valvetrain import rocker
+from engine_kernels.valvetrain.spring_chain_jump import chain_jump_speed
 from studies.scenes.chain import (
     CACHE_SIZE,
     GRID_UNIT_DEG,
@@ -41,6 +42,7 @@ from studies.scenes.chain import (
 from studies.scenes.chain_parameters import RESPONSES as ROCKER_RESPONSES
 from studies.scenes.chain_summaries import chain_status_summary
 from studies.scenes.checks import PointProblems
+from studies.scenes.valve import spring
 from studies.scenes.valve.parameters import (
     CURVES,
     JUMP_NOT_RUN,
@@ -205,8 +207,8 @@ class ValveScene(ChainScene):
     settings = SETTINGS
     responses = RESPONSES
     curves = CURVES
-    stage_order: tuple[str, ...] = ("tappet", "rocker", "dynamics", "jump_speed")
-    status_responses: tuple[str, ...] = ("chain_status", "status")
+    stage_order: tuple[str, ...] = ("tappet", "rocker", "dynamics", "surge", "jump_speed")
+    status_responses: tuple[str, ...] = ("chain_status", "status", "surge_status")
 
     # --- outputs beside the generic ones -----------------------------------------------------
     def figures(self) -> dict[str, FigureBuilder]:
@@ -226,7 +228,13 @@ class ValveScene(ChainScene):
     def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
         problems = super().check_points(points, settings) + jump_setting_problems(settings)
         steps = np.broadcast_to(settings["angle_step"], len(points["cam_speed"]))
+        problems += spring.spring_point_problems(points)
         return problems + stability_problems(points, settings, steps)
+
+    def request_problems(
+        self, settings: dict[str, Any], responses: list[str], curves: list[str]
+    ) -> list[str]:
+        return spring.request_problems(settings, responses, curves)
 
     # --- excitation -----------------------------------------------------------------------
     def window(self, ctx: dict[str, Any], key: tuple) -> tuple[float, float]:
@@ -265,6 +273,9 @@ class ValveScene(ChainScene):
 
     # --- stages ---------------------------------------------------------------------------
     def stage_dynamics(self, ctx: dict[str, Any]) -> None:
+        if spring.uses_chain(ctx["settings"]):
+            self.stage_surge(ctx)
+            return
         n = ctx["n"]
         ctx["out"] = np.full((n, N_OUT), np.nan)
         ctx["step_used"] = np.full(n, np.nan)
@@ -301,6 +312,40 @@ class ValveScene(ChainScene):
             if pending.size == 0:
                 break
 
+    def stage_surge(self, ctx: dict[str, Any]) -> None:
+        """Run the multi-mass spring (once per study chunk) at ``angle_step``; under
+        ``spring_model = "multi_mass"`` its outputs also answer the dynamic responses."""
+        if "chain_out" in ctx:
+            return
+        n, settings = ctx["n"], ctx["settings"]
+        chain_curves = set(spring.CHAIN_CURVE_ROW) if spring.uses_chain(settings) else set()
+        want = bool(ctx["curves"] & (chain_curves | spring.SURGE_CURVE_NAMES))
+        axis = self.curve_coordinate(settings) if want else np.empty(0)
+        ctx["chain_out"] = np.full((n, spring.N_CHAIN_OUT), np.nan)
+        ctx["chain_traces"] = np.full((n, spring.N_CHAIN_CURVES, axis.size), np.nan)
+        step = step_deg(settings["angle_step"])
+        flags = kernel_settings(settings, "rk4", False)
+        for key, idx in ctx["groups"].items():
+            if not self.chain_valid(ctx, key):
+                ctx["chain_out"][idx, spring.sc.CO_STATUS] = STATUS_NOT_RUN
+                continue
+            rows = self.spring_rows(ctx, idx)
+            out, trace = spring.run_chain(self.excitation(ctx, key, step), rows, flags, want)
+            ctx["chain_out"][idx] = out
+            if trace is not None:
+                first = round((self.window(ctx, key)[0] + HALF_TURN_DEG) / step)
+                ctx["chain_traces"][idx, :, first : first + trace.shape[2]] = trace
+        if not spring.uses_chain(settings):
+            return
+        ctx["out"] = np.full((n, N_OUT), np.nan)
+        for column, chain_column in spring.LUMPED_FROM_CHAIN.items():
+            ctx["out"][:, column] = ctx["chain_out"][:, chain_column]
+        ctx["step_used"] = np.full(n, step)
+
+    def spring_rows(self, ctx: dict[str, Any], idx: np.ndarray) -> np.ndarray:
+        masses = int(ctx["settings"]["spring_masses"])
+        return spring.chain_rows(valve_rows(ctx["points"], idx), ctx["points"], idx, masses)
+
     def stage_jump_speed(self, ctx: dict[str, Any]) -> None:
         settings = ctx["settings"]
         flags = kernel_settings(settings, settings["integrator"], False)
@@ -310,8 +355,11 @@ class ValveScene(ChainScene):
                 ctx["jump"][idx, 1] = JUMP_NOT_RUN
                 continue
             table, table_step, start = self.excitation(ctx, key, step_deg(settings["angle_step"]))
-            for i, row in zip(idx, valve_rows(ctx["points"], idx), strict=True):
-                ctx["jump"][i] = valve.jump_speed(
+            chained = spring.uses_chain(settings)
+            rows = self.spring_rows(ctx, idx) if chained else valve_rows(ctx["points"], idx)
+            search = chain_jump_speed if chained else valve.jump_speed
+            for i, row in zip(idx, rows, strict=True):
+                ctx["jump"][i] = search(
                     table,
                     table_step,
                     start,
@@ -330,6 +378,9 @@ class ValveScene(ChainScene):
         if response in ("jump_speed", "jump_speed_status"):
             jump = ctx["jump"]
             return jump[:, 0] * RPM if response == "jump_speed" else jump[:, 1]
+        if response in spring.SURGE_OUTPUT:
+            column, scale = spring.SURGE_OUTPUT[response]
+            return ctx["chain_out"][:, column] * scale
         out = ctx["out"]
         if response in _OUTPUT:
             column, scale = _OUTPUT[response]
@@ -347,6 +398,11 @@ class ValveScene(ChainScene):
         return met if ctx["settings"]["tolerance"] > 0.0 else np.ones(ctx["n"])
 
     def curve_values(self, ctx: dict[str, Any], name: str) -> np.ndarray:
+        if name in spring.SURGE_CURVE_NAMES or (
+            name in spring.CHAIN_CURVE_ROW and spring.uses_chain(ctx["settings"])
+        ):
+            row, scale = spring.CHAIN_CURVE_ROW[name]
+            return ctx["chain_traces"][:, row, :] * scale
         if name not in _CURVE_ROW:
             return super().curve_values(ctx, name)
         row, scale = _CURVE_ROW[name]

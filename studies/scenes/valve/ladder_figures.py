@@ -1,0 +1,94 @@
+"""Figure of the ``valve_spring_ladder`` scene: ``spring_model_ladder.png``.
+
+One panel per compared response: the change of the answer from the finest rung of the study
+(the most coil masses) against the measured cost per case, a line per combination of the
+other factors, each point labelled by its rung (``lumped`` or ``N``); on the log axis the
+finest rung itself (change 0) has no point.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import xarray as xr
+from matplotlib.figure import Figure
+
+from studies.figure_layout import design_factors, factor_levels, runs_where, value_text
+from studies.plots import axis_label
+
+COMPARED = (
+    "jump_speed",
+    "seating_velocity",
+    "min_retainer_force_ratio",
+    "surge_amplitude",
+    "bounce_height",
+)
+PANEL = (3.6, 3.0)
+COLUMNS = 3
+
+
+def _rung_label(masses: float) -> str:
+    return "lumped" if masses == 0 else f"N={masses:g}"
+
+
+def ladder_figure(ds: xr.Dataset) -> Figure | None:
+    """Change from the finest rung vs cost per case, per compared response."""
+    names = [n for n in COMPARED if n in ds.data_vars]
+    if "cost_per_case" not in ds or "spring_masses" not in design_factors(ds) or not names:
+        return None
+    others = [f for f in design_factors(ds) if f != "spring_masses"]
+    combos = list(itertools.product(*(factor_levels(ds, f) for f in others)))
+    columns = min(len(names), COLUMNS)
+    rows = -(-len(names) // columns)
+    fig = Figure(figsize=(PANEL[0] * columns, PANEL[1] * rows + 0.8), layout="constrained")
+    grid = fig.subplots(rows, columns, squeeze=False).ravel()
+    for spare in grid[len(names) :]:
+        spare.set_axis_off()
+    axes = grid[: len(names)]
+    masses = ds["spring_masses"].values
+    for ax, name in zip(axes, names, strict=True):
+        values = ds[name].values.astype(float)
+        for k, combo in enumerate(combos):
+            where = dict(zip(others, combo, strict=True))
+            runs = runs_where(ds, where)
+            runs = runs[np.argsort(masses[runs])]
+            finest = values[runs[-1]]
+            change = np.abs(values[runs] - finest)
+            cost = ds["cost_per_case"].values[runs]
+            shown = np.where(change > 0, change, np.nan)
+            label = ", ".join(value_text(ds, f, lv) for f, lv in where.items()) or None
+            ax.plot(cost, shown, marker="o", color=f"C{k % 10}", label=label)
+            for x, y, rung in zip(cost, shown, masses[runs], strict=True):
+                if not np.isfinite(y):
+                    continue
+                ax.annotate(
+                    _rung_label(rung),
+                    (x, y),
+                    fontsize="xx-small",
+                    xytext=(3, 3),
+                    textcoords="offset points",
+                )
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.grid(alpha=0.3, which="both")
+        units = ds[name].attrs.get("units", "")
+        ax.set_title(name, fontsize="small")
+        ax.set_ylabel(axis_label("|change| from the finest rung", units))
+        ax.set_xlabel(axis_label("cost per case (timing)", ds["cost_per_case"].attrs["units"]))
+    if len(combos) > 1:
+        handles, labels = axes[0].get_legend_handles_labels()
+        spare = len(grid) > len(names)
+        (grid[-1] if spare else axes[0]).legend(
+            handles,
+            labels,
+            title=", ".join(others),
+            loc="center" if spare else "best",
+            fontsize="small" if spare else "xx-small",
+        )
+    fig.suptitle(
+        "Spring-model ladder: change of each answer from the finest rung "
+        f"(N={masses.max():g}) vs cost per case\n(lumped = m_s/3 on the valve)",
+        fontsize="medium",
+    )
+    return fig
