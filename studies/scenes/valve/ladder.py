@@ -26,7 +26,7 @@ from studies.scenes.valve import accuracy_reference as acc
 from studies.scenes.valve import spring
 from studies.scenes.valve.parameters import PARAMETERS, RESPONSES, SETTINGS
 from studies.scenes.valve.scene import MM, ValveScene, integrate, kernel_settings, valve_rows
-from studies.scenes.valve.spring_parameters import SPRING_SETTINGS, SURGE_RESPONSES
+from studies.scenes.valve.spring_parameters import SPRING_MASSES, SPRING_MODEL, SURGE_RESPONSES
 
 if TYPE_CHECKING:
     from studies.scenes.base import FigureBuilder
@@ -51,7 +51,7 @@ class ValveSpringLadderScene(ValveScene):
     seconds_per_point = 0.05
     description = "valve dynamics vs spring model: lumped and N-mass chains, change and cost"
     parameters = (*PARAMETERS, RUNG)
-    settings = tuple(s for s in SETTINGS if s not in SPRING_SETTINGS)
+    settings = tuple(s for s in SETTINGS if s not in (SPRING_MODEL, SPRING_MASSES))
     responses = (
         *RESPONSES,
         Response(
@@ -68,8 +68,9 @@ class ValveSpringLadderScene(ValveScene):
 
     def figures(self) -> dict[str, FigureBuilder]:
         from studies.scenes.valve.ladder_figures import ladder_figure  # noqa: PLC0415
+        from studies.scenes.valve.surge_figures import surge_sweep_figure  # noqa: PLC0415
 
-        return {"spring_model_ladder": ladder_figure}
+        return {"spring_model_ladder": ladder_figure, "surge_sweep": surge_sweep_figure}
 
     def request_problems(
         self, settings: dict[str, Any], responses: list[str], curves: list[str]
@@ -141,6 +142,9 @@ def _lumped_spring_answers(
         "min_retainer_force_ratio": 1.0,
         "max_retainer_force_deviation": 0.0,
     }
+    if "surge_frequency" in scalars:
+        rate, mass = points["spring_rate"][idx], points["spring_mass"][idx]
+        scalars["surge_frequency"][idx] = 0.5 * np.sqrt(rate / mass)
     for name, value in by_definition.items():
         if name in scalars:
             scalars[name][idx] = value

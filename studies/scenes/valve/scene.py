@@ -214,8 +214,13 @@ class ValveScene(ChainScene):
     def figures(self) -> dict[str, FigureBuilder]:
         from studies.scenes.chain_figures import valve_lift_figure  # noqa: PLC0415
         from studies.scenes.valve.figures import jump_speed_map_figure  # noqa: PLC0415
+        from studies.scenes.valve.surge_figures import surge_sweep_figure  # noqa: PLC0415
 
-        return {"valve_lift": valve_lift_figure, "jump_speed_map": jump_speed_map_figure}
+        return {
+            "valve_lift": valve_lift_figure,
+            "jump_speed_map": jump_speed_map_figure,
+            "surge_sweep": surge_sweep_figure,
+        }
 
     def summaries(self, ds: xr.Dataset) -> list[str]:
         return chain_status_summary(ds) + dynamics_status_summary(ds)
@@ -335,6 +340,12 @@ class ValveScene(ChainScene):
             if trace is not None:
                 first = round((self.window(ctx, key)[0] + HALF_TURN_DEG) / step)
                 ctx["chain_traces"][idx, :, first : first + trace.shape[2]] = trace
+            turns = int(settings["revolutions"])
+            if turns > 1:
+                turn = self.excitation(ctx, key, step, (-HALF_TURN_DEG, HALF_TURN_DEG))
+                steady = spring.steady_surge(turn, rows, flags, turns)
+                columns = spring.STEADY_COLUMNS
+                ctx["chain_out"][np.ix_(idx, columns)] = steady[:, columns]
         if not spring.uses_chain(settings):
             return
         ctx["out"] = np.full((n, N_OUT), np.nan)
@@ -378,6 +389,8 @@ class ValveScene(ChainScene):
         if response in ("jump_speed", "jump_speed_status"):
             jump = ctx["jump"]
             return jump[:, 0] * RPM if response == "jump_speed" else jump[:, 1]
+        if response == "surge_frequency":
+            return spring.surge_frequency(ctx["points"], int(ctx["settings"]["spring_masses"]))
         if response in spring.SURGE_OUTPUT:
             column, scale = spring.SURGE_OUTPUT[response]
             return ctx["chain_out"][:, column] * scale

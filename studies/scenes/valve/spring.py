@@ -15,6 +15,7 @@ import numpy as np
 
 from engine_kernels import valvetrain as valve
 from engine_kernels.valvetrain import spring_chain_layout as sc
+from engine_kernels.valvetrain.spring_chain import chain_natural_frequency
 from engine_kernels.valvetrain.spring_chain_response import (
     spring_chain_response,
     spring_chain_response_batch,
@@ -23,6 +24,7 @@ from studies.scenes.checks import PointProblems
 from studies.scenes.valve.spring_parameters import CHAIN_UNOBSERVED, SURGE_CURVES
 
 MM = 1e3
+TWO_PI = 2.0 * np.pi
 N_CHAIN_OUT = len(sc.CHAIN_OUTPUT_NAMES)
 N_CHAIN_CURVES = len(sc.CHAIN_CURVE_NAMES)
 SPRING_MASS_SHARE = 1.0 / 3.0
@@ -44,6 +46,14 @@ LUMPED_FROM_CHAIN = {
     valve.O_STEP_RATIO: sc.CO_STEP_RATIO,
     valve.O_STATUS: sc.CO_STATUS,
 }
+STEADY_COLUMNS = [
+    sc.CO_SURGE_AMPLITUDE,
+    sc.CO_MIN_RETAINER_RATIO,
+    sc.CO_MAX_RETAINER_DEVIATION,
+    sc.CO_CLASH_COUNT,
+    sc.CO_STATUS,
+]
+"""Chain outputs a run over several revolutions gives for the spring responses."""
 # response -> (chain output column, factor from SI to the response's units)
 SURGE_OUTPUT = {
     "surge_amplitude": (sc.CO_SURGE_AMPLITUDE, MM),
@@ -68,6 +78,14 @@ _SPRING_COLUMN = {
     "clash_stiffness": sc.SC_CLASH_STIFFNESS,
     "clash_damping": sc.SC_CLASH_DAMPING,
 }
+
+
+def surge_frequency(points: dict[str, np.ndarray], masses: int) -> np.ndarray:
+    """First fixed–fixed frequency [Hz] of the N-mass spring of each point [V4]."""
+    rate, mass = points["spring_rate"], points["spring_mass"]
+    return np.array(
+        [chain_natural_frequency(k, m, masses, 1) / TWO_PI for k, m in zip(rate, mass, strict=True)]
+    )
 
 
 def uses_chain(settings: dict[str, Any]) -> bool:
@@ -102,6 +120,31 @@ def run_chain(
     for j in range(rows.shape[0]):
         spring_chain_response(table, table_step, start, rows[j], flags, out[j], trace[j])
     return out, trace
+
+
+def steady_surge(
+    revolution: tuple[np.ndarray, float, float], rows: np.ndarray, flags: np.ndarray, turns: int
+) -> np.ndarray:
+    """Chain outputs over ``turns`` camshaft revolutions of a periodic cam, with the surge
+    amplitude and the retainer force ratio and deviation taken over the last one.
+
+    revolution : (table, step [rad], start [rad]) over one whole revolution (its last node is
+    its first one again). One case at a time, its curves reduced as soon as it finishes.
+    """
+    table, table_step, start = revolution
+    tiled = np.concatenate([np.tile(table[:, :-1], turns), table[:, :1]], axis=1)
+    per_turn = (table.shape[1] - 1) // 2
+    out = np.empty((rows.shape[0], N_CHAIN_OUT))
+    trace = np.empty((N_CHAIN_CURVES, per_turn * turns + 1))
+    for j in range(rows.shape[0]):
+        spring_chain_response(tiled, table_step, start, rows[j], flags, out[j], trace)
+        last = trace[:, -(per_turn + 1) :]
+        static = rows[j, sc.SC_PRELOAD] + rows[j, sc.SC_SPRING_RATE] * last[sc.CC_LIFT]
+        retainer = last[sc.CC_RETAINER_FORCE]
+        out[j, sc.CO_SURGE_AMPLITUDE] = last[sc.CC_SURGE].max()
+        out[j, sc.CO_MIN_RETAINER_RATIO] = (retainer / static).min()
+        out[j, sc.CO_MAX_RETAINER_DEVIATION] = np.abs(retainer - static).max()
+    return out
 
 
 def request_problems(

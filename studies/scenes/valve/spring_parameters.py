@@ -95,7 +95,18 @@ SPRING_MASSES = Parameter(
     24.0,
     integer=True,
 )
-SPRING_SETTINGS: tuple[Parameter, ...] = (SPRING_MODEL, SPRING_MASSES)
+REVOLUTIONS = Parameter(
+    "revolutions",
+    "1",
+    1.0,
+    "camshaft revolutions integrated for the spring responses: 1 = the valve event only; "
+    "R > 1 repeats the cam and takes surge amplitude and retainer force over the last "
+    "revolution (steady-state surge: the order resonances j·n_cam/60 = f_1)",
+    1.0,
+    64.0,
+    integer=True,
+)
+SPRING_SETTINGS: tuple[Parameter, ...] = (SPRING_MODEL, SPRING_MASSES, REVOLUTIONS)
 
 SURGE_RESPONSES: tuple[Response, ...] = (
     Response(
@@ -115,6 +126,13 @@ SURGE_RESPONSES: tuple[Response, ...] = (
         "max_retainer_force_deviation",
         "N",
         "largest |retainer force − static spring force|",
+        SURGE,
+    ),
+    Response(
+        "surge_frequency",
+        "Hz",
+        "first surge frequency f_1 of the spring with both ends held: the N-mass chain's [V4] "
+        "(lumped rung: the continuous spring's (1/2)·√(ks/m_s), which it does not model)",
         SURGE,
     ),
     Response("coil_clash_count", "1", "segment closures to solid length (coil clash)", SURGE),
