@@ -31,6 +31,7 @@ GENERATED_FACTOR = {
     "rocker": ("valve_lift", 0.9),
     "valve": ("cam_speed", 1.2),
     "valve_accuracy": ("cam_speed", 1.2),
+    "valve_spring_ladder": ("cam_speed", 1.2),
 }
 DECIBEL = "dB"  # S/N ratios in analysis.nc: CF's canonical unit for levels, not in UDUNITS
 
