@@ -29,6 +29,7 @@ from engine_kernels.valvetrain.spring_chain import (
     surge_displacement,
 )
 from engine_kernels.valvetrain.spring_chain_guard import chain_status, prepare_chain_case
+from engine_kernels.valvetrain.spring_chain_lane_batch import spring_chain_response_lanes
 from engine_kernels.valvetrain.spring_chain_layout import (
     CC_DRIVE_FORCE,
     CC_ENERGY,
@@ -229,12 +230,13 @@ def spring_chain_response(excitation, table_step, table_start, params, settings,
 
 
 @batch
-def spring_chain_response_batch(excitation, table_step, table_start, params, settings, out):
+def spring_chain_one_case_batch(excitation, table_step, table_start, params, settings, out):
     """:func:`spring_chain_response` for many cases, one per prange iteration (no curves).
 
     params : 2-D array  (n_cases, len(CHAIN_PARAM_NAMES)) ``SC_*`` rows (N may differ per row).
     out    : 2-D array  (n_cases, len(CHAIN_OUTPUT_NAMES)) outputs ``CO_*``.
-    Other arguments as in :func:`spring_chain_response`.
+    Other arguments as in :func:`spring_chain_response`. The reference of the lane kernel and
+    the slower path: :func:`spring_chain_response_batch` is the batch entry.
     """
     for i in prange(params.shape[0]):
         spring_chain_response(
@@ -246,3 +248,9 @@ def spring_chain_response_batch(excitation, table_step, table_start, params, set
             out[i],
             np.empty((len(CHAIN_CURVE_NAMES), 0)),
         )
+
+
+spring_chain_response_batch = spring_chain_response_lanes
+"""The batch entry of the multi-mass kernel: many cases, ``LANES`` per SIMD block, the same
+outputs as :func:`spring_chain_one_case_batch`
+(:func:`engine_kernels.valvetrain.spring_chain_lane_batch.spring_chain_response_lanes`)."""
