@@ -71,10 +71,10 @@ def _chain_block(excitation, table_step, table_start, params, block, key, out):
     cases = np.empty(LANES, dtype=np.int64)
     for l in range(LANES):
         cases[l] = block[l if l < count else 0]
-    data = new_block(masses)
-    start_chain_lanes(params, cases, masses, 2.0 * table_step / substeps, data)
-    chain_lane_pass(excitation, table_step, table_start, masses, substeps, data)
-    finish_chain_lanes(data, count, masses, substeps, cases, out)
+    block_arrays = new_block(masses)
+    start_chain_lanes(params, cases, masses, 2.0 * table_step / substeps, block_arrays)
+    chain_lane_pass(excitation, table_step, table_start, masses, substeps, block_arrays)
+    finish_chain_lanes(block_arrays, count, masses, substeps, cases, out)
 
 
 @batch
