@@ -85,10 +85,10 @@ _K_TAU, _K_HALF, _K_SIXTH = range(17, 20)
 _O_DRIVE_VELOCITY = 25
 N_COEFFICIENTS = 20
 N_OBSERVATIONS = 26
-# Rows of a node block: state, stage point, RK4 sums, first-stage acceleration, upper
-# segment force [N], its clash state (1: closed) and count of clash onsets.
-_X, _V, _PX, _PV, _SX, _SV, _A1, _F, _SOLID, _CLASHES = range(10)
-NODE_ROWS = 10
+# Rows of a node block: state, stage point, RK4 sums, first-stage and current acceleration,
+# upper segment force [N], its clash state (1: closed) and count of clash onsets.
+_X, _V, _PX, _PV, _SX, _SV, _A1, _ACC, _F, _SOLID, _CLASHES = range(11)
+NODE_ROWS = 11
 
 
 @jit
@@ -341,6 +341,9 @@ def _stage_sweep(coef, obs, nodes, n, drive_lift, slope, stage):
 
     n : N;  drive_lift Y [m], slope Y' [m/rad] at the stage;  stage : 2, 3 or 4, a constant
     in each caller, so the compiler drops the other stages' branches from the lane loops.
+    A coil's acceleration goes through its ``_ACC`` row, read in a second lane loop: it is
+    then rounded before the RK4 sums add it, as in the one-case kernel (in one loop the
+    compiler would fuse its product into those sums, a different rounding).
     """
     for l in range(LANES):
         c = _k(coef, l)
@@ -350,7 +353,9 @@ def _stage_sweep(coef, obs, nodes, n, drive_lift, slope, stage):
         for l in range(LANES):
             c = _k(coef, l)
             force, _ = _segment(nodes, l, j, _PX, _PV, c)
-            _advance(nodes, l, j, (force - nodes[_at(j - 1, _F, l)]) * c[_K_INV_COIL], stage, c)
+            nodes[_at(j, _ACC, l)] = (force - nodes[_at(j - 1, _F, l)]) * c[_K_INV_COIL]
+        for l in range(LANES):
+            _advance(nodes, l, j, nodes[_at(j, _ACC, l)], stage, _k(coef, l))
     for l in range(LANES):
         c = _k(coef, l)
         _, _, _, _, acc = _valve(
