@@ -1,4 +1,4 @@
-"""Valve dynamics with the multi-mass spring [V4]: fixed-step RK4 per case, batch driver.
+"""Valve dynamics with the multi-mass spring [V4]: fixed-step RK4, one case at a time.
 
 The chain model is in :mod:`engine_kernels.valvetrain.spring_chain`, its rows in
 :mod:`engine_kernels.valvetrain.spring_chain_layout`. The excitation table and the cam-angle
@@ -29,7 +29,6 @@ from engine_kernels.valvetrain.spring_chain import (
     surge_displacement,
 )
 from engine_kernels.valvetrain.spring_chain_guard import chain_status, prepare_chain_case
-from engine_kernels.valvetrain.spring_chain_lane_batch import spring_chain_response_lanes
 from engine_kernels.valvetrain.spring_chain_layout import (
     CC_DRIVE_FORCE,
     CC_ENERGY,
@@ -235,8 +234,8 @@ def spring_chain_one_case_batch(excitation, table_step, table_start, params, set
 
     params : 2-D array  (n_cases, len(CHAIN_PARAM_NAMES)) ``SC_*`` rows (N may differ per row).
     out    : 2-D array  (n_cases, len(CHAIN_OUTPUT_NAMES)) outputs ``CO_*``.
-    Other arguments as in :func:`spring_chain_response`. The reference of the lane kernel and
-    the slower path: :func:`spring_chain_response_batch` is the batch entry.
+    Other arguments as in :func:`spring_chain_response`. The reference of the lane kernel; the
+    batch entry is :func:`engine_kernels.valvetrain.spring_chain_lane_batch.spring_chain_response_batch`.
     """
     for i in prange(params.shape[0]):
         spring_chain_response(
@@ -248,9 +247,3 @@ def spring_chain_one_case_batch(excitation, table_step, table_start, params, set
             out[i],
             np.empty((len(CHAIN_CURVE_NAMES), 0)),
         )
-
-
-spring_chain_response_batch = spring_chain_response_lanes
-"""The batch entry of the multi-mass kernel: many cases, ``LANES`` per SIMD block, the same
-outputs as :func:`spring_chain_one_case_batch`
-(:func:`engine_kernels.valvetrain.spring_chain_lane_batch.spring_chain_response_lanes`)."""
