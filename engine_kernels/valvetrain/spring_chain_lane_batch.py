@@ -25,13 +25,13 @@ import numpy as np
 from engine_kernels._jit import batch, jit, prange
 from engine_kernels.valvetrain.lane_batch import spread_order
 from engine_kernels.valvetrain.spring_chain_guard import prepare_chain_case
-from engine_kernels.valvetrain.spring_chain_lanes import (
+from engine_kernels.valvetrain.spring_chain_lane_layout import (
     LANES,
-    chain_lane_pass,
     finish_chain_lanes,
     new_block,
     start_chain_lanes,
 )
+from engine_kernels.valvetrain.spring_chain_lanes import chain_lane_pass
 from engine_kernels.valvetrain.spring_chain_layout import (
     CHAIN_CURVE_NAMES,
     MAX_SPRING_MASSES,

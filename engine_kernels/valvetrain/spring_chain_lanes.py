@@ -7,22 +7,22 @@ driver that forms such blocks is :mod:`engine_kernels.valvetrain.spring_chain_la
 The force laws, energy terms and valve balance are the inlined select helpers of
 :mod:`engine_kernels.valvetrain.spring_chain`, shared with the one-case kernel.
 
-Layout (STYLE "Hot integrators", as :mod:`engine_kernels.valvetrain.lanes`): one flat array,
-row ``r`` of lane ``l`` at ``r·LANES + l``. First the coefficients and time steps (``_K_*``)
-and the running observations (``_O_*``), then one block of ``NODE_ROWS`` rows per node
-``j = 0 … N+1`` (0 the fixed head, always zero; 1 … N the coils; N+1 the valve): the state
-x, v, the current RK4 stage point, the running RK4 sums, the first-stage acceleration, the
-force of segment j (nodes j, j+1) and its coil-clash state. The 2(N+1) state rows per lane are
-the x, v rows of nodes 1 … N+1. Within a node sweep every row a lane loop touches sits a
-compile-time number of rows from the others, so the compiler sees that they never overlap.
+The block's rows are described in :mod:`engine_kernels.valvetrain.spring_chain_lane_layout`.
+A sub-step is four sweeps over the nodes with loops over the lanes inside: the observation
+sweep evaluates the forces at the state (first RK4 stage, energy, clash and valve
+observations) and forms the second stage point; each stage sweep evaluates the forces at the
+stage point, keeps the RK4 sums and forms the next point, the last one the new state. A
+segment's force needs the points of its two nodes only, so a node is advanced as soon as the
+force of the segment above it is known.
 
-A sub-step is four sweeps over the nodes, each with one loop over the lanes per node: the
-observation sweep evaluates the forces at the state (first RK4 stage, energy, clash and
-valve observations) and forms the second stage point; each stage sweep evaluates the forces
-at the stage point, keeps the RK4 sums and forms the next point, the last one the new state.
-A sweep needs a node's point and that of the node above it only, so a node is advanced as
-soon as its upper segment's force is known. The RK4 sums are kept in the one-case kernel's
-order (``v + 2(V₂ + V₃) + V₄``, doubling being exact), so both give the same numbers.
+Same numbers as the one-case kernel, bit for bit (tests/engine_kernels/
+test_spring_chain_lanes.py): the RK4 sums keep its order (``v + 2(V₂ + V₃) + V₄``, doubling
+being exact) and every product is rounded where it is rounded there, since fused
+multiply-adds (``fastmath={'contract'}``) form wherever a product meets a sum in one basic
+block: the drive velocity ω·Y' and the coil accelerations pass through rows. What keeps the
+lane loops vectorised (checked in the tests): inlined helpers (``jit_inline``) with selects,
+no calls; unsigned node indices (no wraparound branch); the stage a constant of each sweep;
+NumPy's error model (``jit_lanes``: no divide-by-zero branch).
 Reference: SPEC §4 [V2], [V4].
 """
 
@@ -30,12 +30,9 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from engine_kernels._jit import jit, jit_inline, jit_lanes
 from engine_kernels.valvetrain.model import excitation_lift_slope, larger, positive_part, smaller
 from engine_kernels.valvetrain.spring_chain import (
-    chain_coefficients,
     coil_deviation,
     contact_energy,
     kinetic_energy,
@@ -43,124 +40,94 @@ from engine_kernels.valvetrain.spring_chain import (
     segment_force,
     valve_balance,
 )
-from engine_kernels.valvetrain.spring_chain_guard import chain_status
-from engine_kernels.valvetrain.spring_chain_layout import (
-    CO_BOUNCE_COUNT,
-    CO_BOUNCE_HEIGHT,
-    CO_CLASH_COUNT,
-    CO_ENERGY_EXCESS,
-    CO_JUMP_DURATION,
-    CO_JUMP_GAP,
-    CO_JUMP_START,
-    CO_MAX_CONTACT_FORCE,
-    CO_MAX_LIFT,
-    CO_MAX_RETAINER_DEVIATION,
-    CO_MAX_VELOCITY,
-    CO_MIN_FORCE_MARGIN,
-    CO_MIN_RETAINER_RATIO,
-    CO_MIN_VELOCITY,
-    CO_SEATING_VELOCITY,
-    CO_STATUS,
-    CO_SUBSTEPS,
-    CO_SURGE_AMPLITUDE,
-    SC_INITIAL_LIFT,
-    SC_INITIAL_VELOCITY,
-    SC_SPRING_RATE,
+from engine_kernels.valvetrain.spring_chain_lane_layout import (
+    LANES,
+    LK_B,
+    LK_BZ,
+    LK_CC,
+    LK_COIL_MASS,
+    LK_DAMPER,
+    LK_DEPTH,
+    LK_GAMMA,
+    LK_GAP,
+    LK_HALF,
+    LK_INV_COIL,
+    LK_K,
+    LK_KC,
+    LK_KZ,
+    LK_PRELOAD,
+    LK_RATE,
+    LK_SIXTH,
+    LK_SPEED,
+    LK_SPRING_RATE,
+    LK_TAU,
+    LK_VALVE_MASS,
+    LO_BOUNCE_HEIGHT,
+    LO_BOUNCES,
+    LO_DEVIATION,
+    LO_DRIVE_VELOCITY,
+    LO_ENERGY,
+    LO_ENERGY0,
+    LO_ENERGY_MAX,
+    LO_EXCESS,
+    LO_JUMP_ANGLE,
+    LO_JUMP_GAP,
+    LO_JUMP_START,
+    LO_MAX_CONTACT,
+    LO_MAX_DEVIATION,
+    LO_MAX_LIFT,
+    LO_MAX_V,
+    LO_MIN_MARGIN,
+    LO_MIN_RATIO,
+    LO_MIN_V,
+    LO_PHASE,
+    LO_PREV_LIFT,
+    LO_PREV_POWER,
+    LO_PREV_V,
+    LO_SEATING,
+    LO_SURGE,
+    LO_WORK,
+    LO_WORK_MAX,
+    NODE_A1,
+    NODE_ACC,
+    NODE_CLASHES,
+    NODE_F,
+    NODE_PV,
+    NODE_PX,
+    NODE_SOLID,
+    NODE_SV,
+    NODE_SX,
+    NODE_V,
+    NODE_X,
+    lane_coefficients,
+    node_at,
 )
-
-LANES = 32
-
-# Coefficients (chain_coefficients without N) and time steps of each lane [SI].
-(_K_VALVE_MASS, _K_COIL_MASS, _K_RATE, _K_DAMPER, _K_GAP, _K_KC, _K_CC, _K_K, _K_B, _K_KZ) = range(
-    10
-)
-(_K_BZ, _K_GAMMA, _K_PRELOAD, _K_DEPTH, _K_SPEED, _K_SPRING_RATE, _K_INV_COIL) = range(10, 17)
-_K_TAU, _K_HALF, _K_SIXTH = range(17, 20)
-# Running observations of each lane (seat phase as in engine_kernels.valvetrain.layout).
-(_O_MAX_LIFT, _O_MAX_V, _O_MIN_V, _O_MAX_CONTACT, _O_MIN_MARGIN) = range(5)
-(_O_MIN_RATIO, _O_MAX_DEVIATION, _O_SURGE, _O_JUMP_START, _O_JUMP_ANGLE) = range(5, 10)
-(_O_JUMP_GAP, _O_PHASE, _O_SEATING, _O_BOUNCES, _O_BOUNCE_HEIGHT) = range(10, 15)
-(_O_ENERGY0, _O_WORK, _O_WORK_MAX, _O_EXCESS, _O_ENERGY_MAX) = range(15, 20)
-(_O_PREV_LIFT, _O_PREV_V, _O_PREV_POWER, _O_ENERGY, _O_DEVIATION) = range(20, 25)
-_O_DRIVE_VELOCITY = 25
-N_COEFFICIENTS = 20
-N_OBSERVATIONS = 26
-# Rows of a node block: state, stage point, RK4 sums, first-stage and current acceleration,
-# upper segment force [N], its clash state (1: closed) and count of clash onsets.
-_X, _V, _PX, _PV, _SX, _SV, _A1, _ACC, _F, _SOLID, _CLASHES = range(11)
-NODE_ROWS = 11
-
-
-@jit
-def new_block(masses):
-    """Zeroed arrays of a block of N = ``masses``: coefficients, observations and nodes (the
-    head node's rows stay zero). Three arrays: the compiler then checks once per lane loop
-    that a node row it writes is no coefficient it reads, rather than row by row."""
-    return (
-        np.zeros(N_COEFFICIENTS * LANES),
-        np.zeros(N_OBSERVATIONS * LANES),
-        np.zeros((masses + 2) * NODE_ROWS * LANES),
-    )
-
-
-@jit_inline
-def _at(j, field, l):
-    """Index of ``field`` of node ``j`` for lane ``l``, unsigned: Numba then adds no
-    negative-index wraparound, which would hide the affine address from the vectoriser."""
-    return np.uint64((j * NODE_ROWS + field) * LANES + l)
-
-
-@jit_inline
-def _k(coef, l):
-    """Coefficients and time steps of lane ``l`` (``_K_*`` order), read once per loop body."""
-    return (
-        coef[_K_VALVE_MASS * LANES + l],
-        coef[_K_COIL_MASS * LANES + l],
-        coef[_K_RATE * LANES + l],
-        coef[_K_DAMPER * LANES + l],
-        coef[_K_GAP * LANES + l],
-        coef[_K_KC * LANES + l],
-        coef[_K_CC * LANES + l],
-        coef[_K_K * LANES + l],
-        coef[_K_B * LANES + l],
-        coef[_K_KZ * LANES + l],
-        coef[_K_BZ * LANES + l],
-        coef[_K_GAMMA * LANES + l],
-        coef[_K_PRELOAD * LANES + l],
-        coef[_K_DEPTH * LANES + l],
-        coef[_K_SPEED * LANES + l],
-        coef[_K_SPRING_RATE * LANES + l],
-        coef[_K_INV_COIL * LANES + l],
-        coef[_K_TAU * LANES + l],
-        coef[_K_HALF * LANES + l],
-        coef[_K_SIXTH * LANES + l],
-    )
 
 
 @jit_inline
 def _segment(nodes, l, j, x, v, c):
     """Force F_j [N] of segment j from fields ``x``, ``v`` of nodes j and j+1 (stored in
-    ``_F``) and its compression d_j [m]."""
-    d = nodes[_at(j + 1, x, l)] - nodes[_at(j, x, l)]
-    rate = nodes[_at(j + 1, v, l)] - nodes[_at(j, v, l)]
+    ``NODE_F``) and its compression d_j [m]."""
+    d = nodes[node_at(j + 1, x, l)] - nodes[node_at(j, x, l)]
+    rate = nodes[node_at(j + 1, v, l)] - nodes[node_at(j, v, l)]
     force = segment_force(
-        d, c[_K_RATE], c[_K_DAMPER], c[_K_PRELOAD], c[_K_GAP], c[_K_KC], c[_K_CC], rate
+        d, c[LK_RATE], c[LK_DAMPER], c[LK_PRELOAD], c[LK_GAP], c[LK_KC], c[LK_CC], rate
     )
-    nodes[_at(j, _F, l)] = force
+    nodes[node_at(j, NODE_F, l)] = force
     return force, d
 
 
 @jit_inline
 def _observe_segment(obs, nodes, l, j, c):
     """First stage of segment j at the state: force, strain energy, clash onsets; returns F_j."""
-    force, d = _segment(nodes, l, j, _X, _V, c)
-    obs[_O_ENERGY * LANES + l] = segment_energy(
-        obs[_O_ENERGY * LANES + l], d, c[_K_RATE], c[_K_GAP], c[_K_KC]
+    force, d = _segment(nodes, l, j, NODE_X, NODE_V, c)
+    obs[LO_ENERGY * LANES + l] = segment_energy(
+        obs[LO_ENERGY * LANES + l], d, c[LK_RATE], c[LK_GAP], c[LK_KC]
     )
-    solid = d > c[_K_GAP]
-    onset = solid & (nodes[_at(j, _SOLID, l)] == 0.0)
-    nodes[_at(j, _CLASHES, l)] += 1.0 if onset else 0.0
-    nodes[_at(j, _SOLID, l)] = 1.0 if solid else 0.0
+    solid = d > c[LK_GAP]
+    onset = solid & (nodes[node_at(j, NODE_SOLID, l)] == 0.0)
+    nodes[node_at(j, NODE_CLASHES, l)] += 1.0 if onset else 0.0
+    nodes[node_at(j, NODE_SOLID, l)] = 1.0 if solid else 0.0
     return force
 
 
@@ -168,22 +135,22 @@ def _observe_segment(obs, nodes, l, j, c):
 def _valve(nodes, l, n, x, v, drive_lift, drive_velocity, c):
     """Valve (node N+1) at fields ``x``, ``v``: lift [m], velocity [m/s], drive and seat
     forces [N] and acceleration [m/s²] for excitation Y [m], Ẏ [m/s]."""
-    lift = nodes[_at(n + 1, x, l)]
-    velocity = nodes[_at(n + 1, v, l)]
+    lift = nodes[node_at(n + 1, x, l)]
+    velocity = nodes[node_at(n + 1, v, l)]
     drive, seat, acc = valve_balance(
         lift,
         velocity,
         drive_lift,
         drive_velocity,
-        nodes[_at(n, _F, l)],
-        c[_K_VALVE_MASS],
-        c[_K_K],
-        c[_K_B],
-        c[_K_KZ],
-        c[_K_BZ],
-        c[_K_GAMMA],
-        c[_K_PRELOAD],
-        c[_K_DEPTH],
+        nodes[node_at(n, NODE_F, l)],
+        c[LK_VALVE_MASS],
+        c[LK_K],
+        c[LK_B],
+        c[LK_KZ],
+        c[LK_BZ],
+        c[LK_GAMMA],
+        c[LK_PRELOAD],
+        c[LK_DEPTH],
     )
     return lift, velocity, drive, seat, acc
 
@@ -191,30 +158,34 @@ def _valve(nodes, l, n, x, v, drive_lift, drive_velocity, c):
 @jit_inline
 def _first_point(nodes, l, j, acc, c):
     """Keep the first-stage acceleration of node j and form its second-stage point."""
-    nodes[_at(j, _A1, l)] = acc
-    nodes[_at(j, _PX, l)] = nodes[_at(j, _X, l)] + c[_K_HALF] * nodes[_at(j, _V, l)]
-    nodes[_at(j, _PV, l)] = nodes[_at(j, _V, l)] + c[_K_HALF] * acc
+    nodes[node_at(j, NODE_A1, l)] = acc
+    nodes[node_at(j, NODE_PX, l)] = (
+        nodes[node_at(j, NODE_X, l)] + c[LK_HALF] * nodes[node_at(j, NODE_V, l)]
+    )
+    nodes[node_at(j, NODE_PV, l)] = nodes[node_at(j, NODE_V, l)] + c[LK_HALF] * acc
 
 
 @jit_inline
 def _advance(nodes, l, j, acc, stage, c):
     """Node j after the forces of RK4 stage 2, 3 or 4 (acceleration ``acc``) [m, m/s]."""
-    x = nodes[_at(j, _X, l)]
-    v = nodes[_at(j, _V, l)]
-    pv = nodes[_at(j, _PV, l)]
+    x = nodes[node_at(j, NODE_X, l)]
+    v = nodes[node_at(j, NODE_V, l)]
+    pv = nodes[node_at(j, NODE_PV, l)]
     if stage == 2:
-        nodes[_at(j, _SX, l)] = pv
-        nodes[_at(j, _SV, l)] = acc
-        nodes[_at(j, _PX, l)] = x + c[_K_HALF] * pv
-        nodes[_at(j, _PV, l)] = v + c[_K_HALF] * acc
+        nodes[node_at(j, NODE_SX, l)] = pv
+        nodes[node_at(j, NODE_SV, l)] = acc
+        nodes[node_at(j, NODE_PX, l)] = x + c[LK_HALF] * pv
+        nodes[node_at(j, NODE_PV, l)] = v + c[LK_HALF] * acc
     elif stage == 3:
-        nodes[_at(j, _SX, l)] = v + 2.0 * (nodes[_at(j, _SX, l)] + pv)
-        nodes[_at(j, _SV, l)] = nodes[_at(j, _A1, l)] + 2.0 * (nodes[_at(j, _SV, l)] + acc)
-        nodes[_at(j, _PX, l)] = x + c[_K_TAU] * pv
-        nodes[_at(j, _PV, l)] = v + c[_K_TAU] * acc
+        nodes[node_at(j, NODE_SX, l)] = v + 2.0 * (nodes[node_at(j, NODE_SX, l)] + pv)
+        nodes[node_at(j, NODE_SV, l)] = nodes[node_at(j, NODE_A1, l)] + 2.0 * (
+            nodes[node_at(j, NODE_SV, l)] + acc
+        )
+        nodes[node_at(j, NODE_PX, l)] = x + c[LK_TAU] * pv
+        nodes[node_at(j, NODE_PV, l)] = v + c[LK_TAU] * acc
     else:
-        nodes[_at(j, _X, l)] = x + c[_K_SIXTH] * (nodes[_at(j, _SX, l)] + pv)
-        nodes[_at(j, _V, l)] = v + c[_K_SIXTH] * (nodes[_at(j, _SV, l)] + acc)
+        nodes[node_at(j, NODE_X, l)] = x + c[LK_SIXTH] * (nodes[node_at(j, NODE_SX, l)] + pv)
+        nodes[node_at(j, NODE_V, l)] = v + c[LK_SIXTH] * (nodes[node_at(j, NODE_SV, l)] + acc)
 
 
 @jit_inline
@@ -227,37 +198,37 @@ def _observe_valve(obs, l, point, drive_lift, angle, sub_angle, first, c):
     first      : the run's first point. Selects only.
     """
     lift, velocity, drive, drive_velocity, retainer, deviation = point
-    energy = obs[_O_ENERGY * LANES + l]
+    energy = obs[LO_ENERGY * LANES + l]
     power = positive_part(drive) * drive_velocity
-    energy0 = energy if first else obs[_O_ENERGY0 * LANES + l]
-    work = obs[_O_WORK * LANES + l]
-    work = work if first else work + 0.5 * c[_K_TAU] * (power + obs[_O_PREV_POWER * LANES + l])
-    obs[_O_ENERGY0 * LANES + l] = energy0
-    obs[_O_WORK * LANES + l] = work
-    obs[_O_WORK_MAX * LANES + l] = larger(obs[_O_WORK_MAX * LANES + l], abs(work))
-    obs[_O_ENERGY_MAX * LANES + l] = larger(obs[_O_ENERGY_MAX * LANES + l], abs(energy))
-    obs[_O_EXCESS * LANES + l] = larger(obs[_O_EXCESS * LANES + l], energy - energy0 - work)
-    obs[_O_PREV_POWER * LANES + l] = power
-    obs[_O_MAX_LIFT * LANES + l] = larger(obs[_O_MAX_LIFT * LANES + l], lift)
-    obs[_O_MAX_V * LANES + l] = larger(obs[_O_MAX_V * LANES + l], velocity)
-    obs[_O_MIN_V * LANES + l] = smaller(obs[_O_MIN_V * LANES + l], velocity)
-    obs[_O_MAX_CONTACT * LANES + l] = larger(obs[_O_MAX_CONTACT * LANES + l], drive)
-    static = c[_K_PRELOAD] + c[_K_SPRING_RATE] * lift
-    obs[_O_MIN_RATIO * LANES + l] = smaller(obs[_O_MIN_RATIO * LANES + l], retainer / static)
-    obs[_O_MAX_DEVIATION * LANES + l] = larger(
-        obs[_O_MAX_DEVIATION * LANES + l], abs(retainer - static)
+    energy0 = energy if first else obs[LO_ENERGY0 * LANES + l]
+    work = obs[LO_WORK * LANES + l]
+    work = work if first else work + 0.5 * c[LK_TAU] * (power + obs[LO_PREV_POWER * LANES + l])
+    obs[LO_ENERGY0 * LANES + l] = energy0
+    obs[LO_WORK * LANES + l] = work
+    obs[LO_WORK_MAX * LANES + l] = larger(obs[LO_WORK_MAX * LANES + l], abs(work))
+    obs[LO_ENERGY_MAX * LANES + l] = larger(obs[LO_ENERGY_MAX * LANES + l], abs(energy))
+    obs[LO_EXCESS * LANES + l] = larger(obs[LO_EXCESS * LANES + l], energy - energy0 - work)
+    obs[LO_PREV_POWER * LANES + l] = power
+    obs[LO_MAX_LIFT * LANES + l] = larger(obs[LO_MAX_LIFT * LANES + l], lift)
+    obs[LO_MAX_V * LANES + l] = larger(obs[LO_MAX_V * LANES + l], velocity)
+    obs[LO_MIN_V * LANES + l] = smaller(obs[LO_MIN_V * LANES + l], velocity)
+    obs[LO_MAX_CONTACT * LANES + l] = larger(obs[LO_MAX_CONTACT * LANES + l], drive)
+    static = c[LK_PRELOAD] + c[LK_SPRING_RATE] * lift
+    obs[LO_MIN_RATIO * LANES + l] = smaller(obs[LO_MIN_RATIO * LANES + l], retainer / static)
+    obs[LO_MAX_DEVIATION * LANES + l] = larger(
+        obs[LO_MAX_DEVIATION * LANES + l], abs(retainer - static)
     )
-    obs[_O_SURGE * LANES + l] = larger(obs[_O_SURGE * LANES + l], deviation)
-    depth = c[_K_DEPTH]
+    obs[LO_SURGE * LANES + l] = larger(obs[LO_SURGE * LANES + l], deviation)
+    depth = c[LK_DEPTH]
     event = drive_lift > depth
-    margin = obs[_O_MIN_MARGIN * LANES + l]
-    obs[_O_MIN_MARGIN * LANES + l] = smaller(margin, drive) if event else margin
+    margin = obs[LO_MIN_MARGIN * LANES + l]
+    obs[LO_MIN_MARGIN * LANES + l] = smaller(margin, drive) if event else margin
     jumping = event & (drive <= 0.0) & (lift > depth)
-    start = obs[_O_JUMP_START * LANES + l]
-    obs[_O_JUMP_START * LANES + l] = angle if jumping & math.isnan(start) else start
-    obs[_O_JUMP_ANGLE * LANES + l] += sub_angle if jumping else 0.0
-    gap = obs[_O_JUMP_GAP * LANES + l]
-    obs[_O_JUMP_GAP * LANES + l] = larger(gap, lift - drive_lift) if jumping else gap
+    start = obs[LO_JUMP_START * LANES + l]
+    obs[LO_JUMP_START * LANES + l] = angle if jumping & math.isnan(start) else start
+    obs[LO_JUMP_ANGLE * LANES + l] += sub_angle if jumping else 0.0
+    gap = obs[LO_JUMP_GAP * LANES + l]
+    obs[LO_JUMP_GAP * LANES + l] = larger(gap, lift - drive_lift) if jumping else gap
     _observe_seat(obs, l, lift, velocity, depth, first)
 
 
@@ -265,22 +236,22 @@ def _observe_valve(obs, l, point, drive_lift, angle, sub_angle, first, c):
 def _observe_seat(obs, l, lift, velocity, depth, first):
     """Seat phase, bounces and seating velocity of lane ``l`` (the one-case kernel's branches
     as selects). lift y [m], velocity ẏ [m/s], depth δ0 [m]; first : the run's first point."""
-    phase = obs[_O_PHASE * LANES + l]
-    prev_lift = obs[_O_PREV_LIFT * LANES + l]
-    prev_v = obs[_O_PREV_V * LANES + l]
+    phase = obs[LO_PHASE * LANES + l]
+    prev_lift = obs[LO_PREV_LIFT * LANES + l]
+    prev_v = obs[LO_PREV_V * LANES + l]
     up = lift > depth
     reopened = up & (phase >= 2.0)
-    obs[_O_BOUNCES * LANES + l] += 1.0 if reopened & (prev_lift <= depth) else 0.0
-    height = obs[_O_BOUNCE_HEIGHT * LANES + l]
-    obs[_O_BOUNCE_HEIGHT * LANES + l] = larger(height, lift - depth) if reopened else height
+    obs[LO_BOUNCES * LANES + l] += 1.0 if reopened & (prev_lift <= depth) else 0.0
+    height = obs[LO_BOUNCE_HEIGHT * LANES + l]
+    obs[LO_BOUNCE_HEIGHT * LANES + l] = larger(height, lift - depth) if reopened else height
     closing = (not up) & (phase == 1.0) & (not first)
     fraction = (depth - prev_lift) / (lift - prev_lift)
     seating = abs(prev_v + fraction * (velocity - prev_v))
-    obs[_O_SEATING * LANES + l] = seating if closing else obs[_O_SEATING * LANES + l]
+    obs[LO_SEATING * LANES + l] = seating if closing else obs[LO_SEATING * LANES + l]
     opened = 1.0 if up & (phase == 0.0) else phase
-    obs[_O_PHASE * LANES + l] = 3.0 if reopened else (2.0 if closing else opened)
-    obs[_O_PREV_LIFT * LANES + l] = lift
-    obs[_O_PREV_V * LANES + l] = velocity
+    obs[LO_PHASE * LANES + l] = 3.0 if reopened else (2.0 if closing else opened)
+    obs[LO_PREV_LIFT * LANES + l] = lift
+    obs[LO_PREV_V * LANES + l] = velocity
 
 
 @jit_lanes
@@ -292,44 +263,48 @@ def _observe_lanes(coef, obs, nodes, n, drive_lift, slope, angle, sub_angle, fir
     first : the run's first point.
     """
     for l in range(LANES):
-        c = _k(coef, l)
-        lift = nodes[_at(n + 1, _X, l)]
-        velocity = nodes[_at(n + 1, _V, l)]
-        obs[_O_ENERGY * LANES + l] = kinetic_energy(0.0, c[_K_VALVE_MASS], velocity) + (
-            c[_K_PRELOAD] * lift
+        c = lane_coefficients(coef, l)
+        lift = nodes[node_at(n + 1, NODE_X, l)]
+        velocity = nodes[node_at(n + 1, NODE_V, l)]
+        obs[LO_ENERGY * LANES + l] = kinetic_energy(0.0, c[LK_VALVE_MASS], velocity) + (
+            c[LK_PRELOAD] * lift
         )
-        obs[_O_DEVIATION * LANES + l] = 0.0
-        obs[_O_DRIVE_VELOCITY * LANES + l] = c[_K_SPEED] * slope
+        obs[LO_DEVIATION * LANES + l] = 0.0
+        obs[LO_DRIVE_VELOCITY * LANES + l] = c[LK_SPEED] * slope
     for l in range(LANES):
-        _observe_segment(obs, nodes, l, 0, _k(coef, l))
+        _observe_segment(obs, nodes, l, 0, lane_coefficients(coef, l))
     for j in range(1, n + 1):
         for l in range(LANES):
-            c = _k(coef, l)
+            c = lane_coefficients(coef, l)
             force = _observe_segment(obs, nodes, l, j, c)
-            _first_point(nodes, l, j, (force - nodes[_at(j - 1, _F, l)]) * c[_K_INV_COIL], c)
+            _first_point(
+                nodes, l, j, (force - nodes[node_at(j - 1, NODE_F, l)]) * c[LK_INV_COIL], c
+            )
     for j in range(1, n + 1):
         for l in range(LANES):
-            c = _k(coef, l)
-            obs[_O_ENERGY * LANES + l] = kinetic_energy(
-                obs[_O_ENERGY * LANES + l], c[_K_COIL_MASS], nodes[_at(j, _V, l)]
+            c = lane_coefficients(coef, l)
+            obs[LO_ENERGY * LANES + l] = kinetic_energy(
+                obs[LO_ENERGY * LANES + l], c[LK_COIL_MASS], nodes[node_at(j, NODE_V, l)]
             )
-            deviation = coil_deviation(nodes[_at(j, _X, l)], nodes[_at(n + 1, _X, l)], j, n)
-            obs[_O_DEVIATION * LANES + l] = larger(obs[_O_DEVIATION * LANES + l], deviation)
+            deviation = coil_deviation(
+                nodes[node_at(j, NODE_X, l)], nodes[node_at(n + 1, NODE_X, l)], j, n
+            )
+            obs[LO_DEVIATION * LANES + l] = larger(obs[LO_DEVIATION * LANES + l], deviation)
     for l in range(LANES):
-        c = _k(coef, l)
+        c = lane_coefficients(coef, l)
         lift, velocity, drive, _, acc = _valve(
-            nodes, l, n, _X, _V, drive_lift, obs[_O_DRIVE_VELOCITY * LANES + l], c
+            nodes, l, n, NODE_X, NODE_V, drive_lift, obs[LO_DRIVE_VELOCITY * LANES + l], c
         )
-        obs[_O_ENERGY * LANES + l] = contact_energy(
-            obs[_O_ENERGY * LANES + l], lift, drive_lift, c[_K_K], c[_K_KZ], c[_K_DEPTH]
+        obs[LO_ENERGY * LANES + l] = contact_energy(
+            obs[LO_ENERGY * LANES + l], lift, drive_lift, c[LK_K], c[LK_KZ], c[LK_DEPTH]
         )
         point = (
             lift,
             velocity,
             drive,
-            obs[_O_DRIVE_VELOCITY * LANES + l],
-            nodes[_at(n, _F, l)],
-            obs[_O_DEVIATION * LANES + l],
+            obs[LO_DRIVE_VELOCITY * LANES + l],
+            nodes[node_at(n, NODE_F, l)],
+            obs[LO_DEVIATION * LANES + l],
         )
         _observe_valve(obs, l, point, drive_lift, angle, sub_angle, first, c)
         _first_point(nodes, l, n + 1, acc, c)
@@ -341,25 +316,27 @@ def _stage_sweep(coef, obs, nodes, n, drive_lift, slope, stage):
 
     n : N;  drive_lift Y [m], slope Y' [m/rad] at the stage;  stage : 2, 3 or 4, a constant
     in each caller, so the compiler drops the other stages' branches from the lane loops.
-    A coil's acceleration goes through its ``_ACC`` row, read in a second lane loop: it is
+    A coil's acceleration goes through its ``NODE_ACC`` row, read in a second lane loop: it is
     then rounded before the RK4 sums add it, as in the one-case kernel (in one loop the
     compiler would fuse its product into those sums, a different rounding).
     """
     for l in range(LANES):
-        c = _k(coef, l)
-        _segment(nodes, l, 0, _PX, _PV, c)
-        obs[_O_DRIVE_VELOCITY * LANES + l] = c[_K_SPEED] * slope
+        c = lane_coefficients(coef, l)
+        _segment(nodes, l, 0, NODE_PX, NODE_PV, c)
+        obs[LO_DRIVE_VELOCITY * LANES + l] = c[LK_SPEED] * slope
     for j in range(1, n + 1):
         for l in range(LANES):
-            c = _k(coef, l)
-            force, _ = _segment(nodes, l, j, _PX, _PV, c)
-            nodes[_at(j, _ACC, l)] = (force - nodes[_at(j - 1, _F, l)]) * c[_K_INV_COIL]
+            c = lane_coefficients(coef, l)
+            force, _ = _segment(nodes, l, j, NODE_PX, NODE_PV, c)
+            nodes[node_at(j, NODE_ACC, l)] = (force - nodes[node_at(j - 1, NODE_F, l)]) * c[
+                LK_INV_COIL
+            ]
         for l in range(LANES):
-            _advance(nodes, l, j, nodes[_at(j, _ACC, l)], stage, _k(coef, l))
+            _advance(nodes, l, j, nodes[node_at(j, NODE_ACC, l)], stage, lane_coefficients(coef, l))
     for l in range(LANES):
-        c = _k(coef, l)
+        c = lane_coefficients(coef, l)
         _, _, _, _, acc = _valve(
-            nodes, l, n, _PX, _PV, drive_lift, obs[_O_DRIVE_VELOCITY * LANES + l], c
+            nodes, l, n, NODE_PX, NODE_PV, drive_lift, obs[LO_DRIVE_VELOCITY * LANES + l], c
         )
         _advance(nodes, l, n + 1, acc, stage, c)
 
@@ -380,48 +357,6 @@ def _stage3_lanes(coef, obs, nodes, n, drive_lift, slope):
 def _stage4_lanes(coef, obs, nodes, n, drive_lift, slope):
     """Fourth RK4 stage of every node and lane and the new state (``_stage_sweep``)."""
     _stage_sweep(coef, obs, nodes, n, drive_lift, slope, 4)
-
-
-@jit
-def start_chain_lanes(params, cases, masses, sub_angle, block):
-    """Coefficients, time steps, initial state (static deflection line) and observations.
-
-    params : 2-D array  ``SC_*`` rows;  cases : 1-D int64  Row of each of the ``LANES`` lanes.
-    masses : int  N of every lane;  sub_angle : float  RK4 sub-step [rad];
-    block  : tuple  Arrays of :func:`new_block`.
-    """
-    coef, obs, nodes = block
-    n = masses
-    for l in range(LANES):
-        row = params[cases[l]]
-        c = chain_coefficients(row)
-        values = c[1:]  # the _K_* rows up to _K_SPEED, in order
-        for r in range(len(values)):
-            coef[r * LANES + l] = values[r]
-        coef[_K_SPRING_RATE * LANES + l] = row[SC_SPRING_RATE]
-        coef[_K_INV_COIL * LANES + l] = 1.0 / c[2]
-        tau = sub_angle / c[15]
-        coef[_K_TAU * LANES + l] = tau
-        coef[_K_HALF * LANES + l] = 0.5 * tau
-        coef[_K_SIXTH * LANES + l] = tau / 6.0
-        for i in range(n + 1):
-            share = (i + 1) / (n + 1)
-            nodes[_at(i + 1, _X, l)] = share * row[SC_INITIAL_LIFT]
-            nodes[_at(i + 1, _V, l)] = share * row[SC_INITIAL_VELOCITY]
-        for r, value in (
-            (_O_MAX_LIFT, -math.inf),
-            (_O_MAX_V, -math.inf),
-            (_O_MIN_V, math.inf),
-            (_O_MIN_MARGIN, math.inf),
-            (_O_MIN_RATIO, math.inf),
-            (_O_JUMP_START, math.nan),
-            (_O_SEATING, math.nan),
-        ):
-            obs[r * LANES + l] = value
-        lift = nodes[_at(n + 1, _X, l)]
-        obs[_O_PHASE * LANES + l] = 1.0 if lift > c[14] else 0.0
-        obs[_O_PREV_LIFT * LANES + l] = lift
-        obs[_O_PREV_V * LANES + l] = nodes[_at(n + 1, _V, l)]
 
 
 @jit
@@ -450,42 +385,3 @@ def chain_lane_pass(excitation, table_step, table_start, masses, substeps, block
         _stage3_lanes(coef, obs, nodes, masses, ym, slope_m)
         _stage4_lanes(coef, obs, nodes, masses, y1, slope1)
         y0, slope0 = y1, slope1
-
-
-@jit
-def finish_chain_lanes(block, count, masses, substeps, cases, out):
-    """Write the ``CO_*`` outputs of the first ``count`` lanes into rows ``cases`` of ``out``
-    (``CO_STEP_RATIO`` is left as the guard set it)."""
-    _, obs, nodes = block
-    n = masses
-    for l in range(count):
-        row = out[cases[l]]
-        for column, r in (
-            (CO_MAX_LIFT, _O_MAX_LIFT),
-            (CO_MAX_VELOCITY, _O_MAX_V),
-            (CO_MIN_VELOCITY, _O_MIN_V),
-            (CO_JUMP_START, _O_JUMP_START),
-            (CO_JUMP_DURATION, _O_JUMP_ANGLE),
-            (CO_JUMP_GAP, _O_JUMP_GAP),
-            (CO_BOUNCE_COUNT, _O_BOUNCES),
-            (CO_BOUNCE_HEIGHT, _O_BOUNCE_HEIGHT),
-            (CO_SEATING_VELOCITY, _O_SEATING),
-            (CO_MAX_CONTACT_FORCE, _O_MAX_CONTACT),
-            (CO_MIN_FORCE_MARGIN, _O_MIN_MARGIN),
-            (CO_MIN_RETAINER_RATIO, _O_MIN_RATIO),
-            (CO_MAX_RETAINER_DEVIATION, _O_MAX_DEVIATION),
-            (CO_SURGE_AMPLITUDE, _O_SURGE),
-        ):
-            row[column] = obs[r * LANES + l]
-        clashes = 0.0
-        finite = True
-        for j in range(n + 2):
-            clashes += nodes[_at(j, _CLASHES, l)]
-            finite = finite and math.isfinite(nodes[_at(j, _X, l)])
-            finite = finite and math.isfinite(nodes[_at(j, _V, l)])
-        row[CO_CLASH_COUNT] = clashes
-        scale = max(obs[_O_ENERGY_MAX * LANES + l], obs[_O_WORK_MAX * LANES + l])
-        excess = obs[_O_EXCESS * LANES + l]
-        row[CO_ENERGY_EXCESS] = excess / scale if scale > 0.0 else 0.0
-        row[CO_SUBSTEPS] = substeps
-        row[CO_STATUS] = chain_status(finite, row[CO_ENERGY_EXCESS])
