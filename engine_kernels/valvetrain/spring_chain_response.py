@@ -21,7 +21,7 @@ import math
 import numpy as np
 
 from engine_kernels._jit import batch, jit, prange
-from engine_kernels.valvetrain.model import excitation_lift_slope
+from engine_kernels.valvetrain.model import excitation_lift_slope, positive_part
 from engine_kernels.valvetrain.spring_chain import (
     chain_accelerations,
     chain_coefficients,
@@ -144,7 +144,7 @@ def spring_chain_response(excitation, table_step, table_start, params, settings,
         energy = chain_energy(
             pos, vel, y0, n, valve_mass, coil_mass, rate, preload, gap, kc, k, kz, depth
         )
-        power = max(drive, 0.0) * v0
+        power = positive_part(drive) * v0
         if m == 0:
             energy0 = energy
         else:
