@@ -33,10 +33,8 @@ from studies.simd import host_lanes, target_features, widest_vector
 RPM = 2 * math.pi / 60
 VALVE_MASS = 0.033 + 5e-6 / 33.28e-3**2
 HEIGHT, HALF = 4e-3, 1.4  # 1 - cos event as in test_spring_chain.py
-BASE = np.array(
-    [3500 * RPM, VALVE_MASS, 1.17e7, 150.0, 3.0e4, 205.8, 5e7, 900.0, 0, 0, 0]
-    + [0.015, 4, 0.03, 1.0, 0.0, 0.0]
-)
+LUMPED = [3500 * RPM, VALVE_MASS, 1.17e7, 150.0, 3.0e4, 205.8, 5e7, 900.0, 0, 0, 0]
+BASE = np.array([*LUMPED, 0.015, 4, 0.03, 1.0, 0.0, 0.0])  # 15 g spring, N = 4, zeta 0.03
 OUTPUTS = len(layout.CHAIN_OUTPUT_NAMES)
 SETTINGS = valve.valve_settings()
 
