@@ -56,10 +56,9 @@ from engine_kernels.valvetrain.spring_chain_layout import (
 LANES = 32
 
 # Coefficients (chain_coefficients without N) and time steps of each lane [SI].
-(LK_VALVE_MASS, LK_COIL_MASS, LK_RATE, LK_DAMPER, LK_GAP, LK_KC, LK_CC, LK_K, LK_B, LK_KZ) = range(
-    10
-)
-(LK_BZ, LK_GAMMA, LK_PRELOAD, LK_DEPTH, LK_SPEED, LK_SPRING_RATE, LK_INV_COIL) = range(10, 17)
+(LK_VALVE_MASS, LK_COIL_MASS, LK_RATE, LK_DAMPER, LK_GAP, LK_KC, LK_CC) = range(7)
+(LK_K, LK_B, LK_KZ, LK_BZ, LK_GAMMA, LK_PRELOAD, LK_DEPTH, LK_SPEED) = range(7, 15)
+(LK_SPRING_RATE, LK_INV_COIL) = range(15, 17)
 LK_TAU, LK_HALF, LK_SIXTH = range(17, 20)
 # Running observations of each lane (seat phase as in engine_kernels.valvetrain.layout).
 (LO_MAX_LIFT, LO_MAX_V, LO_MIN_V, LO_MAX_CONTACT, LO_MIN_MARGIN) = range(5)
@@ -109,7 +108,7 @@ def node_at(j, field, l):
 
 @jit_inline
 def lane_coefficients(coef, l):
-    """Coefficients and time steps of lane ``l`` (``_K_*`` order), read once per loop body."""
+    """Coefficients and time steps of lane ``l`` (``LK_*`` order), read once per loop body."""
     return (
         coef[LK_VALVE_MASS * LANES + l],
         coef[LK_COIL_MASS * LANES + l],
@@ -147,12 +146,13 @@ def start_chain_lanes(params, cases, masses, sub_angle, block):
     for l in range(LANES):
         row = params[cases[l]]
         c = chain_coefficients(row)
-        values = c[1:]  # the _K_* rows up to LK_SPEED, in order
+        values = c[1:]  # rows LK_VALVE_MASS … LK_SPEED, in chain_coefficients order
         for r in range(len(values)):
             coef[r * LANES + l] = values[r]
+        coil_mass, depth, speed = c[2], c[14], c[15]
         coef[LK_SPRING_RATE * LANES + l] = row[SC_SPRING_RATE]
-        coef[LK_INV_COIL * LANES + l] = 1.0 / c[2]
-        tau = sub_angle / c[15]
+        coef[LK_INV_COIL * LANES + l] = 1.0 / coil_mass
+        tau = sub_angle / speed
         coef[LK_TAU * LANES + l] = tau
         coef[LK_HALF * LANES + l] = 0.5 * tau
         coef[LK_SIXTH * LANES + l] = tau / 6.0
@@ -171,7 +171,7 @@ def start_chain_lanes(params, cases, masses, sub_angle, block):
         ):
             obs[r * LANES + l] = value
         lift = nodes[node_at(n + 1, NODE_X, l)]
-        obs[LO_PHASE * LANES + l] = 1.0 if lift > c[14] else 0.0
+        obs[LO_PHASE * LANES + l] = 1.0 if lift > depth else 0.0
         obs[LO_PREV_LIFT * LANES + l] = lift
         obs[LO_PREV_V * LANES + l] = nodes[node_at(n + 1, NODE_V, l)]
 

@@ -3,8 +3,8 @@
 The one-case kernel's observations
 (:func:`engine_kernels.valvetrain.spring_chain_response.spring_chain_response`: extremes,
 energy balance, jump, seat phase, bounces, seating velocity) with its branches written as
-selects, inlined into the valve loop of
-:func:`engine_kernels.valvetrain.spring_chain_lanes.chain_lane_pass`, which then vectorises.
+selects, inlined into the valve loop of the observation sweep
+(:mod:`engine_kernels.valvetrain.spring_chain_lanes`), which then vectorises.
 They update the ``LO_*`` rows of :mod:`engine_kernels.valvetrain.spring_chain_lane_layout`.
 Reference: SPEC §4 [V2], [V4].
 """

@@ -270,12 +270,14 @@ def _stage4_lanes(coef, obs, nodes, n, drive_lift, slope):
 
 @jit
 def chain_lane_pass(excitation, table_step, table_start, masses, substeps, block):
-    """Integrate every lane of a started block (:func:`start_chain_lanes`) over the table.
+    """Integrate every lane of a started block over the table, as the one-case kernel does.
 
-    excitation : 2-D array  (3, n) rows Y [m], Y' [m/rad], Y'' [m/rad²] at ``table_step``.
-    table_step : float  Table spacing [rad]; the RK4 grid step is twice it.
+    excitation  : 2-D array  (3, n) rows Y [m], Y' [m/rad], Y'' [m/rad²] at ``table_step``.
+    table_step  : float  Table spacing [rad]; the RK4 grid step is twice it.
     table_start : float  Cam angle of the first node [rad];  masses : int  N of every lane.
-    substeps   : int    RK4 sub-steps per grid step, the same for every lane.
+    substeps    : int    RK4 sub-steps per grid step, the same for every lane.
+    block       : tuple  Arrays of ``spring_chain_lane_layout.new_block`` after
+                         ``start_chain_lanes``; ``finish_chain_lanes`` reads the outputs.
     """
     coef, obs, nodes = block
     n_steps = (excitation.shape[1] - 1) // 2
