@@ -19,7 +19,6 @@ import numpy as np
 
 from engine_kernels import valvetrain as valve
 from engine_kernels.valvetrain import lane_batch as valve_lanes
-from engine_kernels.valvetrain.spring_chain_lane_batch import spring_chain_response_batch
 from engine_kernels.valvetrain.spring_chain_layout import (
     CHAIN_OUTPUT_NAMES,
     CHAIN_PARAM_NAMES,
@@ -29,7 +28,10 @@ from engine_kernels.valvetrain.spring_chain_layout import (
     SC_SPRING_MASSES,
     SC_VALVE_MASS,
 )
-from engine_kernels.valvetrain.spring_chain_response import spring_chain_one_case_batch
+from engine_kernels.valvetrain.spring_chain_response import (
+    spring_chain_one_case_batch,
+    spring_chain_response_batch,
+)
 from studies.bench_timing import best_times
 
 CHAIN_MASSES = (1, 2, 4, 8, 16, 24)

@@ -1,13 +1,13 @@
-"""Valve dynamics with the multi-mass spring [V4] for many cases: the batch entry (SPEC §4).
+"""Blocks of the multi-mass spring lane kernel [V4]: grouping keys, boundaries, one block.
 
-:func:`spring_chain_response_batch` gives the results of the one-case kernel
-(:func:`engine_kernels.valvetrain.spring_chain_response.spring_chain_response`, no curves)
-bit for bit, ``LANES`` cases per block stepped together by
+The batch entry
+:func:`engine_kernels.valvetrain.spring_chain_response.spring_chain_response_batch` gives the
+results of the one-case kernel bit for bit, ``LANES`` cases per block stepped together by
 :mod:`engine_kernels.valvetrain.spring_chain_lanes`. A block's lanes share the number of coil
 masses N (the length of their node sweeps) and the RK4 sub-step count the stability guard
-gives each case, so each case keeps exactly its own: its results do not depend on which other
-cases share its block. Cases the guard refuses (invalid input, sub-step limit) get their
-outputs from it and join no block. As for the lumped lanes
+gives each case (:func:`block_key`), so each case keeps exactly its own: its results do not
+depend on which other cases share its block. Cases the guard refuses (invalid input, sub-step
+limit) get their outputs from it and join no block. As for the lumped lanes
 (:mod:`engine_kernels.valvetrain.lane_batch`), blocks run in a ``prange`` in an order that
 spreads the costly ones over the threads, each writing only its own cases' output rows.
 
@@ -22,9 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from engine_kernels._jit import batch, jit, prange
-from engine_kernels.valvetrain.lane_batch import spread_order
-from engine_kernels.valvetrain.spring_chain_guard import prepare_chain_case
+from engine_kernels._jit import jit
 from engine_kernels.valvetrain.spring_chain_lane_layout import (
     LANES,
     finish_chain_lanes,
@@ -32,16 +30,10 @@ from engine_kernels.valvetrain.spring_chain_lane_layout import (
     start_chain_lanes,
 )
 from engine_kernels.valvetrain.spring_chain_lanes import chain_lane_pass
-from engine_kernels.valvetrain.spring_chain_layout import (
-    CHAIN_CURVE_NAMES,
-    MAX_SPRING_MASSES,
-    SC_SPRING_MASSES,
-)
-from engine_kernels.valvetrain.spring_chain_response import spring_chain_response
+from engine_kernels.valvetrain.spring_chain_layout import MAX_SPRING_MASSES, SC_SPRING_MASSES
 
 # Blocks with fewer cases run them one at a time (module docstring).
 MIN_BLOCK_CASES = 8
-# Block key of a case: sub-steps · _KEY_BASE + N (0: refused), so sorting by key sorts by cost.
 _KEY_BASE = MAX_SPRING_MASSES + 1
 
 
@@ -72,59 +64,32 @@ def chain_block_starts(keys, order):
 
 
 @jit
-def _chain_block(excitation, table_step, table_start, params, settings, block, key, out):
-    """Integrate and report one block: up to ``LANES`` cases with the same key.
+def block_key(substeps, params):
+    """Block key of a case: sub-steps · (MAX_SPRING_MASSES + 1) + N, or 0 if the guard refused
+    it (``substeps`` 0). Sorting by key groups the lanes of a block and sorts blocks by cost.
+
+    substeps : int  From :func:`~engine_kernels.valvetrain.spring_chain_guard.prepare_chain_case`;
+    params   : 1-D array  The case's ``SC_*`` row.
+    """
+    return substeps * _KEY_BASE + int(params[SC_SPRING_MASSES]) if substeps > 0 else 0
+
+
+@jit
+def lane_block(excitation, table_step, table_start, params, block, key, out):
+    """Integrate one block of up to ``LANES`` cases with one key in the lane kernel.
 
     block : 1-D int64  Row indices of the block's cases in ``params`` and ``out``.
-    Lanes past the block's cases repeat its first case; their results are not written. Fewer
-    than ``MIN_BLOCK_CASES`` cases run one at a time.
+    key   : int        Their :func:`block_key`. Other arguments as in
+                       :func:`~engine_kernels.valvetrain.spring_chain_response.spring_chain_response_batch`.
+    Lanes past the block's cases repeat its first case; their results are not written.
     """
     count = block.shape[0]
-    if count < MIN_BLOCK_CASES:
-        for i in block:
-            spring_chain_response(
-                excitation,
-                table_step,
-                table_start,
-                params[i],
-                settings,
-                out[i],
-                np.empty((len(CHAIN_CURVE_NAMES), 0)),
-            )
-        return
     masses = key % _KEY_BASE
     substeps = key // _KEY_BASE
     cases = np.empty(LANES, dtype=np.int64)
     for l in range(LANES):
         cases[l] = block[l if l < count else 0]
-    block_arrays = new_block(masses)
-    start_chain_lanes(params, cases, masses, 2.0 * table_step / substeps, block_arrays)
-    chain_lane_pass(excitation, table_step, table_start, masses, substeps, block_arrays)
-    finish_chain_lanes(block_arrays, count, masses, substeps, cases, out)
-
-
-@batch
-def spring_chain_response_batch(excitation, table_step, table_start, params, settings, out):
-    """Valve dynamics with the N-mass spring for many cases, ``LANES`` per SIMD block.
-
-    params : 2-D array  (n_cases, len(CHAIN_PARAM_NAMES)) ``SC_*`` rows (N may differ per row).
-    out    : 2-D array  (n_cases, len(CHAIN_OUTPUT_NAMES)) outputs ``CO_*``.
-    Other arguments as in :func:`~engine_kernels.valvetrain.spring_chain_response.spring_chain_response`;
-    the outputs are those of
-    :func:`~engine_kernels.valvetrain.spring_chain_response.spring_chain_one_case_batch`.
-    Reference: SPEC §4 [V4]; STYLE "Hot integrators".
-    """
-    n_cases = params.shape[0]
-    keys = np.empty(n_cases, dtype=np.int64)
-    for i in prange(n_cases):
-        substeps = prepare_chain_case(excitation, table_step, params[i], settings, out[i])
-        keys[i] = substeps * _KEY_BASE + int(params[i, SC_SPRING_MASSES]) if substeps > 0 else 0
-    order = np.argsort(keys, kind="mergesort")
-    starts = chain_block_starts(keys, order)
-    schedule = spread_order(starts.shape[0] - 1)
-    for i in prange(schedule.shape[0]):
-        b = schedule[i]
-        block = order[starts[b] : starts[b + 1]]
-        _chain_block(
-            excitation, table_step, table_start, params, settings, block, keys[block[0]], out
-        )
+    arrays = new_block(masses)
+    start_chain_lanes(params, cases, masses, 2.0 * table_step / substeps, arrays)
+    chain_lane_pass(excitation, table_step, table_start, masses, substeps, arrays)
+    finish_chain_lanes(arrays, count, masses, substeps, cases, out)

@@ -1,4 +1,4 @@
-"""Valve dynamics with the multi-mass spring [V4]: fixed-step RK4, one case at a time.
+"""Valve dynamics with the multi-mass spring [V4]: fixed-step RK4 per case, batch entry.
 
 The chain model is in :mod:`engine_kernels.valvetrain.spring_chain`, its rows in
 :mod:`engine_kernels.valvetrain.spring_chain_layout`. The excitation table and the cam-angle
@@ -6,12 +6,15 @@ grid are those of the lumped kernel (:func:`engine_kernels.valvetrain.valve_resp
 Y, Y', Y'' at spacing ``table_step``, RK4 grid step twice that, time step ``Δθ/ω``.
 
 The stability guard (equal sub-steps from a bound on every contact state, cases past
-``max_substeps`` refused) is in :mod:`engine_kernels.valvetrain.spring_chain_guard`. The run itself is checked from the physics, not only for
-NaN: the energy may grow only by the cam's work through the drive (``dE/dt ≤ F_drive Ẏ``), and
-an excess above ``ENERGY_SLACK`` of the run's energy scale is ``STATUS_UNSTABLE``.
+``max_substeps`` refused) is in :mod:`engine_kernels.valvetrain.spring_chain_guard`. The run
+itself is checked from the physics, not only for NaN: the energy may grow only by the cam's
+work through the drive (``dE/dt ≤ F_drive Ẏ``), and an excess above ``ENERGY_SLACK`` of the
+run's energy scale is ``STATUS_UNSTABLE``.
 
 Observations are taken at every RK4 sub-step point (a coil clash or a seat landing can last
-less than a grid step). Reference: SPEC §4 [V2], [V4].
+less than a grid step). The batch entry :func:`spring_chain_response_batch` runs blocks of
+cases in SIMD lanes (:mod:`engine_kernels.valvetrain.spring_chain_lanes`), with the same
+numbers. Reference: SPEC §4 [V2], [V4].
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ import math
 import numpy as np
 
 from engine_kernels._jit import batch, jit, prange
+from engine_kernels.valvetrain.lane_batch import spread_order
 from engine_kernels.valvetrain.model import excitation_lift_slope, positive_part
 from engine_kernels.valvetrain.spring_chain import (
     chain_accelerations,
@@ -29,6 +33,12 @@ from engine_kernels.valvetrain.spring_chain import (
     surge_displacement,
 )
 from engine_kernels.valvetrain.spring_chain_guard import chain_status, prepare_chain_case
+from engine_kernels.valvetrain.spring_chain_lane_batch import (
+    MIN_BLOCK_CASES,
+    block_key,
+    chain_block_starts,
+    lane_block,
+)
 from engine_kernels.valvetrain.spring_chain_layout import (
     CC_DRIVE_FORCE,
     CC_ENERGY,
@@ -235,7 +245,7 @@ def spring_chain_one_case_batch(excitation, table_step, table_start, params, set
     params : 2-D array  (n_cases, len(CHAIN_PARAM_NAMES)) ``SC_*`` rows (N may differ per row).
     out    : 2-D array  (n_cases, len(CHAIN_OUTPUT_NAMES)) outputs ``CO_*``.
     Other arguments as in :func:`spring_chain_response`. The reference of the lane kernel; the
-    batch entry is :func:`engine_kernels.valvetrain.spring_chain_lane_batch.spring_chain_response_batch`.
+    batch entry is :func:`spring_chain_response_batch`.
     """
     for i in prange(params.shape[0]):
         spring_chain_response(
@@ -247,3 +257,41 @@ def spring_chain_one_case_batch(excitation, table_step, table_start, params, set
             out[i],
             np.empty((len(CHAIN_CURVE_NAMES), 0)),
         )
+
+
+@batch
+def spring_chain_response_batch(excitation, table_step, table_start, params, settings, out):
+    """Valve dynamics with the N-mass spring for many cases: the batch entry (no curves).
+
+    The outputs of :func:`spring_chain_one_case_batch`, bit for bit, from ``LANES`` cases per
+    SIMD block (:mod:`engine_kernels.valvetrain.spring_chain_lane_batch`); a block of fewer
+    than ``MIN_BLOCK_CASES`` runs its cases one at a time, where the lanes would cost more.
+    params : 2-D array  (n_cases, len(CHAIN_PARAM_NAMES)) ``SC_*`` rows (N may differ per row).
+    out    : 2-D array  (n_cases, len(CHAIN_OUTPUT_NAMES)) outputs ``CO_*``.
+    Other arguments as in :func:`spring_chain_response`. Reference: SPEC §4 [V4]; STYLE "Hot
+    integrators".
+    """
+    n_cases = params.shape[0]
+    keys = np.empty(n_cases, dtype=np.int64)
+    for i in prange(n_cases):
+        substeps = prepare_chain_case(excitation, table_step, params[i], settings, out[i])
+        keys[i] = block_key(substeps, params[i])
+    order = np.argsort(keys, kind="mergesort")
+    starts = chain_block_starts(keys, order)
+    schedule = spread_order(starts.shape[0] - 1)
+    for i in prange(schedule.shape[0]):
+        b = schedule[i]
+        block = order[starts[b] : starts[b + 1]]
+        if block.shape[0] >= MIN_BLOCK_CASES:
+            lane_block(excitation, table_step, table_start, params, block, keys[block[0]], out)
+            continue
+        for case in block:
+            spring_chain_response(
+                excitation,
+                table_step,
+                table_start,
+                params[case],
+                settings,
+                out[case],
+                np.empty((len(CHAIN_CURVE_NAMES), 0)),
+            )

@@ -16,8 +16,10 @@ import pytest
 from engine_kernels import valvetrain as valve
 from engine_kernels.valvetrain import spring_chain as chain
 from engine_kernels.valvetrain import spring_chain_layout as layout
-from engine_kernels.valvetrain.spring_chain_lane_batch import spring_chain_response_batch
-from engine_kernels.valvetrain.spring_chain_response import spring_chain_response
+from engine_kernels.valvetrain.spring_chain_response import (
+    spring_chain_response,
+    spring_chain_response_batch,
+)
 
 RPM = 2 * math.pi / 60
 VALVE_MASS = 0.033 + 5e-6 / 33.28e-3**2

@@ -27,7 +27,10 @@ from engine_kernels.valvetrain import spring_chain_lane_layout as lane_layout
 from engine_kernels.valvetrain import spring_chain_lanes as lane_loops
 from engine_kernels.valvetrain import spring_chain_layout as layout
 from engine_kernels.valvetrain.spring_chain_guard import prepare_chain_case
-from engine_kernels.valvetrain.spring_chain_response import spring_chain_one_case_batch
+from engine_kernels.valvetrain.spring_chain_response import (
+    spring_chain_one_case_batch,
+    spring_chain_response_batch,
+)
 from studies.simd import host_lanes, target_features, widest_vector
 
 RPM = 2 * math.pi / 60
@@ -89,7 +92,7 @@ def one_case(rows, table=None, settings=SETTINGS):
 def batch(rows, table=None, settings=SETTINGS):
     excitation, step, start = table or cosine_event_table(0.5)
     out = np.empty((rows.shape[0], OUTPUTS))
-    lane_batch.spring_chain_response_batch(excitation, step, start, rows, settings, out)
+    spring_chain_response_batch(excitation, step, start, rows, settings, out)
     return out
 
 
@@ -179,16 +182,14 @@ def test_batch_driver_as_plain_python_gives_the_same_rows():
     rows = study_like_batch()[::3]
     excitation, step, start = cosine_event_table(1.0)
     python = np.empty((rows.shape[0], OUTPUTS))
-    lane_batch.spring_chain_response_batch.py_func(excitation, step, start, rows, SETTINGS, python)
+    spring_chain_response_batch.py_func(excitation, step, start, rows, SETTINGS, python)
     np.testing.assert_array_equal(python, batch(rows, (excitation, step, start)))
 
 
 def test_batches_without_runnable_cases():
     empty = np.empty((0, OUTPUTS))
     excitation, step, start = cosine_event_table(0.5)
-    lane_batch.spring_chain_response_batch(
-        excitation, step, start, np.empty((0, BASE.size)), SETTINGS, empty
-    )
+    spring_chain_response_batch(excitation, step, start, np.empty((0, BASE.size)), SETTINGS, empty)
     refused = np.tile(BASE, (3, 1))
     refused[:, column("spring_masses")] = 0
     out = batch(refused)

@@ -15,7 +15,7 @@ import pytest
 
 from engine_kernels import valvetrain as valve
 from engine_kernels.valvetrain import spring_chain_layout as layout
-from engine_kernels.valvetrain.spring_chain_lane_batch import spring_chain_response_batch
+from engine_kernels.valvetrain.spring_chain_response import spring_chain_response_batch
 from studies.bench_chain import CHAIN_MASSES, SPRING_MASS, chain_figures, chain_rows
 
 RPM = 2 * math.pi / 60
