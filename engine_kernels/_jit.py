@@ -69,6 +69,16 @@ def jit_inline(func):
     return numba.njit(cache=True, fastmath=FASTMATH, nogil=True, inline="always")(func)
 
 
+def jit_lanes(func):
+    """Like :func:`jit`, with NumPy's error model, for functions holding SIMD lane loops.
+
+    Under Python's error model every float division checks its divisor and may raise, a
+    branch out of the loop that stops LLVM from vectorising it; here ``x/0`` gives ±inf or
+    NaN as IEEE says (a lane whose value is then discarded by a select needs no branch).
+    """
+    return numba.njit(cache=True, fastmath=FASTMATH, nogil=True, error_model="numpy")(func)
+
+
 def batch(func):
     """Compile a batch driver whose outer loop is ``prange`` over cases.
 

@@ -9,9 +9,8 @@ from __future__ import annotations
 
 import ctypes
 import json
-import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -21,8 +20,10 @@ import numpy as np
 from engine_kernels import valvetrain as valve
 from engine_kernels.valvetrain import lane_batch as valve_lanes
 from studies import provenance, tracking
+from studies.bench_chain import chain_figures
 from studies.bench_plots import save_bench_figure
 from studies.bench_study import bench_study
+from studies.bench_timing import best_time, best_times
 from studies.plan import Plan, plan_text
 from studies.runner import evaluate_chunk
 from studies.scenes.chain import HALF_TURN_DEG, grid_deg
@@ -43,24 +44,6 @@ levels = {widths}
 [factors.seg2_amplitude]
 levels = [10.0, 12.0, 14.0, 16.0]
 """
-
-
-def best_time(fn: Callable[[], object], repeat: int) -> float:
-    return best_times([fn], repeat)[0]
-
-
-def best_times(fns: Sequence[Callable[[], object]], repeat: int) -> list[float]:
-    """Best of ``repeat`` timings of each function, taken in turns (after one warm-up call
-    each), so that load from other users of the machine falls on all of them alike."""
-    for fn in fns:
-        fn()
-    best = [math.inf] * len(fns)
-    for _ in range(repeat):
-        for i, fn in enumerate(fns):
-            t0 = time.perf_counter()
-            fn()
-            best[i] = min(best[i], time.perf_counter() - t0)
-    return best
 
 
 def bench_cam(cases: int, step: float, repeat: int) -> dict[str, Any]:
@@ -119,12 +102,14 @@ def bench_valve(cases: int, step: float, repeat: int) -> dict[str, Any]:
     """Valve cases/s: the lane kernel (double and single precision) vs one case per prange
     iteration and vs the C reference of the lane kernel on identical inputs (kernels alone,
     over the scene's window and over a whole revolution, and end to end through the study
-    engine), the switch-aware RK4, and scipy's event-restarted DOP853 (the accuracy
-    reference)."""
+    engine), the multi-mass spring kernel [V4] for N = 1 … 24 against the lumped lanes on the
+    same rows (:mod:`studies.bench_chain`), the switch-aware RK4, and scipy's event-restarted
+    DOP853 (the accuracy reference)."""
     figures: dict[str, Any] = {
         "lanes_per_vector_float64": host_lanes(np.float64),
         "lanes_per_vector_float32": host_lanes(np.float32),
         "kernel": _valve_kernels(cases, step, repeat),
+        "multi_mass": _multi_mass(cases, step, repeat),
     }
     for integrator, n in [
         ("lanes", cases),
@@ -227,6 +212,14 @@ def _valve_kernels(cases: int, step: float, repeat: int) -> dict[str, Any]:
                     / figures[f"{span}_{denominator}"]["cases_per_s"]
                 )
     return figures
+
+
+def _multi_mass(cases: int, step: float, repeat: int) -> dict[str, Any]:
+    """The multi-mass spring kernel on the rows and window table of :func:`_valve_kernels`."""
+    scene, ctx, key, idx = _valve_case(_valve_plan("lanes", cases, step).definition.text)
+    rows = valve_rows(ctx["points"], idx)
+    flags = kernel_settings(ctx["settings"], "lanes", estimate=False)
+    return chain_figures(scene.excitation(ctx, key, step), rows, flags, repeat)
 
 
 def _c_reference(

@@ -18,7 +18,12 @@ One physical concept per module:
 * :mod:`~engine_kernels.valvetrain.integrator` — one case at a time;
   :mod:`~engine_kernels.valvetrain.jump` — jump-speed search;
 * :mod:`~engine_kernels.valvetrain.lanes` and :mod:`~engine_kernels.valvetrain.lane_batch` —
-  blocks of cases in SIMD lanes.
+  blocks of cases in SIMD lanes;
+* the multi-mass spring [V4]: :mod:`~engine_kernels.valvetrain.spring_chain` (model),
+  ``spring_chain_layout`` (rows), ``spring_chain_guard`` (input checks, sub-steps, status),
+  ``spring_chain_response`` (one case at a time, and the batch entry
+  ``spring_chain_response_batch``), ``spring_chain_lanes`` with ``spring_chain_lane_layout``,
+  ``spring_chain_lane_observations`` and ``spring_chain_lane_batch`` (SIMD lanes).
 
 This package re-exports the public API of the one-case valve kernels and their data layout,
 so ``from engine_kernels import valvetrain`` is the one import a caller of them needs.

@@ -26,7 +26,8 @@ from __future__ import annotations
 
 import math
 
-from engine_kernels._jit import jit
+from engine_kernels._jit import jit, jit_inline
+from engine_kernels.valvetrain.model import positive_part
 from engine_kernels.valvetrain.spring_chain_layout import (
     SC_CLASH_DAMPING,
     SC_CLASH_STIFFNESS,
@@ -144,7 +145,7 @@ def chain_spectral_radius(params):
     return max(math.sqrt(max(coil_k, valve_k)), coil_c, valve_c)
 
 
-@jit
+@jit_inline
 def segment_force(compression, rate, damper, preload, gap, kc, cc, compression_rate):
     """Force of one spring segment, compression positive, with coil clash [V4] [N].
 
@@ -202,12 +203,51 @@ def chain_accelerations(
     inv_coil = 1.0 / coil_mass
     for i in range(masses):
         acc[i] = (forces[i + 1] - forces[i]) * inv_coil
-    lift, velocity = pos[masses], vel[masses]
+    drive, seat, acc[masses] = valve_balance(
+        pos[masses],
+        vel[masses],
+        drive_lift,
+        drive_velocity,
+        forces[masses],
+        valve_mass,
+        k,
+        b,
+        kz,
+        bz,
+        gamma,
+        preload,
+        depth,
+    )
+    return drive, seat
+
+
+@jit_inline
+def valve_balance(
+    lift,
+    velocity,
+    drive_lift,
+    drive_velocity,
+    retainer,
+    valve_mass,
+    k,
+    b,
+    kz,
+    bz,
+    gamma,
+    preload,
+    depth,
+):
+    """Drive and seat forces on the valve and its acceleration [V4] (selects, no calls).
+
+    lift, velocity : float  y [m], ẏ [m/s];  drive_lift, drive_velocity : float  Y [m], Ẏ [m/s].
+    retainer       : float  Force of the retainer-end segment F_N [N].
+    Other arguments as returned by :func:`chain_coefficients`.
+    Returns the drive force before clipping [N], the seat force [N] and ÿ [m/s²].
+    """
     drive = k * (drive_lift - lift) + b * (drive_velocity - velocity)
     seat = preload - kz * lift - bz * velocity  # kz (δ0 − y) − bz ẏ with kz δ0 = Ps0
-    seat = seat if lift < depth and seat > 0.0 else 0.0
-    acc[masses] = (max(drive, 0.0) + seat - forces[masses] - gamma * velocity) / valve_mass
-    return drive, seat
+    seat = seat if (lift < depth) & (seat > 0.0) else 0.0
+    return drive, seat, (positive_part(drive) + seat - retainer - gamma * velocity) / valve_mass
 
 
 @jit
@@ -222,21 +262,43 @@ def chain_energy(
     Arguments as in :func:`chain_accelerations` (no damping needed).
     """
     lift = pos[masses]
-    energy = 0.5 * valve_mass * vel[masses] ** 2 + preload * lift
+    energy = kinetic_energy(0.0, valve_mass, vel[masses]) + preload * lift
     lower = 0.0
     for j in range(masses + 1):
-        d = pos[j] - lower
-        energy += 0.5 * rate * d * d
-        if d > gap:
-            energy += 0.5 * kc * (d - gap) ** 2
+        energy = segment_energy(energy, pos[j] - lower, rate, gap, kc)
         lower = pos[j]
     for i in range(masses):
-        energy += 0.5 * coil_mass * vel[i] ** 2
-    if lift < depth:
-        energy += 0.5 * kz * ((depth - lift) ** 2 - depth * depth)
-    if drive_lift > lift:
-        energy += 0.5 * k * (drive_lift - lift) ** 2
-    return energy
+        energy = kinetic_energy(energy, coil_mass, vel[i])
+    return contact_energy(energy, lift, drive_lift, k, kz, depth)
+
+
+@jit_inline
+def kinetic_energy(energy, mass, velocity):
+    """``energy + ½ m v²`` [J]: mass [kg], velocity [m/s]."""
+    return energy + 0.5 * mass * (velocity * velocity)
+
+
+@jit_inline
+def segment_energy(energy, compression, rate, gap, kc):
+    """``energy`` plus the strain energy of one segment, coil clash included [J] (selects).
+
+    compression : float  d_j [m]; rate k_seg [N/m]; gap g [m]; kc clash rate [N/m].
+    """
+    energy += 0.5 * rate * compression * compression
+    solid = compression - gap if compression > gap else 0.0
+    return energy + 0.5 * kc * (solid * solid)
+
+
+@jit_inline
+def contact_energy(energy, lift, drive_lift, k, kz, depth):
+    """``energy`` plus the seat and drive contact energies of :func:`chain_energy` [J] (selects).
+
+    lift, drive_lift : float  y, Y [m]; k, kz [N/m]; depth δ0 [m] (−∞ without a seat).
+    """
+    seat = (depth - lift) * (depth - lift) - depth * depth if lift < depth else 0.0
+    energy += 0.5 * kz * seat
+    drive = drive_lift - lift if drive_lift > lift else 0.0
+    return energy + 0.5 * k * (drive * drive)
 
 
 @jit
@@ -249,5 +311,11 @@ def surge_displacement(pos, masses):
     lift = pos[masses]
     deviation = 0.0
     for i in range(masses):
-        deviation = max(deviation, abs(pos[i] - (i + 1) * lift / (masses + 1)))
+        deviation = max(deviation, coil_deviation(pos[i], lift, i + 1, masses))
     return deviation
+
+
+@jit_inline
+def coil_deviation(displacement, lift, node, masses):
+    """|u_i − i y/(N+1)| of coil ``node`` = i (1 … N) [m]; displacement u_i, lift y [m]."""
+    return abs(displacement - node * lift / (masses + 1))

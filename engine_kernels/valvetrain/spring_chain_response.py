@@ -1,19 +1,20 @@
-"""Valve dynamics with the multi-mass spring [V4]: fixed-step RK4 per case, batch driver.
+"""Valve dynamics with the multi-mass spring [V4]: fixed-step RK4 per case, batch entry.
 
 The chain model is in :mod:`engine_kernels.valvetrain.spring_chain`, its rows in
 :mod:`engine_kernels.valvetrain.spring_chain_layout`. The excitation table and the cam-angle
 grid are those of the lumped kernel (:func:`engine_kernels.valvetrain.valve_response`): rows
 Y, Y', Y'' at spacing ``table_step``, RK4 grid step twice that, time step ``Δθ/ω``.
 
-Stability guard: the bound of :func:`~engine_kernels.valvetrain.spring_chain.chain_spectral_radius`
-(every contact active, coil clash included) sets equal sub-steps keeping ``|h λ| ≤ 2`` (the
-lumped kernel's ``STEP_RATIO_TARGET``, under RK4's 2.6); past ``max_substeps`` the case is
-refused with ``STATUS_SUBSTEP_LIMIT``. The run itself is checked from the physics, not only for
-NaN: the energy may grow only by the cam's work through the drive (``dE/dt ≤ F_drive Ẏ``), and
-an excess above ``ENERGY_SLACK`` of the run's energy scale is ``STATUS_UNSTABLE``.
+The stability guard (equal sub-steps from a bound on every contact state, cases past
+``max_substeps`` refused) is in :mod:`engine_kernels.valvetrain.spring_chain_guard`. The run
+itself is checked from the physics, not only for NaN: the energy may grow only by the cam's
+work through the drive (``dE/dt ≤ F_drive Ẏ``), and an excess above ``ENERGY_SLACK`` of the
+run's energy scale is ``STATUS_UNSTABLE``.
 
 Observations are taken at every RK4 sub-step point (a coil clash or a seat landing can last
-less than a grid step). Reference: SPEC §4 [V2], [V4].
+less than a grid step). The batch entry :func:`spring_chain_response_batch` runs blocks of
+cases in SIMD lanes (:mod:`engine_kernels.valvetrain.spring_chain_lanes`), with the same
+numbers. Reference: SPEC §4 [V2], [V4].
 """
 
 from __future__ import annotations
@@ -23,24 +24,20 @@ import math
 import numpy as np
 
 from engine_kernels._jit import batch, jit, prange
-from engine_kernels.valvetrain.guard import STEP_RATIO_TARGET
-from engine_kernels.valvetrain.layout import (
-    S_MAX_SUBSTEPS,
-    S_STABILITY_GUARD,
-    STATUS_INVALID_INPUT,
-    STATUS_NONFINITE,
-    STATUS_OK,
-    STATUS_SUBSTEP_LIMIT,
-    STATUS_UNSTABLE,
-)
-from engine_kernels.valvetrain.model import excitation_lift_slope
-from engine_kernels.valvetrain.rk4 import stable_substeps
+from engine_kernels.valvetrain.lane_batch import spread_order
+from engine_kernels.valvetrain.model import excitation_lift_slope, positive_part
 from engine_kernels.valvetrain.spring_chain import (
     chain_accelerations,
     chain_coefficients,
     chain_energy,
-    chain_spectral_radius,
     surge_displacement,
+)
+from engine_kernels.valvetrain.spring_chain_guard import chain_status, prepare_chain_case
+from engine_kernels.valvetrain.spring_chain_lane_batch import (
+    MIN_BLOCK_CASES,
+    block_key,
+    chain_block_starts,
+    lane_block,
 )
 from engine_kernels.valvetrain.spring_chain_layout import (
     CC_DRIVE_FORCE,
@@ -66,78 +63,16 @@ from engine_kernels.valvetrain.spring_chain_layout import (
     CO_MIN_VELOCITY,
     CO_SEATING_VELOCITY,
     CO_STATUS,
-    CO_STEP_RATIO,
     CO_SUBSTEPS,
     CO_SURGE_AMPLITUDE,
-    MAX_SPRING_MASSES,
-    MIN_SPRING_MASSES,
-    SC_CLASH_DAMPING,
-    SC_CLASH_STIFFNESS,
-    SC_CLASH_TRAVEL,
-    SC_DRIVE_DAMPING,
-    SC_DRIVE_STIFFNESS,
-    SC_EXTERNAL_DAMPING,
     SC_INITIAL_LIFT,
     SC_INITIAL_VELOCITY,
-    SC_SEAT_DAMPING,
-    SC_SEAT_STIFFNESS,
-    SC_SPEED,
-    SC_SPRING_DAMPING_RATIO,
-    SC_SPRING_MASS,
-    SC_SPRING_MASSES,
     SC_SPRING_RATE,
-    SC_VALVE_MASS,
 )
-
-# Energy gained beyond the cam's work, as a fraction of the run's energy scale, above which a
-# run is reported unstable: RK4 and the trapezoidal work integral stay far below it.
-ENERGY_SLACK = 0.05
 
 # Rows of the per-case scratch array: state, the three inner RK4 stages, segment forces.
 _POS, _VEL, _ACC1, _P2, _V2, _ACC2, _P3, _V3, _ACC3, _P4, _V4, _ACC4, _FORCES = range(13)
 _SCRATCH_ROWS = 13
-
-
-@jit
-def valid_chain_parameters(params, excitation):
-    """True if an ``SC_*`` row and the excitation table can be integrated.
-
-    params : 1-D array  ``SC_*`` row (SI units);  excitation : 2-D array (3, n), n ≥ 3.
-    """
-    for c in range(params.shape[0]):
-        if not math.isfinite(params[c]):
-            return False
-    masses = params[SC_SPRING_MASSES]
-    if masses != math.floor(masses) or not MIN_SPRING_MASSES <= masses <= MAX_SPRING_MASSES:
-        return False
-    for c in (SC_SPEED, SC_VALVE_MASS, SC_SPRING_MASS, SC_SPRING_RATE):
-        if params[c] <= 0.0:
-            return False
-    for c in (
-        SC_DRIVE_STIFFNESS,
-        SC_DRIVE_DAMPING,
-        SC_SEAT_STIFFNESS,
-        SC_SEAT_DAMPING,
-        SC_EXTERNAL_DAMPING,
-        SC_SPRING_DAMPING_RATIO,
-        SC_CLASH_TRAVEL,
-        SC_CLASH_STIFFNESS,
-        SC_CLASH_DAMPING,
-    ):
-        if params[c] < 0.0:
-            return False
-    return excitation.shape[1] >= 3
-
-
-@jit
-def chain_stability_substeps(params, grid_step):
-    """Sub-steps per grid step keeping ``|h λ| ≤ STEP_RATIO_TARGET``, and ``|h λ|_max``.
-
-    params : 1-D array  ``SC_*`` row;  grid_step : float  Δθ [rad] (time step Δθ/ω).
-    """
-    radius = chain_spectral_radius(params)
-    step = grid_step / params[SC_SPEED]
-    return stable_substeps(step, radius, STEP_RATIO_TARGET), step * radius
 
 
 @jit
@@ -184,17 +119,8 @@ def spring_chain_response(excitation, table_step, table_start, params, settings,
     The coils start on the static deflection line of the initial lift and velocity. Outputs
     stay NaN when the case is not integrated (invalid input or sub-step limit).
     """
-    out[:] = math.nan
-    if not valid_chain_parameters(params, excitation):
-        out[CO_STATUS] = STATUS_INVALID_INPUT
-        return
-    needed, ratio = chain_stability_substeps(params, 2.0 * table_step)
-    guard = settings[S_STABILITY_GUARD] != 0
-    substeps = needed if guard else 1
-    out[CO_SUBSTEPS] = needed
-    out[CO_STEP_RATIO] = ratio / substeps
-    if guard and needed > settings[S_MAX_SUBSTEPS]:
-        out[CO_STATUS] = STATUS_SUBSTEP_LIMIT
+    substeps = prepare_chain_case(excitation, table_step, params, settings, out)
+    if substeps == 0:
         return
     c = chain_coefficients(params)
     n, valve_mass, coil_mass, rate, _, gap, kc, _, k, _, kz, _, _, preload, depth, speed = c
@@ -228,7 +154,7 @@ def spring_chain_response(excitation, table_step, table_start, params, settings,
         energy = chain_energy(
             pos, vel, y0, n, valve_mass, coil_mass, rate, preload, gap, kc, k, kz, depth
         )
-        power = max(drive, 0.0) * v0
+        power = positive_part(drive) * v0
         if m == 0:
             energy0 = energy
         else:
@@ -309,21 +235,17 @@ def spring_chain_response(excitation, table_step, table_start, params, settings,
     finite = True
     for i in range(n + 1):
         finite = finite and math.isfinite(pos[i]) and math.isfinite(vel[i])
-    if not finite:
-        out[CO_STATUS] = STATUS_NONFINITE
-    elif out[CO_ENERGY_EXCESS] > ENERGY_SLACK:
-        out[CO_STATUS] = STATUS_UNSTABLE
-    else:
-        out[CO_STATUS] = STATUS_OK
+    out[CO_STATUS] = chain_status(finite, out[CO_ENERGY_EXCESS])
 
 
 @batch
-def spring_chain_response_batch(excitation, table_step, table_start, params, settings, out):
+def spring_chain_one_case_batch(excitation, table_step, table_start, params, settings, out):
     """:func:`spring_chain_response` for many cases, one per prange iteration (no curves).
 
     params : 2-D array  (n_cases, len(CHAIN_PARAM_NAMES)) ``SC_*`` rows (N may differ per row).
     out    : 2-D array  (n_cases, len(CHAIN_OUTPUT_NAMES)) outputs ``CO_*``.
-    Other arguments as in :func:`spring_chain_response`.
+    Other arguments as in :func:`spring_chain_response`. The reference of the lane kernel; the
+    batch entry is :func:`spring_chain_response_batch`.
     """
     for i in prange(params.shape[0]):
         spring_chain_response(
@@ -335,3 +257,41 @@ def spring_chain_response_batch(excitation, table_step, table_start, params, set
             out[i],
             np.empty((len(CHAIN_CURVE_NAMES), 0)),
         )
+
+
+@batch
+def spring_chain_response_batch(excitation, table_step, table_start, params, settings, out):
+    """Valve dynamics with the N-mass spring for many cases: the batch entry (no curves).
+
+    The outputs of :func:`spring_chain_one_case_batch`, bit for bit, from ``LANES`` cases per
+    SIMD block (:mod:`engine_kernels.valvetrain.spring_chain_lane_batch`); a block of fewer
+    than ``MIN_BLOCK_CASES`` runs its cases one at a time, where the lanes would cost more.
+    params : 2-D array  (n_cases, len(CHAIN_PARAM_NAMES)) ``SC_*`` rows (N may differ per row).
+    out    : 2-D array  (n_cases, len(CHAIN_OUTPUT_NAMES)) outputs ``CO_*``.
+    Other arguments as in :func:`spring_chain_response`. Reference: SPEC §4 [V4]; STYLE "Hot
+    integrators".
+    """
+    n_cases = params.shape[0]
+    keys = np.empty(n_cases, dtype=np.int64)
+    for i in prange(n_cases):
+        substeps = prepare_chain_case(excitation, table_step, params[i], settings, out[i])
+        keys[i] = block_key(substeps, params[i])
+    order = np.argsort(keys, kind="mergesort")
+    starts = chain_block_starts(keys, order)
+    schedule = spread_order(starts.shape[0] - 1)
+    for i in prange(schedule.shape[0]):
+        b = schedule[i]
+        block = order[starts[b] : starts[b + 1]]
+        if block.shape[0] >= MIN_BLOCK_CASES:
+            lane_block(excitation, table_step, table_start, params, block, keys[block[0]], out)
+            continue
+        for case in block:
+            spring_chain_response(
+                excitation,
+                table_step,
+                table_start,
+                params[case],
+                settings,
+                out[case],
+                np.empty((len(CHAIN_CURVE_NAMES), 0)),
+            )
