@@ -34,13 +34,13 @@ from engine_kernels.valvetrain.energy_balance import (
 )
 from engine_kernels.valvetrain.guard import (
     STEP_RATIO_TARGET,
-    error_estimate_is_stable,
     prepare_case,
     stability_substeps,
     stability_substeps_batch,
     valid_valve_parameters,
 )
 from engine_kernels.valvetrain.integrator import (
+    valve_lift_batch,
     valve_response,
     valve_response_batch,
 )
@@ -90,6 +90,7 @@ from engine_kernels.valvetrain.layout import (
     P_SPRING_RATE,
     S_ESTIMATE_ERROR,
     S_MAX_SUBSTEPS,
+    S_SUBSTEPS,
     S_STABILITY_GUARD,
     S_SWITCH_AWARE,
     STATUS_INVALID_INPUT,
@@ -180,6 +181,7 @@ __all__ = [
     "SWITCH_OVERSHOOT",
     "S_ESTIMATE_ERROR",
     "S_MAX_SUBSTEPS",
+    "S_SUBSTEPS",
     "S_STABILITY_GUARD",
     "S_SWITCH_AWARE",
     "TRANSITION_BAND",
@@ -191,7 +193,6 @@ __all__ = [
     "VALVE_PARAM_UNITS",
     "VALVE_STATUS_NAMES",
     "equivalent_mass",
-    "error_estimate_is_stable",
     "excitation_at",
     "jump_speed",
     "prepare_case",
@@ -202,6 +203,7 @@ __all__ = [
     "valve_acceleration",
     "valve_coefficients",
     "valve_energy",
+    "valve_lift_batch",
     "valve_response",
     "valve_response_batch",
     "valve_settings",

@@ -172,8 +172,8 @@ SETTINGS: tuple[Parameter, ...] = (
         "tolerance",
         "mm",
         0.0,
-        "if > 0: halve the step per design point until the step-doubling difference is at "
-        "most this (see the valve_parameters docstring); 0 = use angle_step",
+        "if > 0: halve the step per design point until the error bar is at most this (see "
+        "studies.scenes.valve.error_bar); 0 = use angle_step",
         0.0,
         10.0,
     ),
@@ -227,22 +227,41 @@ DYNAMIC_RESPONSES: tuple[Response, ...] = (
     Response(
         "error_estimate",
         "mm",
-        "step-doubling error estimate max|y(h) − y(2h)|/15 (Richardson, fourth order; NaN "
-        "where the doubled step breaks the stability bound)",
+        "error bar of the lift over the grid: 2 max|y(h) − y(h/2)|, the companion run with "
+        "every length halved (step, table spacing, sub-step); never NaN for a finished point",
         DYN,
     ),
     Response(
-        "step_doubling_difference",
+        "step_halving_difference",
         "mm",
-        "max|y(h) − y(2h)| over the grid: the tolerance test (bounds the error of y(h) for "
-        "monotone convergence of order ≥ 1)",
+        "max|y(h) − y(h/2)| over the grid, the companion with every length halved",
+        DYN,
+    ),
+    Response("max_lift_error", "mm", "error bar of max_lift (step halving)", DYN),
+    Response("jump_start_error", "degree", "error bar of jump_start (inf: the runs disagree)", DYN),
+    Response(
+        "seating_velocity_error", "m/s", "error bar of seating_velocity (step halving)", DYN
+    ),
+    Response("bounce_height_error", "mm", "error bar of bounce_height (step halving)", DYN),
+    Response(
+        "integration_error",
+        "mm",
+        "RK4 part of the error bar: 2 max|y − y'| against a run with twice the sub-steps on the "
+        "same excitation table",
+        DYN,
+    ),
+    Response(
+        "excitation_error",
+        "mm",
+        "excitation part of the error bar: the Hermite table of the kinematic chain at half "
+        "the step against one at a quarter (same sub-step length)",
         DYN,
     ),
     Response("angle_step_used", "degree", "RK4 step used (picked per point with a tolerance)", DYN),
     Response(
         "tolerance_met",
         "1",
-        "the step-doubling difference is within the tolerance (1 when no tolerance is set)",
+        "the error bar is within the tolerance (1 when no tolerance is set)",
         DYN,
         "larger",
         flag=True,

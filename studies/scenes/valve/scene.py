@@ -41,6 +41,7 @@ from studies.scenes.chain import (
 from studies.scenes.chain_parameters import RESPONSES as ROCKER_RESPONSES
 from studies.scenes.chain_summaries import chain_status_summary
 from studies.scenes.checks import PointProblems
+from studies.scenes.valve.error_bar import BAR_FACTOR, DERIVED_BARS, Ladder, halving_ladder
 from studies.scenes.valve.parameters import (
     CURVES,
     JUMP_NOT_RUN,
@@ -65,7 +66,19 @@ PRE_OPEN_DEG = 2.0
 JUMP_SCAN_POINTS = 16
 N_OUT = len(valve.VALVE_OUTPUT_NAMES)
 N_CURVES = len(valve.VALVE_CURVE_NAMES)
-ESTIMATE_RESPONSES = ("error_estimate", "step_doubling_difference")
+BUDGET_RESPONSES = frozenset(("integration_error", "excitation_error"))
+BAR_RESPONSES = frozenset(
+    ("error_estimate", "step_halving_difference", *DERIVED_BARS)
+) | BUDGET_RESPONSES
+# error bar response -> factor from SI to the response's units
+_BAR_SCALE = {
+    "jump_start_error": DEG,
+    "seating_velocity_error": 1.0,
+    "bounce_height_error": MM,
+    "max_lift_error": MM,
+    "integration_error": MM,
+    "excitation_error": MM,
+}
 KINEMATIC_RESPONSES = frozenset(r.name for r in ROCKER_RESPONSES)
 
 # response -> (output column, factor from SI to the response's units)
@@ -86,8 +99,6 @@ _OUTPUT: dict[str, tuple[int, float]] = {
     "step_ratio": (valve.O_STEP_RATIO, 1.0),
     "mode_transitions": (valve.O_TRANSITIONS, 1.0),
     "status": (valve.O_STATUS, 1.0),
-    "error_estimate": (valve.O_ERROR_ESTIMATE, MM),
-    "step_doubling_difference": (valve.O_ERROR_ESTIMATE, valve.ERROR_ORDER_DIVISOR * MM),
 }
 _CURVE_ROW = {
     "actual_lift": (valve.C_LIFT, MM),
@@ -123,12 +134,17 @@ def valve_rows(points: dict[str, np.ndarray], idx: np.ndarray | slice) -> np.nda
     return rows
 
 
-def kernel_settings(settings: dict[str, Any], integrator: str, estimate: bool) -> np.ndarray:
-    """The ``S_*`` integer settings row for an integrator name."""
+def kernel_settings(
+    settings: dict[str, Any], integrator: str, estimate: bool, substeps: int = 0
+) -> np.ndarray:
+    """The ``S_*`` integer settings row for an integrator name (``estimate``: the kernels'
+    sub-step halving difference; ``substeps``: forced sub-steps per grid step, 0 = the
+    guard's)."""
     return valve.valve_settings(
         max_substeps=int(settings["max_substeps"]),
         switch_aware=integrator == "rk4_switch_aware",
         estimate_error=estimate,
+        substeps=substeps,
     )
 
 
@@ -271,6 +287,8 @@ class ValveScene(ChainScene):
         want = any(c in _CURVE_ROW for c in ctx["curves"])
         axis = self.curve_coordinate(ctx["settings"])
         ctx["traces"] = np.full((n, N_CURVES, axis.size if want else 0), np.nan)
+        names = ("error_estimate", "tolerance_met", *DERIVED_BARS, *BUDGET_RESPONSES)
+        ctx["bars"] = {name: np.full(n, np.nan) for name in names}
         for key, idx in ctx["groups"].items():
             if not self.chain_valid(ctx, key):
                 ctx["out"][idx, valve.O_STATUS] = STATUS_NOT_RUN
@@ -278,28 +296,72 @@ class ValveScene(ChainScene):
             self.run_group(ctx, key, idx, want)
 
     def run_group(self, ctx: dict[str, Any], key: tuple, idx: np.ndarray, want: bool) -> None:
-        """Integrate the points ``idx`` of one chain, halving the step under a tolerance."""
+        """Integrate the points ``idx`` of one chain; with error bars or a tolerance, down the
+        halving ladder of :mod:`studies.scenes.valve.error_bar`."""
         settings = ctx["settings"]
         tolerance = settings["tolerance"]
-        estimate = tolerance > 0.0 or bool(ctx["responses"] & set(ESTIMATE_RESPONSES))
-        flags = kernel_settings(settings, settings["integrator"], estimate)
+        integrator = settings["integrator"]
         rows = valve_rows(ctx["points"], idx)
         coarse = step_deg(settings["angle_step"])
-        first = round((self.window(ctx, key)[0] + HALF_TURN_DEG) / coarse)
-        pending = np.arange(len(idx))
-        for level in range(MAX_HALVINGS + 1 if tolerance > 0.0 else 1):
-            step = coarse / 2**level
-            excitation = self.excitation(ctx, key, step)
-            out, trace = integrate(excitation, rows[pending], settings["integrator"], flags, want)
-            ctx["out"][idx[pending]] = out
-            ctx["step_used"][idx[pending]] = step
+        flags = kernel_settings(settings, integrator, False)
+        if tolerance <= 0.0 and not ctx["responses"] & BAR_RESPONSES:
+            out, trace = integrate(self.excitation(ctx, key, coarse), rows, integrator, flags, want)
+            ctx["out"][idx] = out
+            ctx["step_used"][idx] = coarse
             if trace is not None:
-                kept = trace[:, :, :: 2**level]
-                ctx["traces"][idx[pending], :, first : first + kept.shape[2]] = kept
-            difference = valve.ERROR_ORDER_DIVISOR * out[:, valve.O_ERROR_ESTIMATE]
-            pending = pending[~(difference <= tolerance)]
-            if pending.size == 0:
-                break
+                self.store_traces(ctx, key, idx, trace, coarse, 0)
+            return
+        ladder = halving_ladder(
+            lambda step: self.excitation(ctx, key, step),
+            rows,
+            flags,
+            coarse,
+            tolerance,
+            MAX_HALVINGS if tolerance > 0.0 else 0,
+            bool(ctx["responses"] & BUDGET_RESPONSES),
+        )
+        ctx["out"][idx] = ladder.out
+        ctx["step_used"][idx] = coarse / 2.0**ladder.level
+        ctx["bars"]["error_estimate"][idx] = ladder.bar
+        ctx["bars"]["tolerance_met"][idx] = ladder.met
+        for name, values in (ladder.derived | ladder.budget).items():
+            ctx["bars"][name][idx] = values
+        if want:
+            self.ladder_curves(ctx, key, idx, rows, ladder, coarse)
+
+    def ladder_curves(
+        self,
+        ctx: dict[str, Any],
+        key: tuple,
+        idx: np.ndarray,
+        rows: np.ndarray,
+        ladder: Ladder,
+        coarse: float,
+    ) -> None:
+        """Curves of each point at the level the ladder stopped at (its sub-step count)."""
+        integrator = ctx["settings"]["integrator"]
+        pairs = np.stack([ladder.level, ladder.substeps], axis=1)
+        for level, count in np.unique(pairs, axis=0):
+            members = np.flatnonzero((pairs == (level, count)).all(axis=1))
+            step = coarse / 2.0**level
+            flags = kernel_settings(ctx["settings"], integrator, False, int(count))
+            trace = integrate(self.excitation(ctx, key, step), rows[members], integrator, flags, True)[1]
+            assert trace is not None
+            self.store_traces(ctx, key, idx[members], trace, coarse, int(level))
+
+    def store_traces(
+        self,
+        ctx: dict[str, Any],
+        key: tuple,
+        idx: np.ndarray,
+        trace: np.ndarray,
+        coarse: float,
+        level: int,
+    ) -> None:
+        """Curves at step coarse/2^level into the study's curve axis (the coarse grid)."""
+        first = round((self.window(ctx, key)[0] + HALF_TURN_DEG) / coarse)
+        kept = trace[:, :, :: 2**level]
+        ctx["traces"][idx, :, first : first + kept.shape[2]] = kept
 
     def stage_jump_speed(self, ctx: dict[str, Any]) -> None:
         settings = ctx["settings"]
@@ -342,9 +404,16 @@ class ValveScene(ChainScene):
             return np.where(np.isnan(duration), np.nan, (duration == 0.0).astype(float))
         if response == "angle_step_used":
             return ctx["step_used"].copy()
-        difference = valve.ERROR_ORDER_DIVISOR * out[:, valve.O_ERROR_ESTIMATE]
-        met = (difference <= ctx["settings"]["tolerance"]).astype(float)
-        return met if ctx["settings"]["tolerance"] > 0.0 else np.ones(ctx["n"])
+        bars = ctx["bars"]
+        if response == "step_halving_difference":
+            return bars["error_estimate"] / BAR_FACTOR * MM
+        if response == "error_estimate":
+            return bars["error_estimate"] * MM
+        if response in _BAR_SCALE:
+            return bars[response] * _BAR_SCALE[response]
+        if ctx["settings"]["tolerance"] > 0.0:
+            return bars["tolerance_met"].copy()
+        return np.ones(ctx["n"])
 
     def curve_values(self, ctx: dict[str, Any], name: str) -> np.ndarray:
         if name not in _CURVE_ROW:
