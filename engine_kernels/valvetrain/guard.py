@@ -27,8 +27,8 @@ from engine_kernels.valvetrain.layout import (
     P_SPEED,
     P_SPRING_RATE,
     S_MAX_SUBSTEPS,
-    S_SUBSTEPS,
     S_STABILITY_GUARD,
+    S_SUBSTEPS,
     STATUS_INVALID_INPUT,
     STATUS_SUBSTEP_LIMIT,
 )

@@ -160,7 +160,7 @@ def harmonic_contact(theta):
 
 
 def errors_against_reference(function, row, steps, start_deg, stop_deg, **options):
-    """Max lift error at common 2-degree points, and the step-doubling estimates."""
+    """Max lift error at common 2-degree points, and the sub-step halving differences."""
     check = np.radians(np.arange(start_deg, stop_deg + 1.0, 2.0))
     reference = valve_reference(function, row, check, rtol=1e-12, atol=1e-15)
     errors, estimates = [], []
@@ -188,7 +188,7 @@ def test_rk4_is_fourth_order_without_switches():
 
 def test_switch_aware_rk4_restores_fourth_order():
     # Contact and seat switch inside steps: plain RK4 loses its order (SPEC §4 measured ~1.6),
-    # locating the switches restores ~4 and makes step doubling a usable error estimate.
+    # locating the switches restores ~4 and makes sub-step halving a usable error estimate.
     steps = (0.5, 0.25, 0.125)
     plain, _ = errors_against_reference(cosine_event, PARAMS, steps, -100.0, 110.0)
     aware, estimates = errors_against_reference(

@@ -80,7 +80,12 @@ def lift_runs(
         part_out = np.empty((members.size, out.shape[1]))
         part_lifts = np.empty((members.size, lifts.shape[1]))
         valve.valve_lift_batch(
-            table, table_step, start, np.ascontiguousarray(rows[members]), local, part_out,
+            table,
+            table_step,
+            start,
+            np.ascontiguousarray(rows[members]),
+            local,
+            part_out,
             part_lifts,
         )
         out[members], lifts[members] = part_out, part_lifts

@@ -239,9 +239,7 @@ DYNAMIC_RESPONSES: tuple[Response, ...] = (
     ),
     Response("max_lift_error", "mm", "error bar of max_lift (step halving)", DYN),
     Response("jump_start_error", "degree", "error bar of jump_start (inf: the runs disagree)", DYN),
-    Response(
-        "seating_velocity_error", "m/s", "error bar of seating_velocity (step halving)", DYN
-    ),
+    Response("seating_velocity_error", "m/s", "error bar of seating_velocity (step halving)", DYN),
     Response("bounce_height_error", "mm", "error bar of bounce_height (step halving)", DYN),
     Response(
         "integration_error",
@@ -258,6 +256,13 @@ DYNAMIC_RESPONSES: tuple[Response, ...] = (
         DYN,
     ),
     Response("angle_step_used", "degree", "RK4 step used (picked per point with a tolerance)", DYN),
+    Response(
+        "integrator_used",
+        "1",
+        "integrator of the reported results (picked per point with a tolerance)",
+        DYN,
+        codes=INTEGRATORS,
+    ),
     Response(
         "tolerance_met",
         "1",
