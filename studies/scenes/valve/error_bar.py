@@ -11,12 +11,16 @@ stability bound and the bar is never NaN for a finished point.
 The **error bar** of the run (``error_estimate``) is ``BAR_FACTOR`` times the step-halving
 difference ``max |y_h − y_h/2|`` over the run's grid. Two errors shrink when every length
 halves: the integration error (fourth order with located switches, about 1.6 for plain RK4,
-not monotone) and the excitation error (the cubic Hermite interpolation of the kinematic
-chain's table across the kink where the lash is taken up: first order). The factor
-1/(1 − 2⁻¹) = 2 turns the difference into an error for any order ≥ 1; ``BAR_FACTOR`` adds a
-safety margin calibrated on a random sample against the scipy reference
-(``tests/studies/test_valve_error_bar.py``). The same factor on the difference of a derived
-output between the two runs gives its bar (``seating_velocity_error`` ...).
+not monotone) and the excitation error (the cubic Hermite interpolation of the chain's table
+between nodes, where the cam law's acceleration jumps: about second order). The factor
+1/(1 − 2⁻¹) = 2 turns the difference into an error for any order ≥ 1, and a safety factor
+1.5 covers the non-monotone convergence of plain RK4: on 200 random points against the scipy
+reference (``tests/studies/test_valve_error_bar.py``) factor 2 bounded the true error of
+``lanes`` at 0.5° in 95.5 % of points, 3 in 98.5 % (within 10×: 93.5 %, 94 %); switch-aware
+RK4 99 % and 99.5 %. The same factor on the difference of a derived output between the two
+runs gives its bar (``seating_velocity_error`` ...). The runs come from the one-case kernel in
+double precision (``lanes`` computes the same numbers; ``lanes_f32`` round-off is not in the
+bar).
 
 The **budget** splits the bar: a third run at step h with the table of h/2 and 2n sub-steps
 differs from the run only by the integration (``integration_error``) and from the companion
@@ -38,8 +42,8 @@ import numpy as np
 from engine_kernels import valvetrain as valve
 
 Excitation = tuple[np.ndarray, float, float]
-BAR_FACTOR = 2.0
-"""Error bar per unit of step-halving difference: 1/(1 − 2⁻¹) for first order [-]."""
+BAR_FACTOR = 3.0
+"""Error bar per unit of step-halving difference: 1/(1 − 2⁻¹) for first order × 1.5 [-]."""
 DERIVED_BARS = {
     "jump_start_error": valve.O_JUMP_START,
     "seating_velocity_error": valve.O_SEATING_VELOCITY,
