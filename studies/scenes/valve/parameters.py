@@ -164,18 +164,19 @@ WINDOW_SETTINGS: tuple[Parameter, ...] = (
         0.5,
     ),
 )
+TOLERANCE = Parameter(
+    "tolerance",
+    "mm",
+    0.0,
+    "if > 0: halve the step per design point until the error bar is at most this (see "
+    "studies.scenes.valve.error_bar); 0 = use angle_step",
+    0.0,
+    10.0,
+)
 SETTINGS: tuple[Parameter, ...] = (
     INTEGRATOR,
     ANGLE_STEP,
-    Parameter(
-        "tolerance",
-        "mm",
-        0.0,
-        "if > 0: halve the step per design point until the error bar is at most this (see "
-        "studies.scenes.valve.error_bar); 0 = use angle_step",
-        0.0,
-        10.0,
-    ),
+    TOLERANCE,
     TAPPET_STEP,
     *WINDOW_SETTINGS,
 )

@@ -48,12 +48,11 @@ from studies.scenes.valve.batches import (
     stability_problems,
     valve_rows,
 )
-from studies.scenes.valve.error_bar import BAR_FACTOR, DERIVED_BARS, Ladder, halving_ladder
+from studies.scenes.valve.error_bar import BAR_FACTOR, DERIVED_BARS, Ladder, tolerance_rungs
 from studies.scenes.valve.parameters import (
     CURVES,
     INTEGRATORS,
     JUMP_NOT_RUN,
-    MAX_HALVINGS,
     PARAMETERS,
     RESPONSES,
     SETTINGS,
@@ -112,7 +111,6 @@ _CURVE_ROW = {
     "drive_force": (valve.C_DRIVE_FORCE, 1.0),
     "seat_force": (valve.C_SEAT_FORCE, 1.0),
 }
-SWITCH_AWARE = "rk4_switch_aware"
 
 
 class ValveScene(ChainScene):
@@ -202,9 +200,8 @@ class ValveScene(ChainScene):
         """Integrate the points ``idx`` of one chain; with error bars or a tolerance, down the
         halving ladder of :mod:`studies.scenes.valve.error_bar`.
 
-        Under a tolerance a plain-RK4 integrator gets one rung at ``angle_step`` (its cheap
-        run and bar); the points it leaves above the tolerance go down the ladder of
-        switch-aware RK4, the only one of our methods that converges to 1e-4 mm.
+        Under a tolerance the method is picked per point too
+        (:func:`~studies.scenes.valve.error_bar.tolerance_rungs`).
         """
         settings = ctx["settings"]
         tolerance = settings["tolerance"]
@@ -219,20 +216,16 @@ class ValveScene(ChainScene):
             if trace is not None:
                 self.store_traces(ctx, key, idx, trace, coarse, 0)
             return
-        rungs = [(integrator, MAX_HALVINGS if tolerance > 0.0 else 0)]
-        if tolerance > 0.0 and integrator != SWITCH_AWARE:
-            rungs = [(integrator, 0), (SWITCH_AWARE, MAX_HALVINGS)]
-        pending = np.arange(len(idx))
-        for method, halvings in rungs:
-            ladder = halving_ladder(
-                lambda step: self.excitation(ctx, key, step),
-                rows[pending],
-                kernel_settings(settings, method, False),
-                coarse,
-                tolerance,
-                halvings,
-                bool(ctx["responses"] & BUDGET_RESPONSES),
-            )
+        rungs = tolerance_rungs(
+            lambda step: self.excitation(ctx, key, step),
+            rows,
+            lambda method: kernel_settings(settings, method, False),
+            integrator,
+            coarse,
+            tolerance,
+            bool(ctx["responses"] & BUDGET_RESPONSES),
+        )
+        for pending, method, ladder in rungs:
             at = idx[pending]
             ctx["out"][at] = ladder.out
             ctx["step_used"][at] = coarse / 2.0**ladder.level
@@ -243,8 +236,6 @@ class ValveScene(ChainScene):
                 ctx["bars"][name][at] = values
             if want:
                 self.ladder_curves(ctx, key, at, rows[pending], ladder, coarse, method)
-            finished = ladder.out[:, valve.O_STATUS] == valve.STATUS_OK
-            pending = pending[finished & (ladder.met == 0.0)]
 
     def ladder_curves(
         self,
