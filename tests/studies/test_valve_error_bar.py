@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from engine_kernels import valvetrain as valve
 from studies.plan import plan_text
 from studies.scenes.valve import accuracy_reference as acc
 from studies.scenes.valve.parameters import INTEGRATORS
@@ -167,3 +168,34 @@ def test_error_converges_with_the_tolerance_on_a_stiff_seat() -> None:
     assert (loose_error <= 1e-3).all()
     assert (tight_error <= 1e-4).all()
     assert (tight_error * 2.0 <= loose_error).all()
+
+
+@pytest.mark.slow
+def test_extremes_get_a_bar_that_holds_or_a_status_that_says_why() -> None:
+    # The stability matrix (camshaft 50…10 000 rpm, seat 1e4…1e7 N/mm, no damping or heavy
+    # damping: 5000 N s/m on the drive, 1e5 on the seat). A finished point has a finite bar;
+    # one the guard refuses (more sub-steps than max_substeps) has the status that says so
+    # and no bar. Where the reference is affordable (it needs more than 10 000 restarts on
+    # an undamped 1e7 N/mm seat, and minutes at 50 rpm) the bar must hold.
+    speeds, seats = [50.0, 500.0, 3500.0, 10000.0], [1e4, 1e6, 1e7]
+    dampings = [(0.0, 0.0), (5000.0, 1e5)]
+    combos = [(n, kz, b) for n in speeds for kz in seats for b in dampings]
+    plan = sample_plan("lanes", 0.0, [3500.0], [5e4])
+    points = {k: np.repeat(v[:1], len(combos), axis=0) for k, v in plan.points.items()}
+    points["cam_speed"] = np.array([c[0] for c in combos]) * RPM
+    points["seat_stiffness"] = np.array([c[1] for c in combos]) * 1e3
+    points["drive_damping"] = np.array([c[2][0] for c in combos])
+    points["seat_damping"] = np.array([c[2][1] for c in combos])
+    output = plan.scene.evaluate(points, plan.settings, list(plan.responses), ["actual_lift"])
+    status, bar = output.scalars["status"], output.scalars["error_estimate"]
+    finished = status == 0
+    assert np.isfinite(bar[finished]).all()
+    assert np.isnan(bar[~finished]).all()
+    refused = [valve.VALVE_STATUS_NAMES[int(s)] for s in status[~finished]]
+    assert set(refused) == {"substep_limit"}
+    assert finished.sum() >= len(combos) // 2
+    checked = np.array([c[0] >= 3500.0 and c[1] <= 1e6 for c in combos])
+    inside, reference = reference_lifts(plan, {k: v[checked] for k, v in points.items()}, 1 / 64)
+    curve = output.curves["actual_lift"][checked][:, inside] * 1e-3
+    error = np.max(np.abs(curve - reference), axis=1) * 1e3
+    assert (error <= bar[checked]).all()

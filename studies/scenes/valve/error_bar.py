@@ -143,6 +143,7 @@ def halving_ladder(
         budget={"integration_error": np.full(n, np.nan), "excitation_error": np.full(n, np.nan)},
     )
     pending = np.flatnonzero(finished)
+    out, lifts = out[pending], lifts[pending]
     for level in range(max_halvings + 1):
         if pending.size == 0:
             break
