@@ -117,7 +117,6 @@ from engine_kernels.valvetrain.model import (
     valve_spectral_radius,
 )
 from engine_kernels.valvetrain.step import (
-    ERROR_ORDER_DIVISOR,
     rk4_valve_step,
 )
 from engine_kernels.valvetrain.switching import (
@@ -136,7 +135,6 @@ __all__ = [
     "ENERGY_INTERVAL",
     "ENERGY_REST_RISE",
     "ENERGY_SLACK",
-    "ERROR_ORDER_DIVISOR",
     "JUMP_AT_LOWER_BOUND",
     "JUMP_FOUND",
     "JUMP_NONE_IN_RANGE",

@@ -55,7 +55,7 @@ O_SUBSTEPS = 12
 O_STEP_RATIO = 13
 O_TRANSITIONS = 14
 O_STATUS = 15
-O_ERROR_ESTIMATE = 16
+O_ERROR_ESTIMATE = 16  # max |y(n sub-steps) − y(2n)| over the grid [m] (S_ESTIMATE_ERROR)
 VALVE_OUTPUT_NAMES = (
     "max_lift",
     "max_opening_velocity",
