@@ -445,3 +445,24 @@ def test_case_coefficients_are_the_record_rows_in_order(width) -> None:
     assert len(coefficients) == len(names)
     for row, name in names:
         assert coefficients[row] == record[at + row * width], name
+
+
+def test_sub_step_halving_difference_is_never_nan_and_is_the_forced_run():
+    # A 1e10 N/m seat at 2000 rpm needs many sub-steps: the old step-doubling estimate broke
+    # the stability bound there and was NaN. The halving pass only shortens sub-steps, so the
+    # difference is finite, and it is exactly the largest lift difference from a run forced
+    # to twice the guard's sub-steps (settings substeps).
+    row = params(camshaft_speed=2000 * RPM, seat_stiffness=1e10)
+    excitation, step, start = table(cosine_event, 0.5)
+    out, curve = run(excitation, step, start, row, curves=True, estimate_error=True)
+    substeps = int(out[valve.O_SUBSTEPS])
+    assert substeps > 1
+    assert out[valve.O_STATUS] == valve.STATUS_OK
+    forced, finer = run(excitation, step, start, row, curves=True, substeps=2 * substeps)
+    assert forced[valve.O_SUBSTEPS] == 2 * substeps
+    difference = np.abs(curve[valve.C_LIFT] - finer[valve.C_LIFT]).max()
+    assert out[valve.O_ERROR_ESTIMATE] == difference
+    assert 0.0 < difference < 1e-4
+    # fewer forced sub-steps than the guard needs are ignored: the guard's count wins
+    fewer, _ = run(excitation, step, start, row, substeps=1)
+    assert fewer[valve.O_SUBSTEPS] == substeps
