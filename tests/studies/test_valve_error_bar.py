@@ -2,11 +2,11 @@
 
 Expected values: scipy's event-restarted DOP853 (studies.scenes.valve.reference.valve_ivp:
 a terminal event at every drive and seat switch, rtol 1e-10) on the same model and on the
-chain's valve lift tabulated every ``REFERENCE_TABLE_DEG``: 1/512 deg, finer than the finest
-table the tolerance ladder uses (1/256 deg after six halvings of 0.5 deg). With the study
-default of 1/64 deg the reference's own table error (measured on eight points: ≤ 0.023 µm
-against 1/128 deg; ≤ 1e-4 µm from rtol 1e-12 or Radau) grows to 0.1–0.3 µm in violent
-separation, and 7 of the 200 points seemed to miss 1e-4 mm; against 1/512 deg one does.
+chain's valve lift tabulated every ``acc.REFERENCE_TABLE_DEG`` (1/512 deg, finer than the
+finest table the tolerance ladder uses). Its own floor, measured on eight points of this
+sample at 1/64 deg: ≤ 1e-4 µm against rtol 1e-12 and against Radau, ≤ 0.023 µm against a
+1/128 deg table; in violent separation the 1/64 deg table error grew to 0.1–0.3 µm and made 7
+of the 200 points seem to miss 1e-4 mm (against 1/512 deg one does).
 The true error of a point is max |y − y_ref| over the stored curve (every 0.5 deg).
 
 The sample (fixed seed): camshaft 500…8000 rpm, seat stiffness 1e4…1e7 N/mm (log-uniform),
@@ -30,7 +30,6 @@ from study_text import scene_study
 
 SAMPLE = 200
 SEED = 15
-REFERENCE_TABLE_DEG = 1.0 / 512.0
 RPM = math.pi / 30.0
 RESPONSES = '["error_estimate", "status", "angle_step_used", "tolerance_met", "integrator_used"]'
 
@@ -110,9 +109,7 @@ def sample() -> dict[str, tuple[dict[str, np.ndarray], np.ndarray]]:
         "1e-3": ("lanes", 1e-3),
         "1e-4": ("lanes", 1e-4),
     }
-    results = run_modes(
-        tuple(modes.values()), [3500.0], [5e4], randomise=True, table_deg=REFERENCE_TABLE_DEG
-    )
+    results = run_modes(tuple(modes.values()), [3500.0], [5e4], randomise=True)
     return dict(zip(modes, results, strict=True))
 
 
@@ -201,7 +198,9 @@ def test_extremes_get_a_bar_that_holds_or_a_status_that_says_why() -> None:
     assert set(refused) == {"substep_limit"}
     assert finished.sum() >= len(combos) // 2
     checked = np.array([c[0] >= 3500.0 and c[1] <= 1e6 for c in combos])
-    inside, reference = reference_lifts(plan, {k: v[checked] for k, v in points.items()}, 1 / 64)
+    inside, reference = reference_lifts(
+        plan, {k: v[checked] for k, v in points.items()}, acc.REFERENCE_TABLE_DEG
+    )
     curve = output.curves["actual_lift"][checked][:, inside] * 1e-3
     error = np.max(np.abs(curve - reference), axis=1) * 1e3
     assert (error <= bar[checked]).all()
