@@ -39,13 +39,13 @@ from engine_kernels.valvetrain.energy_balance import (
 )
 from engine_kernels.valvetrain.guard import (
     STEP_RATIO_TARGET,
-    error_estimate_is_stable,
     prepare_case,
     stability_substeps,
     stability_substeps_batch,
     valid_valve_parameters,
 )
 from engine_kernels.valvetrain.integrator import (
+    valve_lift_batch,
     valve_response,
     valve_response_batch,
 )
@@ -96,6 +96,7 @@ from engine_kernels.valvetrain.layout import (
     S_ESTIMATE_ERROR,
     S_MAX_SUBSTEPS,
     S_STABILITY_GUARD,
+    S_SUBSTEPS,
     S_SWITCH_AWARE,
     STATUS_INVALID_INPUT,
     STATUS_NONFINITE,
@@ -121,7 +122,6 @@ from engine_kernels.valvetrain.model import (
     valve_spectral_radius,
 )
 from engine_kernels.valvetrain.step import (
-    ERROR_ORDER_DIVISOR,
     rk4_valve_step,
 )
 from engine_kernels.valvetrain.switching import (
@@ -140,7 +140,6 @@ __all__ = [
     "ENERGY_INTERVAL",
     "ENERGY_REST_RISE",
     "ENERGY_SLACK",
-    "ERROR_ORDER_DIVISOR",
     "JUMP_AT_LOWER_BOUND",
     "JUMP_FOUND",
     "JUMP_NONE_IN_RANGE",
@@ -186,6 +185,7 @@ __all__ = [
     "S_ESTIMATE_ERROR",
     "S_MAX_SUBSTEPS",
     "S_STABILITY_GUARD",
+    "S_SUBSTEPS",
     "S_SWITCH_AWARE",
     "TRANSITION_BAND",
     "VALVE_CURVE_NAMES",
@@ -196,7 +196,6 @@ __all__ = [
     "VALVE_PARAM_UNITS",
     "VALVE_STATUS_NAMES",
     "equivalent_mass",
-    "error_estimate_is_stable",
     "excitation_at",
     "jump_speed",
     "prepare_case",
@@ -207,6 +206,7 @@ __all__ = [
     "valve_acceleration",
     "valve_coefficients",
     "valve_energy",
+    "valve_lift_batch",
     "valve_response",
     "valve_response_batch",
     "valve_settings",

@@ -28,6 +28,7 @@ from engine_kernels.valvetrain.layout import (
     P_SPRING_RATE,
     S_MAX_SUBSTEPS,
     S_STABILITY_GUARD,
+    S_SUBSTEPS,
     STATUS_INVALID_INPUT,
     STATUS_SUBSTEP_LIMIT,
 )
@@ -94,7 +95,8 @@ def prepare_case(excitation, table_step, params, settings, out):
     """Validate one case and apply the stability guard before integrating it.
 
     Sets every output to NaN, then ``O_SUBSTEPS`` and ``O_STEP_RATIO`` (|h λ|_max per
-    sub-step), and the status if the case cannot run. Returns the RK4 sub-steps per grid step,
+    sub-step), and the status if the case cannot run. Returns the RK4 sub-steps per grid step
+    (the stable count, or 1 without the guard, raised to ``S_SUBSTEPS`` if that is larger),
     or 0 when the case must not be integrated (``STATUS_INVALID_INPUT`` or
     ``STATUS_SUBSTEP_LIMIT``, the needed count left in ``O_SUBSTEPS``).
 
@@ -110,7 +112,7 @@ def prepare_case(excitation, table_step, params, settings, out):
         return 0
     needed, ratio = stability_substeps(params, 2.0 * table_step)
     guard = settings[S_STABILITY_GUARD] != 0
-    substeps = needed if guard else 1
+    substeps = max(needed if guard else 1, settings[S_SUBSTEPS])
     out[O_SUBSTEPS] = needed
     out[O_STEP_RATIO] = ratio / substeps
     if guard and needed > settings[S_MAX_SUBSTEPS]:
@@ -118,14 +120,3 @@ def prepare_case(excitation, table_step, params, settings, out):
         return 0
     out[O_SUBSTEPS] = substeps
     return substeps
-
-
-@jit
-def error_estimate_is_stable(params, table_step, substeps, settings):
-    """True if the step-doubling run (each sub-step twice as long) keeps the RK4 bound.
-
-    Where it would not, the estimate means nothing and ``O_ERROR_ESTIMATE`` stays NaN.
-    Arguments as in :func:`prepare_case`; ``substeps`` is the count it returned.
-    """
-    coarse, _ = stability_substeps(params, 4.0 * table_step)
-    return coarse <= substeps or settings[S_STABILITY_GUARD] == 0

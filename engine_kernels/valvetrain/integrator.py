@@ -13,9 +13,10 @@ starts at the initial lift and velocity of the parameter row (normally at rest o
 The stability guard (:mod:`engine_kernels.valvetrain.guard`) sub-steps or refuses a case before
 integrating it; the running observations and the physics check of the run are in
 :mod:`engine_kernels.valvetrain.observations`; switch-aware stepping (settings
-``switch_aware = 1``) is in :mod:`engine_kernels.valvetrain.switching`. The step-doubling error
-estimate (``estimate_error = 1``) compares the lift with a run at twice the step (divided by
-2⁴ − 1); it is NaN where the doubled step would break the stability bound.
+``switch_aware = 1``) is in :mod:`engine_kernels.valvetrain.switching`. The step-halving
+difference (``estimate_error = 1``) compares the lift over the grid with a second run at twice
+the sub-steps (each sub-step half as long, so always within the stability bound); the scene
+turns it into an error bar (:mod:`studies.scenes.valve.error_bar`).
 
 :mod:`engine_kernels.valvetrain.lanes` runs the same plain-RK4 integration, with the same
 arithmetic and results, for blocks of cases in SIMD lanes: about 4× more cases per CPU-second
@@ -28,7 +29,7 @@ import numpy as np
 
 from engine_kernels._jit import batch, jit, jit_inline, prange
 from engine_kernels.valvetrain.energy_balance import ENERGY_INTERVAL, observe_energy
-from engine_kernels.valvetrain.guard import error_estimate_is_stable, prepare_case
+from engine_kernels.valvetrain.guard import prepare_case
 from engine_kernels.valvetrain.layout import (
     C_ACCELERATION,
     C_DRIVE_FORCE,
@@ -61,7 +62,7 @@ from engine_kernels.valvetrain.observations import (
     record_closure_events,
     start_observations,
 )
-from engine_kernels.valvetrain.step import ERROR_ORDER_DIVISOR, rk4_valve_step, valve_time_steps
+from engine_kernels.valvetrain.step import rk4_valve_step, valve_time_steps
 from engine_kernels.valvetrain.switching import switch_aware_step
 
 
@@ -85,7 +86,6 @@ def _integrate(
     excitation,
     table_step,
     table_start,
-    stride,
     params,
     substeps,
     switch_aware,
@@ -95,15 +95,15 @@ def _integrate(
     trace,
     compare,
 ):
-    """Integrate one case over the table with RK4 grid step ``2·stride·table_step``.
+    """Integrate one case over the table with RK4 grid step ``2·table_step``.
 
     record : 1-D array  The case record (layout in :mod:`engine_kernels.valvetrain.layout`),
                         coefficients ``K_*`` already written by ``valve_coefficients``.
     Fills ``out`` (``O_*`` rows from :func:`finish_observations`), the curves if
     ``curves`` has columns, and either records the lift at each grid point into ``trace`` or
-    (``compare``) returns the largest difference from a trace recorded at half this step.
+    (``compare``) returns the largest difference from a trace recorded on the same grid.
     """
-    half = stride
+    half = 1
     n_steps = (excitation.shape[1] - 1) // (2 * half)
     grid_step = 2.0 * half * table_step
     valve_time_steps(record, 0, 1, grid_step, substeps)
@@ -155,7 +155,7 @@ def _integrate(
             curves[C_SEAT_FORCE, n] = mass * seat if seated else 0.0
         if record_trace:
             if compare:
-                difference = max(difference, abs(lift - trace[2 * n]))
+                difference = max(difference, abs(lift - trace[n]))
             else:
                 trace[n] = lift
         if n == n_steps:
@@ -241,7 +241,6 @@ def valve_response(excitation, table_step, table_start, params, settings, out, c
         excitation,
         table_step,
         table_start,
-        1,
         params,
         substeps,
         switch_aware,
@@ -251,15 +250,14 @@ def valve_response(excitation, table_step, table_start, params, settings, out, c
         trace,
         False,
     )
-    if estimate and error_estimate_is_stable(params, table_step, substeps, settings):
+    if estimate:
         scratch = np.empty(out.shape[0])
         difference = _integrate(
             excitation,
             table_step,
             table_start,
-            2,
             params,
-            substeps,
+            2 * substeps,
             switch_aware,
             record,
             scratch,
@@ -267,7 +265,7 @@ def valve_response(excitation, table_step, table_start, params, settings, out, c
             trace,
             True,
         )
-        out[O_ERROR_ESTIMATE] = difference / ERROR_ORDER_DIVISOR
+        out[O_ERROR_ESTIMATE] = difference
 
 
 @batch
@@ -288,3 +286,19 @@ def valve_response_batch(excitation, table_step, table_start, params, settings, 
             out[i],
             np.empty((len(VALVE_CURVE_NAMES), 0)),
         )
+
+
+@batch
+def valve_lift_batch(excitation, table_step, table_start, params, settings, out, lifts):
+    """:func:`valve_response_batch` that also keeps each case's lift at every grid point.
+
+    lifts : 2-D array  (n_cases, (excitation.shape[1] − 1)//2 + 1) lift y [m] per grid point,
+                       NaN where the case is not integrated. The error bars of the scene
+                       compare these between runs on differently refined grids.
+    Other arguments as in :func:`valve_response_batch`.
+    """
+    for i in prange(params.shape[0]):
+        curves = np.empty((len(VALVE_CURVE_NAMES), lifts.shape[1]))
+        curves[C_LIFT, :] = np.nan
+        valve_response(excitation, table_step, table_start, params[i], settings, out[i], curves)
+        lifts[i, :] = curves[C_LIFT]

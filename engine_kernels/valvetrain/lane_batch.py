@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from engine_kernels._jit import batch, jit, prange
-from engine_kernels.valvetrain.guard import error_estimate_is_stable, prepare_case
+from engine_kernels.valvetrain.guard import prepare_case
 from engine_kernels.valvetrain.lanes import (
     LANES,
     N_LANE_ROWS,
@@ -27,7 +27,6 @@ from engine_kernels.valvetrain.lanes import (
 from engine_kernels.valvetrain.layout import O_ERROR_ESTIMATE, S_ESTIMATE_ERROR
 from engine_kernels.valvetrain.model import valve_coefficients
 from engine_kernels.valvetrain.observations import finish_observations
-from engine_kernels.valvetrain.step import ERROR_ORDER_DIVISOR
 
 
 @jit
@@ -58,7 +57,7 @@ def finish_lanes(data, count, step_angle, cases, out):
 
 @jit
 def lane_difference(data, l):
-    """Largest lift difference [m] of lane ``l`` from the step-doubling pass (``lane_pass``)."""
+    """Largest lift difference [m] of lane ``l`` from the step-halving pass (``lane_pass``)."""
     return data[R_DIFFERENCE * LANES + l]
 
 
@@ -81,7 +80,7 @@ def lift_trace_lanes(excitation, table_step, table_start, params, settings, trac
     cases = np.zeros(LANES, dtype=np.int64)
     data = block_data(excitation, rows, cases)
     lanes = np.empty((trace.shape[0], LANES))
-    lane_pass(excitation, table_step, table_start, 1, substeps, rows, cases, data, lanes)
+    lane_pass(excitation, table_step, table_start, False, substeps, rows, cases, data, lanes)
     trace[:] = lanes[:, 0]
 
 
@@ -99,14 +98,13 @@ def _lane_block(excitation, table_step, table_start, params, settings, block, su
     data = block_data(excitation, params, cases)
     estimate = settings[S_ESTIMATE_ERROR] != 0 and excitation.shape[1] >= 5
     trace = np.empty(((excitation.shape[1] - 1) // 2 + 1 if estimate else 0, LANES))
-    lane_pass(excitation, table_step, table_start, 1, substeps, params, cases, data, trace)
+    lane_pass(excitation, table_step, table_start, False, substeps, params, cases, data, trace)
     finish_lanes(data, count, 2.0 * table_step, cases, out)
     if not estimate:
         return
-    lane_pass(excitation, table_step, table_start, 2, substeps, params, cases, data, trace)
+    lane_pass(excitation, table_step, table_start, True, 2 * substeps, params, cases, data, trace)
     for l in range(count):
-        if error_estimate_is_stable(params[cases[l]], table_step, substeps, settings):
-            out[cases[l], O_ERROR_ESTIMATE] = lane_difference(data, l) / ERROR_ORDER_DIVISOR
+        out[cases[l], O_ERROR_ESTIMATE] = lane_difference(data, l)
 
 
 @jit

@@ -200,29 +200,30 @@ def _observe_seat_lanes(data, past_nose):
 
 @jit
 def _record_lanes(data, trace, n, compare):
-    """Record the lift of every lane at grid point ``n`` or compare with a finer trace."""
+    """Record the lift of every lane at grid point ``n`` or compare with the recorded one."""
     for l in range(LANES):
         lift = data[R_LIFT * LANES + l]
         if compare:
-            difference = abs(lift - trace[2 * n, l])
+            difference = abs(lift - trace[n, l])
             data[R_DIFFERENCE * LANES + l] = max(data[R_DIFFERENCE * LANES + l], difference)
         else:
             trace[n, l] = lift
 
 
 @jit
-def lane_pass(excitation, table_step, table_start, half, substeps, params, cases, data, trace):
-    """Integrate all lanes of a block at RK4 grid step ``2·half·table_step``.
+def lane_pass(excitation, table_step, table_start, compare, substeps, params, cases, data, trace):
+    """Integrate all lanes of a block at RK4 grid step ``2·table_step``.
 
     substeps : int  RK4 sub-steps per grid step, the same for every lane of the block.
     cases    : 1-D int64  Parameter rows of the lanes (their initial state).
-    Records the lift per grid point in ``trace`` (grid point × lane) when ``half`` is 1 or,
-    when it is 2, keeps the largest difference from that trace in ``R_DIFFERENCE``.
+    Records the lift per grid point in ``trace`` (grid point × lane) or, with ``compare``,
+    keeps the largest difference from that trace in ``R_DIFFERENCE`` (the step-halving pass
+    runs with twice the sub-steps of the recorded one).
     """
+    half = 1
     n_steps = (excitation.shape[1] - 1) // (2 * half)
     grid_step = 2.0 * half * table_step
     record = trace.shape[0] > 0
-    compare = half == 2
     for l in range(LANES):
         valve_time_steps(data, l, LANES, grid_step, substeps)
         data[R_LIFT * LANES + l] = params[cases[l], P_INITIAL_LIFT]

@@ -55,7 +55,7 @@ O_SUBSTEPS = 12
 O_STEP_RATIO = 13
 O_TRANSITIONS = 14
 O_STATUS = 15
-O_ERROR_ESTIMATE = 16
+O_ERROR_ESTIMATE = 16  # max |y(n sub-steps) − y(2n)| over the grid [m] (S_ESTIMATE_ERROR)
 VALVE_OUTPUT_NAMES = (
     "max_lift",
     "max_opening_velocity",
@@ -107,6 +107,7 @@ S_MAX_SUBSTEPS = 0
 S_SWITCH_AWARE = 1
 S_ESTIMATE_ERROR = 2
 S_STABILITY_GUARD = 3
+S_SUBSTEPS = 4
 DEFAULT_MAX_SUBSTEPS = 256
 
 STATUS_OK = 0
@@ -122,17 +123,26 @@ def valve_settings(
     switch_aware=False,
     estimate_error=False,
     stability_guard=True,
+    substeps=0,
 ):
     """Integer settings array for the valve kernels (plain Python, builds the ``S_*`` row).
 
     max_substeps    : int   Hard cap on RK4 sub-steps per grid step (stability guard).
     switch_aware    : bool  Locate contact and seat switches inside steps (one-case kernel).
-    estimate_error  : bool  Step-doubling error estimate in ``O_ERROR_ESTIMATE``.
+    estimate_error  : bool  Step-halving difference in ``O_ERROR_ESTIMATE``: the largest lift
+                            difference over the grid from a second run with twice the
+                            sub-steps (never a longer step, so never past the RK4 bound).
     stability_guard : bool  False integrates with one sub-step whatever the bound says: only
                             to demonstrate the physics-based instability detection.
+    substeps        : int   Sub-steps per grid step to use when more than the guard needs
+                            (0: the guard's count). Halving the angle step at a fixed count
+                            halves every sub-step, also where a stiff seat forces them (the
+                            guard alone would halve their number instead, and the error of a
+                            seat contact would not converge).
     """
     return np.array(
-        [max_substeps, int(switch_aware), int(estimate_error), int(stability_guard)], dtype=np.int64
+        [max_substeps, int(switch_aware), int(estimate_error), int(stability_guard), substeps],
+        dtype=np.int64,
     )
 
 

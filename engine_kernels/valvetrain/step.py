@@ -9,9 +9,6 @@ from engine_kernels._jit import jit_inline
 from engine_kernels.valvetrain.layout import K_HALF_TAU, K_SIXTH_TAU, K_SPEED, K_TAU, K_TIME_STEP
 from engine_kernels.valvetrain.model import TWO, specific_acceleration, specific_forces
 
-# Step doubling: the RK4 error of a run at step h is about (y_2h − y_h)/(2⁴ − 1).
-ERROR_ORDER_DIVISOR = 15.0
-
 
 @jit_inline
 def valve_time_steps(record, at, w, grid_step, substeps):

@@ -8,7 +8,7 @@ past zero; the earliest crossing is located (seeded on the Hermite, refined by r
 RK4 sub-step to it, aiming just past the root so it is not found again), the mode switches
 and the step is finished (the motion in a fixed mode is in
 :mod:`engine_kernels.valvetrain.modes`). This restores fourth order (SPEC §4, "Integrators and the
-speed–accuracy trade") and makes step doubling a usable error estimate.
+speed–accuracy trade") and makes step halving a usable error estimate.
 """
 
 from __future__ import annotations

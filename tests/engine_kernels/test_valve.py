@@ -160,7 +160,7 @@ def harmonic_contact(theta):
 
 
 def errors_against_reference(function, row, steps, start_deg, stop_deg, **options):
-    """Max lift error at common 2-degree points, and the step-doubling estimates."""
+    """Max lift error at common 2-degree points, and the sub-step halving differences."""
     check = np.radians(np.arange(start_deg, stop_deg + 1.0, 2.0))
     reference = valve_reference(function, row, check, rtol=1e-12, atol=1e-15)
     errors, estimates = [], []
@@ -188,7 +188,7 @@ def test_rk4_is_fourth_order_without_switches():
 
 def test_switch_aware_rk4_restores_fourth_order():
     # Contact and seat switch inside steps: plain RK4 loses its order (SPEC §4 measured ~1.6),
-    # locating the switches restores ~4 and makes step doubling a usable error estimate.
+    # locating the switches restores ~4 and makes sub-step halving a usable error estimate.
     steps = (0.5, 0.25, 0.125)
     plain, _ = errors_against_reference(cosine_event, PARAMS, steps, -100.0, 110.0)
     aware, estimates = errors_against_reference(
@@ -445,3 +445,24 @@ def test_case_coefficients_are_the_record_rows_in_order(width) -> None:
     assert len(coefficients) == len(names)
     for row, name in names:
         assert coefficients[row] == record[at + row * width], name
+
+
+def test_sub_step_halving_difference_is_never_nan_and_is_the_forced_run():
+    # A 1e10 N/m seat at 2000 rpm needs many sub-steps: the old step-doubling estimate broke
+    # the stability bound there and was NaN. The halving pass only shortens sub-steps, so the
+    # difference is finite, and it is exactly the largest lift difference from a run forced
+    # to twice the guard's sub-steps (settings substeps).
+    row = params(camshaft_speed=2000 * RPM, seat_stiffness=1e10)
+    excitation, step, start = table(cosine_event, 0.5)
+    out, curve = run(excitation, step, start, row, curves=True, estimate_error=True)
+    substeps = int(out[valve.O_SUBSTEPS])
+    assert substeps > 1
+    assert out[valve.O_STATUS] == valve.STATUS_OK
+    forced, finer = run(excitation, step, start, row, curves=True, substeps=2 * substeps)
+    assert forced[valve.O_SUBSTEPS] == 2 * substeps
+    difference = np.abs(curve[valve.C_LIFT] - finer[valve.C_LIFT]).max()
+    assert out[valve.O_ERROR_ESTIMATE] == difference
+    assert 0.0 < difference < 1e-4
+    # fewer forced sub-steps than the guard needs are ignored: the guard's count wins
+    fewer, _ = run(excitation, step, start, row, substeps=1)
+    assert fewer[valve.O_SUBSTEPS] == substeps

@@ -64,7 +64,7 @@ def test_runs_differing_in_one_setting_name_it_and_the_responses_it_moved(
     # the reference moved, so the error against it did; cost_per_case is a wall-clock timing
     assert "reference_error" in moved
     assert moved <= {"reference_error", "cost_per_case"}
-    assert {"max_lift", "error_estimate", "step_doubling_difference"}.isdisjoint(moved)
+    assert {"max_lift", "error_estimate", "step_halving_difference"}.isdisjoint(moved)
 
     assert main(["compare", a, b, "--outputs", str(outputs)]) == 0
     out = capsys.readouterr().out

@@ -3,6 +3,7 @@ resonances at the cam orders, the ladder scene and the two shipped spring studie
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 from typing import Any
@@ -154,7 +155,7 @@ def test_surge_peaks_where_a_cam_order_meets_the_first_surge_frequency() -> None
     f1 *= math.sin(math.pi / (2 * (masses + 1))) / (2.0 * math.pi)
     speeds = np.arange(2940.0, 4121.0, 10.0)
     factors = f"[factors.cam_speed]\nlevels = {speeds.tolist()}\nunits = 'rpm'"
-    settings = f"spring_model = \"multi_mass\"\nspring_masses = {masses}\nrevolutions = 8"
+    settings = f'spring_model = "multi_mass"\nspring_masses = {masses}\nrevolutions = 8'
     out = run(
         study(
             '["surge_amplitude", "surge_frequency", "follows_cam"]',
@@ -207,3 +208,19 @@ def test_shipped_spring_studies_run(name: str, tmp_path: Path) -> None:
     assert (result.folder / figure).stat().st_size > 10_000
     if name == "spring_model_ladder":
         assert (ds["cost_per_case"] > 0.0).all()
+
+
+def test_every_dynamic_response_is_answered_or_refused_under_multi_mass() -> None:
+    """Each response of the dynamics stage either comes from the chain run (finite at a point
+    that follows the cam, or NaN by its meaning: no jump) or is refused by check."""
+    scene_responses = plan_text(study()).scene.responses
+    dynamic = [r.name for r in scene_responses if r.needs == ("tappet", "rocker", "dynamics")]
+    answered = [r for r in dynamic if r not in spring.CHAIN_UNOBSERVED]
+    settings = 'spring_model = "multi_mass"\nspring_masses = 2'
+    out = run(study(json.dumps(answered), settings, "[factors.cam_speed]\nlevels = [3000.0]"))
+    absent_when_following = {"jump_start"}
+    for name in answered:
+        assert np.isfinite(out.scalars[name]).all() or name in absent_when_following, name
+    for name in set(dynamic) - set(answered):
+        with pytest.raises(StudyError, match=name):
+            plan_text(study(json.dumps([name]), settings))

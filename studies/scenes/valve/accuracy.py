@@ -21,15 +21,19 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from engine_kernels import valvetrain as valve
 from studies.scenes.base import Parameter, Response, SceneOutput
 from studies.scenes.chain import CACHE_SIZE, BoundedCache, angle_step_problem, grid_deg, step_deg
 from studies.scenes.checks import PointProblems
 from studies.scenes.valve import accuracy_reference as acc
+from studies.scenes.valve.error_bar import tolerance_rungs
 from studies.scenes.valve.parameters import (
     ANGLE_STEP,
     DYNAMIC_RESPONSES,
     INTEGRATOR,
+    INTEGRATORS,
     PARAMETERS,
+    TOLERANCE,
     WINDOW_SETTINGS,
 )
 from studies.scenes.valve.parameters import SETTINGS as VALVE_SETTINGS
@@ -48,7 +52,8 @@ if TYPE_CHECKING:
     from studies.scenes.base import FigureBuilder
 
 REFERENCE_METHODS = ("DOP853", "Radau")
-REF, COST = ("tappet", "rocker", "reference"), ("tappet", "rocker", "cost")
+REF = ("tappet", "rocker", "dynamics", "reference")  # the error of the reported run
+COST = ("tappet", "rocker", "cost")
 MS = 1e3
 
 SETTINGS: tuple[Parameter, ...] = (
@@ -89,7 +94,7 @@ class ValveAccuracyScene(ValveScene):
     name = "valve_accuracy"
     seconds_per_point = 0.2
     description = "valve dynamics vs integrator and step: error against scipy, cost per case"
-    parameters = (*PARAMETERS, INTEGRATOR, ANGLE_STEP)
+    parameters = (*PARAMETERS, INTEGRATOR, ANGLE_STEP, TOLERANCE)
     settings = SETTINGS
     responses = RESPONSES
     curves = ()
@@ -131,13 +136,15 @@ class ValveAccuracyScene(ValveScene):
         scalars = {r: np.full(len(points["angle_step"]), np.nan) for r in responses}
         steps = [step_deg(s) for s in points["angle_step"]]
         spacing = acc.common_spacing({*steps, acc.REFERENCE_TABLE_DEG})
-        pairs: dict[tuple[str, float], list[int]] = {}
-        for i, pair in enumerate(zip(points["integrator"], steps, strict=True)):
-            pairs.setdefault(pair, []).append(i)
-        for (integrator, step), members in pairs.items():
+        groups: dict[tuple[str, float, float], list[int]] = {}
+        for i, group in enumerate(
+            zip(points["integrator"], steps, points["tolerance"], strict=True)
+        ):
+            groups.setdefault(group, []).append(i)
+        for (integrator, step, tolerance), members in groups.items():
             idx = np.array(members)
             local = dict(settings, integrator=integrator, angle_step=math.radians(step))
-            local |= {"tolerance": 0.0, "reference_spacing": spacing}
+            local |= {"tolerance": tolerance, "reference_spacing": spacing}
             out = super().evaluate({k: v[idx] for k, v in points.items()}, local, responses, [])
             for r in responses:
                 scalars[r][idx] = out.scalars[r]
@@ -147,12 +154,10 @@ class ValveAccuracyScene(ValveScene):
         settings = ctx["settings"]
         step = step_deg(settings["angle_step"])
         spacing = settings["reference_spacing"]
-        flags = kernel_settings(settings, settings["integrator"], False)
         ctx["reference_error"] = np.full(ctx["n"], np.nan)
         for key, idx in ctx["groups"].items():
             if not self.chain_valid(ctx, key):
                 continue
-            excitation = self.excitation(ctx, key, step)
             fine = self.excitation(ctx, key, 2.0 * acc.REFERENCE_TABLE_DEG)
             window = self.window(ctx, key)
             theta = np.radians(grid_deg(window[0], spacing, window[1]))
@@ -162,22 +167,51 @@ class ValveAccuracyScene(ValveScene):
                     (key, window, spacing, tuple(row), solver),
                     partial(acc.reference_lift, fine, row, theta, *solver),
                 )
-                lift = acc.trajectory_lift(excitation, row, flags, settings["integrator"])
+                lift = self.reported_lift(ctx, key, i, row)
                 ctx["reference_error"][i] = acc.max_error(lift, reference, round(step / spacing))
 
+    def reported_lift(self, ctx: dict[str, Any], key: tuple, i: int, row: np.ndarray) -> np.ndarray:
+        """Lift [m] of point i on the study's grid, integrated as it was reported: at its
+        step, method and sub-step count (they differ from the settings under a tolerance)."""
+        settings = ctx["settings"]
+        used = float(ctx["step_used"][i])
+        method = INTEGRATORS[int(ctx["method"][i])]
+        substeps = ctx["out"][i, valve.O_SUBSTEPS]
+        forced = int(substeps) if np.isfinite(substeps) else 0
+        flags = kernel_settings(settings, method, False, forced)
+        lift = acc.trajectory_lift(self.excitation(ctx, key, used), row, flags, method)
+        return lift[:: round(step_deg(settings["angle_step"]) / used)]
+
     def stage_cost(self, ctx: dict[str, Any]) -> None:
+        """Seconds per case of what produced the results: the integrator's batch kernel at
+        the study's step, or under a tolerance the whole ladder (runs, companions, rungs)."""
         settings = ctx["settings"]
         integrator = settings["integrator"]
-        flags = kernel_settings(settings, integrator, False)
+        step = step_deg(settings["angle_step"])
         ctx["cost"] = np.full(ctx["n"], np.nan)
         for key, idx in ctx["groups"].items():
             if not self.chain_valid(ctx, key):
                 continue
-            excitation = self.excitation(ctx, key, step_deg(settings["angle_step"]))
-
-            run = partial(_run_kernel, excitation, integrator, flags)
+            if settings["tolerance"] > 0.0:
+                run = partial(self.ladder_run, ctx, key)
+            else:
+                flags = kernel_settings(settings, integrator, False)
+                run = partial(_run_kernel, self.excitation(ctx, key, step), integrator, flags)
             for i, row in zip(idx, valve_rows(ctx["points"], idx), strict=True):
                 ctx["cost"][i] = acc.seconds_per_case(run, row)
+
+    def ladder_run(self, ctx: dict[str, Any], key: tuple, rows: np.ndarray) -> object:
+        """The tolerance ladder of the dynamics stage on ``rows`` (for its timing)."""
+        settings = ctx["settings"]
+        return tolerance_rungs(
+            lambda step: self.excitation(ctx, key, step),
+            rows,
+            lambda method: kernel_settings(settings, method, False),
+            settings["integrator"],
+            step_deg(settings["angle_step"]),
+            settings["tolerance"],
+            False,
+        )
 
     def scalar(self, ctx: dict[str, Any], response: str) -> np.ndarray:
         if response == "reference_error":

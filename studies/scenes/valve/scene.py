@@ -27,7 +27,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from engine_kernels import valvetrain as valve
-from engine_kernels.valvetrain import lane_batch as valve_lanes
 from engine_kernels.valvetrain import rocker
 from engine_kernels.valvetrain.spring_chain_jump import chain_jump_speed
 from studies.scenes.chain import (
@@ -41,13 +40,21 @@ from studies.scenes.chain import (
 )
 from studies.scenes.chain_parameters import RESPONSES as ROCKER_RESPONSES
 from studies.scenes.chain_summaries import chain_status_summary
-from studies.scenes.checks import PointProblems
 from studies.scenes.valve import spring
+from studies.scenes.valve.batches import (
+    N_CURVES,
+    N_OUT,
+    integrate,
+    jump_setting_problems,
+    kernel_settings,
+    stability_problems,
+    valve_rows,
+)
+from studies.scenes.valve.error_bar import BAR_FACTOR, DERIVED_BARS, Ladder, tolerance_rungs
 from studies.scenes.valve.parameters import (
     CURVES,
+    INTEGRATORS,
     JUMP_NOT_RUN,
-    LANE_PRECISION,
-    MAX_HALVINGS,
     PARAMETERS,
     RESPONSES,
     SETTINGS,
@@ -65,9 +72,19 @@ WINDOW_PROBE_DEG = 0.25
 """Grid on which the valve opening and closing angles that set the window are found."""
 PRE_OPEN_DEG = 2.0
 JUMP_SCAN_POINTS = 16
-N_OUT = len(valve.VALVE_OUTPUT_NAMES)
-N_CURVES = len(valve.VALVE_CURVE_NAMES)
-ESTIMATE_RESPONSES = ("error_estimate", "step_doubling_difference")
+BUDGET_RESPONSES = frozenset(("integration_error", "excitation_error"))
+BAR_RESPONSES = (
+    frozenset(("error_estimate", "step_halving_difference", *DERIVED_BARS)) | BUDGET_RESPONSES
+)
+# error bar response -> factor from SI to the response's units
+_BAR_SCALE = {
+    "jump_start_error": DEG,
+    "seating_velocity_error": 1.0,
+    "bounce_height_error": MM,
+    "max_lift_error": MM,
+    "integration_error": MM,
+    "excitation_error": MM,
+}
 KINEMATIC_RESPONSES = frozenset(r.name for r in ROCKER_RESPONSES)
 
 # response -> (output column, factor from SI to the response's units)
@@ -88,8 +105,6 @@ _OUTPUT: dict[str, tuple[int, float]] = {
     "step_ratio": (valve.O_STEP_RATIO, 1.0),
     "mode_transitions": (valve.O_TRANSITIONS, 1.0),
     "status": (valve.O_STATUS, 1.0),
-    "error_estimate": (valve.O_ERROR_ESTIMATE, MM),
-    "step_doubling_difference": (valve.O_ERROR_ESTIMATE, valve.ERROR_ORDER_DIVISOR * MM),
 }
 _CURVE_ROW = {
     "actual_lift": (valve.C_LIFT, MM),
@@ -98,105 +113,6 @@ _CURVE_ROW = {
     "drive_force": (valve.C_DRIVE_FORCE, 1.0),
     "seat_force": (valve.C_SEAT_FORCE, 1.0),
 }
-# parameter name -> column of the valve kernels' parameter rows
-_PARAM_COLUMN = {
-    "cam_speed": valve.P_SPEED,
-    "equivalent_mass": valve.P_MASS,
-    "drive_stiffness": valve.P_DRIVE_STIFFNESS,
-    "drive_damping": valve.P_DRIVE_DAMPING,
-    "spring_rate": valve.P_SPRING_RATE,
-    "spring_preload": valve.P_PRELOAD,
-    "seat_stiffness": valve.P_SEAT_STIFFNESS,
-    "seat_damping": valve.P_SEAT_DAMPING,
-    "external_damping": valve.P_EXTERNAL_DAMPING,
-}
-
-
-CHECK_BLOCK = 1 << 18  # design points per block of the stability check
-
-
-def valve_rows(points: dict[str, np.ndarray], idx: np.ndarray | slice) -> np.ndarray:
-    """Kernel parameter rows (``engine_kernels.valvetrain.P_*``, SI) of the design points idx
-    (indices or a slice)."""
-    first = points["cam_speed"][idx]
-    rows = np.zeros((len(first), len(valve.VALVE_PARAM_NAMES)))
-    for name, column in _PARAM_COLUMN.items():
-        rows[:, column] = points[name][idx]
-    return rows
-
-
-def kernel_settings(settings: dict[str, Any], integrator: str, estimate: bool) -> np.ndarray:
-    """The ``S_*`` integer settings row for an integrator name."""
-    return valve.valve_settings(
-        max_substeps=int(settings["max_substeps"]),
-        switch_aware=integrator == "rk4_switch_aware",
-        estimate_error=estimate,
-    )
-
-
-def integrate(
-    excitation: tuple[np.ndarray, float, float],
-    rows: np.ndarray,
-    integrator: str,
-    flags: np.ndarray,
-    curves: bool,
-) -> tuple[np.ndarray, np.ndarray | None]:
-    """Run one integrator over the rows on one excitation; outputs (n, O_*) and curves."""
-    table, table_step, start = excitation
-    out = np.empty((rows.shape[0], N_OUT))
-    if curves:
-        trace = np.empty((rows.shape[0], N_CURVES, (table.shape[1] - 1) // 2 + 1))
-        for j in range(rows.shape[0]):
-            valve.valve_response(table, table_step, start, rows[j], flags, out[j], trace[j])
-        return out, trace
-    if integrator in LANE_PRECISION:
-        lanes = table.astype(LANE_PRECISION[integrator])
-        valve_lanes.valve_response_lanes(lanes, table_step, start, rows, flags, out)
-    else:
-        valve.valve_response_batch(table, table_step, start, rows, flags, out)
-    return out, None
-
-
-def jump_setting_problems(settings: dict[str, Any]) -> list[str]:
-    if settings["jump_speed_low"] < settings["jump_speed_high"]:
-        return []
-    return [
-        (
-            "settings jump_speed_low and jump_speed_high: the low end of the jump speed search "
-            f"({settings['jump_speed_low'] * RPM:g} rpm) must be below the high end "
-            f"({settings['jump_speed_high'] * RPM:g} rpm)"
-        )
-    ]
-
-
-def stability_problems(
-    points: dict[str, np.ndarray], settings: dict[str, Any], steps: np.ndarray
-) -> list[str]:
-    """Points whose RK4 step [rad] (one per point) needs more sub-steps than
-    ``max_substeps`` (SPEC §4); checked by a compiled batch over blocks of points, so the
-    parameter rows of a 10⁷-point design never sit in memory at once."""
-    found = PointProblems()
-    limit = int(settings["max_substeps"])
-    runs = len(points["cam_speed"])
-    for start in range(0, runs, CHECK_BLOCK):
-        part = slice(start, min(start + CHECK_BLOCK, runs))
-        rows = valve_rows(points, part)
-        block_steps = np.ascontiguousarray(steps[part], dtype=float)
-        needed = np.empty(rows.shape[0], dtype=np.int64)
-        ratio = np.empty(rows.shape[0])
-        valve.stability_substeps_batch(rows, block_steps, needed, ratio)
-        for i in np.flatnonzero(needed > limit):
-            row, step = rows[i], block_steps[i]
-            found.add(
-                start + int(i),
-                f"angle_step = {step_deg(step):g} deg at cam_speed = "
-                f"{row[valve.P_SPEED] * RPM:g} rpm with seat_stiffness = "
-                f"{row[valve.P_SEAT_STIFFNESS] / 1e3:g} N/mm gives |h λ| = {ratio[i]:.3g}: "
-                f"{needed[i]} RK4 sub-steps per step would be needed to keep |h λ| ≤ "
-                f"{valve.STEP_RATIO_TARGET:g}, more than max_substeps = {limit} (use a smaller "
-                "angle_step or a larger max_substeps)",
-            )
-    return found.messages()
 
 
 class ValveScene(ChainScene):
@@ -287,6 +203,9 @@ class ValveScene(ChainScene):
         want = any(c in _CURVE_ROW for c in ctx["curves"])
         axis = self.curve_coordinate(ctx["settings"])
         ctx["traces"] = np.full((n, N_CURVES, axis.size if want else 0), np.nan)
+        names = ("error_estimate", "tolerance_met", *DERIVED_BARS, *BUDGET_RESPONSES)
+        ctx["bars"] = {name: np.full(n, np.nan) for name in names}
+        ctx["method"] = np.full(n, float(INTEGRATORS.index(ctx["settings"]["integrator"])))
         for key, idx in ctx["groups"].items():
             if not self.chain_valid(ctx, key):
                 ctx["out"][idx, valve.O_STATUS] = STATUS_NOT_RUN
@@ -294,28 +213,81 @@ class ValveScene(ChainScene):
             self.run_group(ctx, key, idx, want)
 
     def run_group(self, ctx: dict[str, Any], key: tuple, idx: np.ndarray, want: bool) -> None:
-        """Integrate the points ``idx`` of one chain, halving the step under a tolerance."""
+        """Integrate the points ``idx`` of one chain; with error bars or a tolerance, down the
+        halving ladder of :mod:`studies.scenes.valve.error_bar`.
+
+        Under a tolerance the method is picked per point too
+        (:func:`~studies.scenes.valve.error_bar.tolerance_rungs`).
+        """
         settings = ctx["settings"]
         tolerance = settings["tolerance"]
-        estimate = tolerance > 0.0 or bool(ctx["responses"] & set(ESTIMATE_RESPONSES))
-        flags = kernel_settings(settings, settings["integrator"], estimate)
+        integrator = settings["integrator"]
         rows = valve_rows(ctx["points"], idx)
         coarse = step_deg(settings["angle_step"])
-        first = round((self.window(ctx, key)[0] + HALF_TURN_DEG) / coarse)
-        pending = np.arange(len(idx))
-        for level in range(MAX_HALVINGS + 1 if tolerance > 0.0 else 1):
-            step = coarse / 2**level
-            excitation = self.excitation(ctx, key, step)
-            out, trace = integrate(excitation, rows[pending], settings["integrator"], flags, want)
-            ctx["out"][idx[pending]] = out
-            ctx["step_used"][idx[pending]] = step
+        if tolerance <= 0.0 and not ctx["responses"] & BAR_RESPONSES:
+            flags = kernel_settings(settings, integrator, False)
+            out, trace = integrate(self.excitation(ctx, key, coarse), rows, integrator, flags, want)
+            ctx["out"][idx] = out
+            ctx["step_used"][idx] = coarse
             if trace is not None:
-                kept = trace[:, :, :: 2**level]
-                ctx["traces"][idx[pending], :, first : first + kept.shape[2]] = kept
-            difference = valve.ERROR_ORDER_DIVISOR * out[:, valve.O_ERROR_ESTIMATE]
-            pending = pending[~(difference <= tolerance)]
-            if pending.size == 0:
-                break
+                self.store_traces(ctx, key, idx, trace, coarse, 0)
+            return
+        rungs = tolerance_rungs(
+            lambda step: self.excitation(ctx, key, step),
+            rows,
+            lambda method: kernel_settings(settings, method, False),
+            integrator,
+            coarse,
+            tolerance,
+            bool(ctx["responses"] & BUDGET_RESPONSES),
+        )
+        for pending, method, ladder in rungs:
+            at = idx[pending]
+            ctx["out"][at] = ladder.out
+            ctx["step_used"][at] = coarse / 2.0**ladder.level
+            ctx["method"][at] = INTEGRATORS.index(method)
+            ctx["bars"]["error_estimate"][at] = ladder.bar
+            ctx["bars"]["tolerance_met"][at] = ladder.met
+            for name, values in (ladder.derived | ladder.budget).items():
+                ctx["bars"][name][at] = values
+            if want:
+                self.ladder_curves(ctx, key, at, rows[pending], ladder, coarse, method)
+
+    def ladder_curves(
+        self,
+        ctx: dict[str, Any],
+        key: tuple,
+        idx: np.ndarray,
+        rows: np.ndarray,
+        ladder: Ladder,
+        coarse: float,
+        integrator: str,
+    ) -> None:
+        """Curves of each point at the level the ladder stopped at (its sub-step count)."""
+        pairs = np.stack([ladder.level, ladder.substeps], axis=1)
+        for level, count in np.unique(pairs, axis=0):
+            members = np.flatnonzero((pairs == (level, count)).all(axis=1))
+            step = coarse / 2.0**level
+            flags = kernel_settings(ctx["settings"], integrator, False, int(count))
+            trace = integrate(
+                self.excitation(ctx, key, step), rows[members], integrator, flags, True
+            )[1]
+            assert trace is not None
+            self.store_traces(ctx, key, idx[members], trace, coarse, int(level))
+
+    def store_traces(
+        self,
+        ctx: dict[str, Any],
+        key: tuple,
+        idx: np.ndarray,
+        trace: np.ndarray,
+        coarse: float,
+        level: int,
+    ) -> None:
+        """Curves at step coarse/2^level into the study's curve axis (the coarse grid)."""
+        first = round((self.window(ctx, key)[0] + HALF_TURN_DEG) / coarse)
+        kept = trace[:, :, :: 2**level]
+        ctx["traces"][idx, :, first : first + kept.shape[2]] = kept
 
     def stage_surge(self, ctx: dict[str, Any]) -> None:
         """Run the multi-mass spring (once per study chunk) at ``angle_step``; under
@@ -406,9 +378,18 @@ class ValveScene(ChainScene):
             return np.where(np.isnan(duration), np.nan, (duration == 0.0).astype(float))
         if response == "angle_step_used":
             return ctx["step_used"].copy()
-        difference = valve.ERROR_ORDER_DIVISOR * out[:, valve.O_ERROR_ESTIMATE]
-        met = (difference <= ctx["settings"]["tolerance"]).astype(float)
-        return met if ctx["settings"]["tolerance"] > 0.0 else np.ones(ctx["n"])
+        if response == "integrator_used":
+            return ctx["method"].copy()
+        bars = ctx["bars"]
+        if response == "step_halving_difference":
+            return bars["error_estimate"] / BAR_FACTOR * MM
+        if response == "error_estimate":
+            return bars["error_estimate"] * MM
+        if response in _BAR_SCALE:
+            return bars[response] * _BAR_SCALE[response]
+        if ctx["settings"]["tolerance"] > 0.0:
+            return bars["tolerance_met"].copy()
+        return np.ones(ctx["n"])
 
     def curve_values(self, ctx: dict[str, Any], name: str) -> np.ndarray:
         if name in spring.SURGE_CURVE_NAMES or (
