@@ -290,40 +290,7 @@ class ValveScene(ChainScene):
         ctx["traces"][idx, :, first : first + kept.shape[2]] = kept
 
     def stage_surge(self, ctx: dict[str, Any]) -> None:
-        """Run the multi-mass spring (once per study chunk) at ``angle_step``; under
-        ``spring_model = "multi_mass"`` its outputs also answer the dynamic responses."""
-        if "chain_out" in ctx:
-            return
-        n, settings = ctx["n"], ctx["settings"]
-        chain_curves = set(spring.CHAIN_CURVE_ROW) if spring.uses_chain(settings) else set()
-        want = bool(ctx["curves"] & (chain_curves | spring.SURGE_CURVE_NAMES))
-        axis = self.curve_coordinate(settings) if want else np.empty(0)
-        ctx["chain_out"] = np.full((n, spring.N_CHAIN_OUT), np.nan)
-        ctx["chain_traces"] = np.full((n, spring.N_CHAIN_CURVES, axis.size), np.nan)
-        step = step_deg(settings["angle_step"])
-        flags = kernel_settings(settings, "rk4", False)
-        for key, idx in ctx["groups"].items():
-            if not self.chain_valid(ctx, key):
-                ctx["chain_out"][idx, spring.sc.CO_STATUS] = STATUS_NOT_RUN
-                continue
-            rows = self.spring_rows(ctx, idx)
-            out, trace = spring.run_chain(self.excitation(ctx, key, step), rows, flags, want)
-            ctx["chain_out"][idx] = out
-            if trace is not None:
-                first = round((self.window(ctx, key)[0] + HALF_TURN_DEG) / step)
-                ctx["chain_traces"][idx, :, first : first + trace.shape[2]] = trace
-            turns = int(settings["revolutions"])
-            if turns > 1:
-                turn = self.excitation(ctx, key, step, (-HALF_TURN_DEG, HALF_TURN_DEG))
-                steady = spring.steady_surge(turn, rows, flags, turns)
-                columns = spring.STEADY_COLUMNS
-                ctx["chain_out"][np.ix_(idx, columns)] = steady[:, columns]
-        if not spring.uses_chain(settings):
-            return
-        ctx["out"] = np.full((n, N_OUT), np.nan)
-        for column, chain_column in spring.LUMPED_FROM_CHAIN.items():
-            ctx["out"][:, column] = ctx["chain_out"][:, chain_column]
-        ctx["step_used"] = np.full(n, step)
+        spring.surge_stage(self, ctx)
 
     def spring_rows(self, ctx: dict[str, Any], idx: np.ndarray) -> np.ndarray:
         masses = int(ctx["settings"]["spring_masses"])

@@ -9,7 +9,7 @@ lumped rung's under ``spring_model = "multi_mass"``, and the checks of a request
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -20,8 +20,14 @@ from engine_kernels.valvetrain.spring_chain_response import (
     spring_chain_response,
     spring_chain_response_batch,
 )
+from studies.scenes.chain import HALF_TURN_DEG, step_deg
 from studies.scenes.checks import PointProblems
+from studies.scenes.valve.batches import N_OUT, kernel_settings
+from studies.scenes.valve.parameters import STATUS_NOT_RUN
 from studies.scenes.valve.spring_parameters import CHAIN_UNOBSERVED, SURGE_CURVES
+
+if TYPE_CHECKING:
+    from studies.scenes.valve.scene import ValveScene
 
 MM = 1e3
 TWO_PI = 2.0 * np.pi
@@ -181,3 +187,39 @@ def spring_point_problems(points: dict[str, np.ndarray]) -> list[str]:
             "the spring mass (it is valve + spring/3 + rocker inertia/lb² [V1])",
         )
     return found.messages()
+
+
+def surge_stage(scene: ValveScene, ctx: dict[str, Any]) -> None:
+    """The ``surge`` stage: the multi-mass spring (once per study chunk) at ``angle_step``, and
+    over ``revolutions`` turns when asked; under ``spring_model = "multi_mass"`` its outputs
+    also answer the dynamic responses."""
+    if "chain_out" in ctx:
+        return
+    n, settings = ctx["n"], ctx["settings"]
+    chain_curves = set(CHAIN_CURVE_ROW) if uses_chain(settings) else set()
+    want = bool(ctx["curves"] & (chain_curves | SURGE_CURVE_NAMES))
+    axis = scene.curve_coordinate(settings) if want else np.empty(0)
+    ctx["chain_out"] = np.full((n, N_CHAIN_OUT), np.nan)
+    ctx["chain_traces"] = np.full((n, N_CHAIN_CURVES, axis.size), np.nan)
+    step = step_deg(settings["angle_step"])
+    flags = kernel_settings(settings, "rk4", False)
+    for key, idx in ctx["groups"].items():
+        if not scene.chain_valid(ctx, key):
+            ctx["chain_out"][idx, sc.CO_STATUS] = STATUS_NOT_RUN
+            continue
+        rows = scene.spring_rows(ctx, idx)
+        out, trace = run_chain(scene.excitation(ctx, key, step), rows, flags, want)
+        ctx["chain_out"][idx] = out
+        if trace is not None:
+            first = round((scene.window(ctx, key)[0] + HALF_TURN_DEG) / step)
+            ctx["chain_traces"][idx, :, first : first + trace.shape[2]] = trace
+        turns = int(settings["revolutions"])
+        if turns > 1:
+            turn = scene.excitation(ctx, key, step, (-HALF_TURN_DEG, HALF_TURN_DEG))
+            steady = steady_surge(turn, rows, flags, turns)
+            ctx["chain_out"][np.ix_(idx, STEADY_COLUMNS)] = steady[:, STEADY_COLUMNS]
+    if uses_chain(settings):
+        ctx["out"] = np.full((n, N_OUT), np.nan)
+        for column, chain_column in LUMPED_FROM_CHAIN.items():
+            ctx["out"][:, column] = ctx["chain_out"][:, chain_column]
+        ctx["step_used"] = np.full(n, step)
