@@ -28,6 +28,7 @@ from engine_kernels.valvetrain.dopri_step import (
     dense_state,
     dopri_step,
     locate_switch,
+    mode_acceleration,
     mode_violation,
     switching_functions,
 )
@@ -58,13 +59,11 @@ from engine_kernels.valvetrain.layout import (
 from engine_kernels.valvetrain.model import (
     TRANSITION_BAND,
     case_coefficients,
-    excitation_at,
     excitation_lift_slope,
     specific_point,
     valve_coefficients,
     valve_spectral_radius,
 )
-from engine_kernels.valvetrain.modes import mode_acceleration
 from engine_kernels.valvetrain.observations import (
     finish_observations,
     nose_position,
@@ -147,9 +146,9 @@ def _stop(out, curves, status):
 
 
 @jit
-def _initial_mode(lift, velocity, drive_lift, drive_velocity, params):
+def _initial_mode(lift, velocity, drive_lift, slope, c):
     """Contact and seat modes of a state: each on while its switching function is positive."""
-    drive, seat = switching_functions(lift, velocity, drive_lift, drive_velocity, params)
+    drive, seat = switching_functions(lift, velocity, drive_lift, slope, c)
     return drive > 0.0, seat > 0.0
 
 
@@ -191,14 +190,15 @@ def dopri_response(
     record = np.empty(N_RECORD)
     valve_coefficients(params, record, 0, 1)
     valve_time_steps(record, 0, 1, grid_step, 1)
+    c = case_coefficients(record, 0, 1)
     band = TRANSITION_BAND * params[P_PRELOAD]
     velocity_tolerance = tolerance * speed
     radius = valve_spectral_radius(params)
     nose = table_start + nose_position(excitation) * table_step
     lift, velocity = params[P_INITIAL_LIFT], params[P_INITIAL_VELOCITY]
     drive_lift, slope = excitation_lift_slope(excitation, table_step, 0.0)
-    mode = _initial_mode(lift, velocity, drive_lift, speed * slope, params)
-    acc = mode_acceleration(lift, velocity, drive_lift, speed * slope, mode[0], mode[1], params)
+    mode = _initial_mode(lift, velocity, drive_lift, slope, c)
+    acc = mode_acceleration(lift, velocity, drive_lift, slope, mode[0], mode[1], c)
     prev = (
         lift,
         velocity,
@@ -233,7 +233,7 @@ def dopri_response(
         if last:
             h = end - time
         new_lift, new_velocity, new_acc, error_lift, error_velocity = dopri_step(
-            excitation, table_step, speed, time, h, lift, velocity, acc, mode, params, dense
+            excitation, table_step, speed, time, h, lift, velocity, acc, mode, c, dense
         )
         error = max(abs(error_lift) / tolerance, abs(error_velocity) / velocity_tolerance)
         if not error <= 1.0:
@@ -247,9 +247,7 @@ def dopri_response(
         lo = 0.0
         for j in range(1, SWITCH_SAMPLES + 1):
             s = j / SWITCH_SAMPLES
-            past = mode_violation(
-                excitation, table_step, speed, time, h, dense, s, mode, band, params
-            )
+            past = mode_violation(excitation, table_step, speed, time, h, dense, s, mode, band, c)
             first = 2.0
             for index in range(2):
                 # Right after a switch the new mode may start a hair inside the dead band
@@ -268,7 +266,7 @@ def dopri_response(
                         index,
                         mode,
                         band,
-                        params,
+                        c,
                     )
                     if root < first:
                         first, which = root, index
@@ -285,7 +283,7 @@ def dopri_response(
                     velocity,
                     acc,
                     mode,
-                    params,
+                    c,
                     dense,
                 )
                 attempts += 1
@@ -329,10 +327,10 @@ def dopri_response(
                 record_closure_events(record, 0, 1, prev[0], prev[1], prev[2])
             prev = (lift, velocity, acc)
         if which >= 0:
-            drive_lift, drive_velocity = excitation_at(
-                excitation, table_step, time * speed / table_step, speed
+            drive_lift, slope = excitation_lift_slope(
+                excitation, table_step, time * speed / table_step
             )
-            changed = _initial_mode(lift, velocity, drive_lift, drive_velocity, params)
+            changed = _initial_mode(lift, velocity, drive_lift, slope, c)
             contact, seated = changed
             if changed[which] == mode[which]:
                 if which == 0:
@@ -340,9 +338,7 @@ def dopri_response(
                 else:
                     seated = not mode[1]
             mode = (contact, seated)
-            acc = mode_acceleration(
-                lift, velocity, drive_lift, drive_velocity, contact, seated, params
-            )
+            acc = mode_acceleration(lift, velocity, drive_lift, slope, contact, seated, c)
             switched = which
             fresh = True
         h *= min(FAC_MAX, max(FAC_MIN, SAFETY * error**-0.2)) if error > 0.0 else FAC_MAX
