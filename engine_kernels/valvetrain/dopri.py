@@ -324,6 +324,10 @@ def dopri_response(
             break
         if not on_grid and next_grid < n_grid:
             if observe_closure(record, 0, 1, lift, table_start + time * speed >= nose):
+                # A located seat switch ends this step on the seat plane: the seating
+                # velocity is read there, not extrapolated over a whole step.
+                if which == 1:
+                    prev = (lift, velocity, acc)
                 record_closure_events(record, 0, 1, prev[0], prev[1], prev[2])
             prev = (lift, velocity, acc)
         if which >= 0:
