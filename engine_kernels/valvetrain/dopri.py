@@ -77,10 +77,11 @@ from engine_kernels.valvetrain.step import valve_time_steps
 SAFETY = 0.9
 FAC_MIN = 0.2
 FAC_MAX = 5.0
-SWITCH_SAMPLES = 4
+SWITCH_SAMPLES = 8
 """Points of a step's dense output (equally spaced, the end included) where the switching
 functions are checked: a switch that is crossed and crossed back between two of them (a
-grazing contact) is missed."""
+grazing contact) is missed. On 48 random points at 1e-8 m per step, 4 points missed one
+grazing contact (0.63 µm error at one point); 8 and 16 did not, at ~10 % more cost."""
 DEFAULT_MAX_STEPS = 1_000_000
 """Step attempts (accepted, rejected and redone at a switch) after which a case stops with
 ``STATUS_SUBSTEP_LIMIT``."""

@@ -40,7 +40,7 @@ with that bar, ``tolerance_met`` = 1), or at ``MAX_HALVINGS`` with the last bar 
 
 **dopri** (adaptive Dormand–Prince 5(4), :mod:`engine_kernels.valvetrain.dopri`) has no step
 to halve: its companion runs at a tenth of the lift tolerance per step on a table of half the
-spacing (``DOPRI_TABLE_DEG``/2), so the difference sees both the integration and the table
+spacing (``dopri_table_deg``), so the difference sees both the integration and the table
 error, and the bar is ``DOPRI_BAR_FACTOR`` times the largest lift difference over the grid.
 Measured on 48 points of the random sample against the scipy reference: at 1e-6 m per step
 factor 3 bounded the true error in 100 % of points (within 10×: 100 %), at 1e-7 m in 100 %
@@ -60,7 +60,12 @@ import numpy as np
 
 from engine_kernels import valvetrain as valve
 from studies.scenes.valve.batches import dopri_lifts
-from studies.scenes.valve.parameters import DOPRI, DOPRI_TABLE_DEG, MAX_HALVINGS, dopri_tolerance
+from studies.scenes.valve.parameters import (
+    DOPRI,
+    MAX_HALVINGS,
+    dopri_table_deg,
+    dopri_tolerance,
+)
 
 Excitation = tuple[np.ndarray, float, float]
 SWITCH_AWARE = "rk4_switch_aware"
@@ -205,9 +210,10 @@ def dopri_ladder(
     :func:`~studies.scenes.valve.parameters.dopri_tolerance`) on the ``coarse_deg`` grid, and
     its bar from the companion (see the module docstring). Level 0, no forced sub-steps."""
     atol = dopri_tolerance(tolerance)
-    out, lifts = dopri_lifts(excitation_at(2.0 * DOPRI_TABLE_DEG), rows, coarse_deg, atol)
+    spacing = dopri_table_deg(tolerance)
+    out, lifts = dopri_lifts(excitation_at(2.0 * spacing), rows, coarse_deg, atol)
     fine_out, fine_lifts = dopri_lifts(
-        excitation_at(DOPRI_TABLE_DEG), rows, coarse_deg, atol / DOPRI_TIGHTENING
+        excitation_at(spacing), rows, coarse_deg, atol / DOPRI_TIGHTENING
     )
     finished = (out[:, valve.O_STATUS] == valve.STATUS_OK) & (
         fine_out[:, valve.O_STATUS] == valve.STATUS_OK

@@ -55,13 +55,13 @@ from studies.scenes.valve.error_bar import BAR_FACTOR, DERIVED_BARS, Ladder, tol
 from studies.scenes.valve.parameters import (
     CURVES,
     DOPRI,
-    DOPRI_TABLE_DEG,
     INTEGRATORS,
     JUMP_NOT_RUN,
     PARAMETERS,
     RESPONSES,
     SETTINGS,
     STATUS_NOT_RUN,
+    dopri_table_deg,
     dopri_tolerance,
 )
 from studies.scenes.valve.summaries import dynamics_status_summary
@@ -291,10 +291,11 @@ class ValveScene(ChainScene):
     def dopri_run(
         self, ctx: dict[str, Any], key: tuple, rows: np.ndarray, grid_deg: float, curves: bool
     ) -> tuple[np.ndarray, np.ndarray | None]:
-        """``dopri`` on its own excitation table (every ``DOPRI_TABLE_DEG``), reported on the
+        """``dopri`` on its own excitation table (``dopri_table_deg``), reported on the
         grid every ``grid_deg`` [deg], at the per-step tolerance of the study's tolerance."""
-        excitation = self.excitation(ctx, key, 2.0 * DOPRI_TABLE_DEG)
-        atol = dopri_tolerance(ctx["settings"]["tolerance"])
+        tolerance = ctx["settings"]["tolerance"]
+        excitation = self.excitation(ctx, key, 2.0 * dopri_table_deg(tolerance))
+        atol = dopri_tolerance(tolerance)
         return integrate_dopri(excitation, rows, grid_deg, atol, curves)
 
     def store_traces(
