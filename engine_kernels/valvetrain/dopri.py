@@ -24,6 +24,7 @@ import math
 import numpy as np
 
 from engine_kernels._jit import batch, jit, prange
+from engine_kernels.valvetrain.dopri_observe import grid_points, observe_grid_point, stop_run
 from engine_kernels.valvetrain.dopri_step import (
     dense_state,
     dopri_step,
@@ -32,17 +33,9 @@ from engine_kernels.valvetrain.dopri_step import (
     mode_violation,
     switching_functions,
 )
-from engine_kernels.valvetrain.energy_balance import ENERGY_INTERVAL, observe_energy
 from engine_kernels.valvetrain.guard import valid_valve_parameters
 from engine_kernels.valvetrain.layout import (
-    C_ACCELERATION,
-    C_DRIVE_FORCE,
     C_LIFT,
-    C_SEAT_FORCE,
-    C_VELOCITY,
-    K_MASS,
-    K_SEAT_DEPTH,
-    K_SPEED,
     N_RECORD,
     O_STATUS,
     O_STEP_RATIO,
@@ -60,7 +53,6 @@ from engine_kernels.valvetrain.model import (
     TRANSITION_BAND,
     case_coefficients,
     excitation_lift_slope,
-    specific_point,
     valve_coefficients,
     valve_spectral_radius,
 )
@@ -68,9 +60,7 @@ from engine_kernels.valvetrain.observations import (
     finish_observations,
     nose_position,
     observe_closure,
-    observe_valve,
     record_closure_events,
-    start_observations,
 )
 from engine_kernels.valvetrain.step import valve_time_steps
 
@@ -85,65 +75,6 @@ grazing contact (0.63 µm error at one point); 8 and 16 did not, at ~10 % more c
 DEFAULT_MAX_STEPS = 1_000_000
 """Step attempts (accepted, rejected and redone at a switch) after which a case stops with
 ``STATUS_SUBSTEP_LIMIT``."""
-
-
-@jit
-def grid_points(excitation, table_step, grid_step):
-    """Number of grid points ``θ_0 + i·grid_step`` [-] inside the excitation table's span."""
-    span = (excitation.shape[1] - 1) * table_step
-    return int(span / grid_step * (1.0 + 1e-12)) + 1
-
-
-@jit
-def _observe_grid(record, n, last, angle, past_nose, lift, velocity, drive_lift, slope, curves):
-    """The running observations at grid point ``n`` (of ``last``) and its curve column.
-
-    angle [rad] is its cam angle, lift [m] and velocity [m/s] the valve state there, drive_lift
-    Y [m] and slope Y' [m/rad] the excitation. Returns ÿ [m/s²] and whether the seat phase
-    changed in a way :func:`record_closure_events` must record.
-    """
-    c = case_coefficients(record, 0, 1)
-    speed = record[K_SPEED]
-    drive, seat, acc = specific_point(lift, velocity, drive_lift, slope, c)
-    event = False
-    if n == 0:
-        start_observations(
-            record, 0, 1, angle, lift, velocity, acc, drive_lift, speed * slope, drive, seat
-        )
-    else:
-        event = observe_valve(
-            record,
-            0,
-            1,
-            angle,
-            lift,
-            velocity,
-            acc,
-            drive_lift,
-            speed * slope,
-            drive,
-            seat,
-            past_nose,
-        )
-    if n % ENERGY_INTERVAL == 0 or n == last:
-        observe_energy(record, 0, 1, lift, velocity, drive_lift, speed * slope, drive)
-    if curves.shape[1] > 0:
-        mass = record[K_MASS]
-        curves[C_LIFT, n] = lift
-        curves[C_VELOCITY, n] = velocity
-        curves[C_ACCELERATION, n] = acc
-        curves[C_DRIVE_FORCE, n] = mass * max(0.0, drive)
-        seated = (seat > 0.0) & (lift < record[K_SEAT_DEPTH])
-        curves[C_SEAT_FORCE, n] = mass * seat if seated else 0.0
-    return acc, event
-
-
-@jit
-def _stop(out, curves, status):
-    """End a run that did not finish: every output and curve NaN, the status set."""
-    out[:] = math.nan
-    curves[:, :] = math.nan
-    out[O_STATUS] = status
 
 
 @jit
@@ -203,7 +134,7 @@ def dopri_response(
     prev = (
         lift,
         velocity,
-        _observe_grid(
+        observe_grid_point(
             record,
             0,
             n_grid - 1,
@@ -227,7 +158,7 @@ def dopri_response(
     largest_ratio = 0.0
     while next_grid < n_grid:
         if attempts >= max_steps:
-            _stop(out, curves, STATUS_SUBSTEP_LIMIT)
+            stop_run(out, curves, STATUS_SUBSTEP_LIMIT)
             return
         attempts += 1
         last = h >= end - time
@@ -240,7 +171,7 @@ def dopri_response(
         if not error <= 1.0:
             h *= max(FAC_MIN, SAFETY * error**-0.2) if math.isfinite(error) else FAC_MIN
             if h <= 1e-14 * end:
-                _stop(out, curves, STATUS_NONFINITE)
+                stop_run(out, curves, STATUS_NONFINITE)
                 return
             continue
         length = h
@@ -301,7 +232,7 @@ def dopri_response(
             drive_lift, slope = excitation_lift_slope(
                 excitation, table_step, next_grid * grid_step / table_step
             )
-            acc_here, event = _observe_grid(
+            acc_here, event = observe_grid_point(
                 record,
                 next_grid,
                 n_grid - 1,
@@ -322,7 +253,8 @@ def dopri_response(
         time = stop
         lift, velocity, acc = new_lift, new_velocity, new_acc
         if not (math.isfinite(lift) and math.isfinite(velocity)):
-            break
+            stop_run(out, curves, STATUS_NONFINITE)
+            return
         if not on_grid and next_grid < n_grid:
             if observe_closure(record, 0, 1, lift, table_start + time * speed >= nose):
                 # A located seat switch ends this step on the seat plane: the seating
