@@ -24,7 +24,12 @@ import math
 import numpy as np
 
 from engine_kernels._jit import batch, jit, prange
-from engine_kernels.valvetrain.dopri_observe import grid_points, observe_grid_point, stop_run
+from engine_kernels.valvetrain.dopri_observe import (
+    grid_points,
+    observe_grid_point,
+    observe_inside_step,
+    stop_run,
+)
 from engine_kernels.valvetrain.dopri_step import (
     dense_state,
     dopri_step,
@@ -69,7 +74,7 @@ FAC_MIN = 0.2
 FAC_MAX = 5.0
 SWITCH_SAMPLES = 8
 """Points of a step's dense output (equally spaced, the end included) where the switching
-functions are checked: a switch that is crossed and crossed back between two of them (a
+functions are checked and the seat phase is followed (a bounce shorter than a step): a switch that is crossed and crossed back between two of them (a
 grazing contact) is missed. On 48 random points at 1e-8 m per step, 4 points missed one
 grazing contact (0.63 µm error at one point); 8 and 16 did not, at ~10 % more cost."""
 DEFAULT_MAX_STEPS = 1_000_000
@@ -224,9 +229,24 @@ def dopri_response(
         fresh = False
         stop = end if last else time + length
         on_grid = False
+        sample = 1
         while next_grid < n_grid and next_grid * grid_time <= stop:
             at = next_grid * grid_time
             on_grid = at == stop
+            while sample < SWITCH_SAMPLES and sample * length < SWITCH_SAMPLES * (at - time):
+                prev = observe_inside_step(
+                    record,
+                    excitation,
+                    table_step,
+                    table_start,
+                    nose,
+                    time,
+                    length,
+                    dense,
+                    sample / SWITCH_SAMPLES,
+                    prev,
+                )
+                sample += 1
             y, v = dense_state(dense, (at - time) / length)
             angle = table_start + next_grid * grid_step
             drive_lift, slope = excitation_lift_slope(
@@ -248,6 +268,19 @@ def dopri_response(
                 record_closure_events(record, 0, 1, prev[0], prev[1], prev[2])
             prev = (y, v, acc_here)
             next_grid += 1
+        for inside in range(sample, SWITCH_SAMPLES):
+            prev = observe_inside_step(
+                record,
+                excitation,
+                table_step,
+                table_start,
+                nose,
+                time,
+                length,
+                dense,
+                inside / SWITCH_SAMPLES,
+                prev,
+            )
         accepted += 1
         largest_ratio = max(largest_ratio, length * radius)
         time = stop

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 
 from engine_kernels._jit import jit
+from engine_kernels.valvetrain.dopri_step import dense_state
 from engine_kernels.valvetrain.energy_balance import ENERGY_INTERVAL, observe_energy
 from engine_kernels.valvetrain.layout import (
     C_ACCELERATION,
@@ -24,8 +25,13 @@ from engine_kernels.valvetrain.layout import (
     K_SPEED,
     O_STATUS,
 )
-from engine_kernels.valvetrain.model import case_coefficients, specific_point
-from engine_kernels.valvetrain.observations import observe_valve, start_observations
+from engine_kernels.valvetrain.model import case_coefficients, excitation_lift_slope, specific_point
+from engine_kernels.valvetrain.observations import (
+    observe_closure,
+    observe_valve,
+    record_closure_events,
+    start_observations,
+)
 
 
 @jit
@@ -93,3 +99,28 @@ def stop_run(out, curves, status):
     out[:] = math.nan
     curves[:, :] = math.nan
     out[O_STATUS] = status
+
+
+@jit
+def observe_inside_step(
+    record, excitation, table_step, table_start, nose, time, length, dense, s, prev
+):
+    """Follow the seat phase at the fraction ``s`` of a step (a bounce can begin and end
+    between grid points and step ends); returns the state there for the next point.
+
+    record : 1-D array  The case record; excitation, table_step [rad], table_start [rad]: the
+             excitation table; nose: the nose's cam angle [rad]; time [s], length [s], dense:
+             the step's start, length and dense output
+             (:func:`engine_kernels.valvetrain.dopri_step.dopri_step`); prev: (lift [m],
+             velocity [m/s], acceleration [m/s²]) at the previous observed point.
+    """
+    lift, velocity = dense_state(dense, s)
+    speed = record[K_SPEED]
+    angle = table_start + (time + s * length) * speed
+    drive_lift, slope = excitation_lift_slope(
+        excitation, table_step, (angle - table_start) / table_step
+    )
+    acc = specific_point(lift, velocity, drive_lift, slope, case_coefficients(record, 0, 1))[2]
+    if observe_closure(record, 0, 1, lift, angle >= nose):
+        record_closure_events(record, 0, 1, prev[0], prev[1], prev[2])
+    return lift, velocity, acc

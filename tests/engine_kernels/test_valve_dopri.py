@@ -152,3 +152,31 @@ def test_seating_velocity_matches_reference(rpm, seat_stiffness):
     closing = reference(row, np.array([theta[0], seat]))
     out, _, _ = run(row, 1e-7)
     assert out[valve.O_SEATING_VELOCITY] == pytest.approx(abs(closing.velocity[-1]), rel=1e-4)
+
+
+def test_bounces_and_jump_start_match_reference():
+    # Nearly undamped seat (damping ratio 0.007) at 3500 rpm, then 7000 rpm where the valve
+    # leaves the cam. Reference (event-restarted DOP853 on the same table): a bounce is a
+    # seat-gap switch off the seat after the first closure; the height is the largest y − δ0
+    # after it; the jump starts at the first grid point after the drive switch that ends the
+    # contact (the kernels observe separation on the grid).
+    row = params(seat_damping=20.0)
+    out, _, theta = run(row, 1e-7)
+    found = reference(row, theta)
+    closing = [t for t, kind in found.switches if "seat_gap" in kind and t > 0.0]
+    depth = row[valve.P_PRELOAD] / row[valve.P_SEAT_STIFFNESS]
+    assert out[valve.O_STATUS] == valve.STATUS_OK
+    assert out[valve.O_BOUNCE_COUNT] == (len(closing) - 1) // 2 >= 3
+    # The kernel samples the lift at grid points, step ends and inside its steps: its height
+    # lies between the reference's maximum on the grid and on a 32× finer one.
+    on_grid = (found.lift[theta >= closing[0]] - depth).max()
+    fine = np.linspace(theta[0], theta[-1], 32 * (theta.size - 1) + 1)
+    finer = reference(row, fine)
+    true = (finer.lift[fine >= closing[0]] - depth).max()
+    assert on_grid * (1 - 1e-6) <= out[valve.O_BOUNCE_HEIGHT] <= true * (1 + 1e-6)
+    fast = params(camshaft_speed=7000 * RPM)
+    out, _, theta = run(fast, 1e-7)
+    found = reference(fast, theta)
+    # the first drive switch takes up the lash at −HALF, the second is the separation
+    separation = [t for t, kind in found.switches if "drive" in kind][1]
+    assert out[valve.O_JUMP_START] == theta[np.searchsorted(theta, separation)]
