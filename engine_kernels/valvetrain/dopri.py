@@ -41,6 +41,7 @@ from engine_kernels.valvetrain.dopri_step import (
 from engine_kernels.valvetrain.guard import valid_valve_parameters
 from engine_kernels.valvetrain.layout import (
     C_LIFT,
+    K_SEAT_DEPTH,
     N_RECORD,
     O_STATUS,
     O_STEP_RATIO,
@@ -229,7 +230,9 @@ def dopri_response(
         fresh = False
         stop = end if last else time + length
         on_grid = False
-        sample = 1
+        # Inside a step the valve can cross the seat plane unseen only while off its seat
+        # with an end of the step below the plane (a landing is a located switch).
+        sample = 1 if not mode[1] and min(lift, new_lift) <= c[K_SEAT_DEPTH] else SWITCH_SAMPLES
         while next_grid < n_grid and next_grid * grid_time <= stop:
             at = next_grid * grid_time
             on_grid = at == stop
