@@ -15,6 +15,9 @@ One physical concept per module:
   physics check of a run;
 * :mod:`~engine_kernels.valvetrain.modes` and :mod:`~engine_kernels.valvetrain.switching` —
   switch-aware RK4 with located contact and seat switches;
+* :mod:`~engine_kernels.valvetrain.dopri` with :mod:`~engine_kernels.valvetrain.dopri_step`
+  and :mod:`~engine_kernels.valvetrain.dopri_observe` — adaptive Dormand–Prince 5(4) with
+  switches located on its dense output, one case at a time (imported as its own module);
 * :mod:`~engine_kernels.valvetrain.integrator` — one case at a time;
   :mod:`~engine_kernels.valvetrain.jump` — jump-speed search;
 * :mod:`~engine_kernels.valvetrain.lanes` and :mod:`~engine_kernels.valvetrain.lane_batch` —

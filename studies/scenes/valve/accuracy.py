@@ -29,6 +29,7 @@ from studies.scenes.valve import accuracy_reference as acc
 from studies.scenes.valve.error_bar import tolerance_rungs
 from studies.scenes.valve.parameters import (
     ANGLE_STEP,
+    DOPRI,
     DYNAMIC_RESPONSES,
     INTEGRATOR,
     INTEGRATORS,
@@ -176,6 +177,12 @@ class ValveAccuracyScene(ValveScene):
         settings = ctx["settings"]
         used = float(ctx["step_used"][i])
         method = INTEGRATORS[int(ctx["method"][i])]
+        if method == DOPRI:
+            trace = self.dopri_run(ctx, key, row[None, :], step_deg(settings["angle_step"]), True)[
+                1
+            ]
+            assert trace is not None
+            return trace[0, valve.C_LIFT]
         substeps = ctx["out"][i, valve.O_SUBSTEPS]
         forced = int(substeps) if np.isfinite(substeps) else 0
         flags = kernel_settings(settings, method, False, forced)
@@ -194,11 +201,19 @@ class ValveAccuracyScene(ValveScene):
                 continue
             if settings["tolerance"] > 0.0:
                 run = partial(self.ladder_run, ctx, key)
+            elif integrator == DOPRI:
+                run = partial(self.dopri_cost_run, ctx, key, step)
             else:
                 flags = kernel_settings(settings, integrator, False)
                 run = partial(_run_kernel, self.excitation(ctx, key, step), integrator, flags)
             for i, row in zip(idx, valve_rows(ctx["points"], idx), strict=True):
                 ctx["cost"][i] = acc.seconds_per_case(run, row)
+
+    def dopri_cost_run(
+        self, ctx: dict[str, Any], key: tuple, step: float, rows: np.ndarray
+    ) -> object:
+        """``dopri`` on ``rows`` as the dynamics stage runs it (for its timing)."""
+        return self.dopri_run(ctx, key, rows, step, False)
 
     def ladder_run(self, ctx: dict[str, Any], key: tuple, rows: np.ndarray) -> object:
         """The tolerance ladder of the dynamics stage on ``rows`` (for its timing)."""

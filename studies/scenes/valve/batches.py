@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from engine_kernels import valvetrain as valve
+from engine_kernels.valvetrain import dopri as valve_dopri
 from engine_kernels.valvetrain import lane_batch as valve_lanes
 from studies.scenes.chain import step_deg
 from studies.scenes.checks import PointProblems
@@ -17,6 +18,7 @@ from studies.scenes.valve.parameters import LANE_PRECISION
 RPM = 30.0 / math.pi  # rpm per rad/s
 N_OUT = len(valve.VALVE_OUTPUT_NAMES)
 N_CURVES = len(valve.VALVE_CURVE_NAMES)
+DOPRI_MAX_STEPS = valve_dopri.DEFAULT_MAX_STEPS
 
 # parameter name -> column of the valve kernels' parameter rows
 _PARAM_COLUMN = {
@@ -80,6 +82,60 @@ def integrate(
     else:
         valve.valve_response_batch(table, table_step, start, rows, flags, out)
     return out, None
+
+
+def integrate_dopri(
+    excitation: tuple[np.ndarray, float, float],
+    rows: np.ndarray,
+    grid_deg: float,
+    tolerance: float,
+    curves: bool,
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """Run ``dopri`` over the rows: outputs (n, O_*) and, with ``curves``, the curves
+    (n, C_*, grid points) on the grid every ``grid_deg`` [deg] from the table's start.
+
+    excitation : (table, spacing [rad], start [rad]) at any spacing (the steps are adaptive).
+    tolerance  : lift tolerance per step [m].
+    """
+    table, table_step, start = excitation
+    grid = math.radians(grid_deg)
+    out = np.empty((rows.shape[0], N_OUT))
+    if curves:
+        trace = np.empty(
+            (rows.shape[0], N_CURVES, valve_dopri.grid_points(table, table_step, grid))
+        )
+        for j in range(rows.shape[0]):
+            valve_dopri.dopri_response(
+                table,
+                table_step,
+                start,
+                grid,
+                rows[j],
+                tolerance,
+                DOPRI_MAX_STEPS,
+                out[j],
+                trace[j],
+            )
+        return out, trace
+    none = np.empty((rows.shape[0], 0))
+    valve_dopri.dopri_batch(
+        table, table_step, start, grid, rows, tolerance, DOPRI_MAX_STEPS, out, none
+    )
+    return out, None
+
+
+def dopri_lifts(
+    excitation: tuple[np.ndarray, float, float], rows: np.ndarray, grid_deg: float, tolerance: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """``dopri`` outputs (n, O_*) and lift [m] at every grid point (see :func:`integrate_dopri`)."""
+    table, table_step, start = excitation
+    grid = math.radians(grid_deg)
+    out = np.empty((rows.shape[0], N_OUT))
+    lifts = np.empty((rows.shape[0], valve_dopri.grid_points(table, table_step, grid)))
+    valve_dopri.dopri_batch(
+        table, table_step, start, grid, rows, tolerance, DOPRI_MAX_STEPS, out, lifts
+    )
+    return out, lifts
 
 
 def jump_setting_problems(settings: dict[str, Any]) -> list[str]:

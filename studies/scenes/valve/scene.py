@@ -45,6 +45,7 @@ from studies.scenes.valve.batches import (
     N_CURVES,
     N_OUT,
     integrate,
+    integrate_dopri,
     jump_setting_problems,
     kernel_settings,
     stability_problems,
@@ -53,12 +54,15 @@ from studies.scenes.valve.batches import (
 from studies.scenes.valve.error_bar import BAR_FACTOR, DERIVED_BARS, Ladder, tolerance_rungs
 from studies.scenes.valve.parameters import (
     CURVES,
+    DOPRI,
     INTEGRATORS,
     JUMP_NOT_RUN,
     PARAMETERS,
     RESPONSES,
     SETTINGS,
     STATUS_NOT_RUN,
+    dopri_table_deg,
+    dopri_tolerance,
 )
 from studies.scenes.valve.summaries import dynamics_status_summary
 
@@ -225,8 +229,12 @@ class ValveScene(ChainScene):
         rows = valve_rows(ctx["points"], idx)
         coarse = step_deg(settings["angle_step"])
         if tolerance <= 0.0 and not ctx["responses"] & BAR_RESPONSES:
-            flags = kernel_settings(settings, integrator, False)
-            out, trace = integrate(self.excitation(ctx, key, coarse), rows, integrator, flags, want)
+            if integrator == DOPRI:
+                out, trace = self.dopri_run(ctx, key, rows, coarse, want)
+            else:
+                flags = kernel_settings(settings, integrator, False)
+                excitation = self.excitation(ctx, key, coarse)
+                out, trace = integrate(excitation, rows, integrator, flags, want)
             ctx["out"][idx] = out
             ctx["step_used"][idx] = coarse
             if trace is not None:
@@ -264,6 +272,11 @@ class ValveScene(ChainScene):
         integrator: str,
     ) -> None:
         """Curves of each point at the level the ladder stopped at (its sub-step count)."""
+        if integrator == DOPRI:
+            trace = self.dopri_run(ctx, key, rows, coarse, True)[1]
+            assert trace is not None
+            self.store_traces(ctx, key, idx, trace, coarse, 0)
+            return
         pairs = np.stack([ladder.level, ladder.substeps], axis=1)
         for level, count in np.unique(pairs, axis=0):
             members = np.flatnonzero((pairs == (level, count)).all(axis=1))
@@ -274,6 +287,16 @@ class ValveScene(ChainScene):
             )[1]
             assert trace is not None
             self.store_traces(ctx, key, idx[members], trace, coarse, int(level))
+
+    def dopri_run(
+        self, ctx: dict[str, Any], key: tuple, rows: np.ndarray, grid_deg: float, curves: bool
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """``dopri`` on its own excitation table (``dopri_table_deg``), reported on the
+        grid every ``grid_deg`` [deg], at the per-step tolerance of the study's tolerance."""
+        tolerance = ctx["settings"]["tolerance"]
+        excitation = self.excitation(ctx, key, 2.0 * dopri_table_deg(tolerance))
+        atol = dopri_tolerance(tolerance)
+        return integrate_dopri(excitation, rows, grid_deg, atol, curves)
 
     def store_traces(
         self,
