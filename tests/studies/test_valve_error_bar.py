@@ -161,13 +161,14 @@ def test_tolerance_is_met_by_the_true_error(
 @pytest.mark.slow
 def test_error_converges_with_the_tolerance_on_a_stiff_seat() -> None:
     # Issue #15: on the 1e6 N/mm seat the error did not shrink with the step (each contact
-    # lasts about one sub-step and the guard kept the sub-step). Now every level of the
-    # ladder halves the sub-step too, and the true error follows the tolerance down. The
-    # reference's own table is 1/1024 deg here: at 1/64 deg its floor (the Hermite table
-    # between the cam law's acceleration jumps) is ~0.01–0.03 µm, as large as the errors
-    # at 1e-4 mm. Measured at 2500 and 7000 rpm: 0.072 and 0.046 µm at 1e-3 mm, 0.026 and
-    # 0.0062 µm at 1e-4 mm (2.7× and 7.4×; the issue asked for 5×, which 2500 rpm misses:
-    # one ladder level there gains only 2.7×, the excitation error's order).
+    # lasts about one sub-step and the guard kept the sub-step). The tolerance mode now
+    # answers these points with the adaptive Dormand–Prince rung (switches located inside
+    # its steps, its table refined with the tolerance), and the true error follows the
+    # tolerance down. The reference's own table is 1/1024 deg here (at 1/64 deg its floor,
+    # ~0.01–0.03 µm, is as large as the errors at 1e-4 mm). Measured at 2500 and 7000 rpm:
+    # 0.017 and 0.154 µm at 1e-3 mm, 0.0021 and 0.0152 µm at 1e-4 mm: 8.0× and 10.1× for the
+    # tenfold tolerance (the issue asks ≥ 5×; with the switch-aware RK4 ladder alone it was
+    # 2.7× at 2500 rpm, the order of the excitation table's error).
     modes = (("lanes", 1e-3), ("lanes", 1e-4))
     (loose, loose_error), (tight, tight_error) = run_modes(
         modes, [2500.0, 7000.0], [1e6], randomise=False, table_deg=1.0 / 1024.0
@@ -176,7 +177,7 @@ def test_error_converges_with_the_tolerance_on_a_stiff_seat() -> None:
     assert (tight["status"] == 0).all()
     assert (loose_error <= 1e-3).all()
     assert (tight_error <= 1e-4).all()
-    assert (tight_error * 2.0 <= loose_error).all()
+    assert (tight_error * 5.0 <= loose_error).all()
 
 
 @pytest.mark.slow
