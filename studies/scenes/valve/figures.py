@@ -111,8 +111,8 @@ def error_vs_cost_figure(ds: xr.Dataset) -> Figure | None:
         ax.set_ylabel(f"{short_label(ds, 'reference_error')}: max |y − y_ref|")
     axes[0, 0].legend(title="integrator", fontsize="x-small", title_fontsize="x-small")
     fig.suptitle(
-        "Error against the scipy reference vs cost per case (labels: RK4 step, where apart)"
-        f"{layout.held_note()}",
+        "Error against the scipy reference vs cost per case (labels: RK4 step, where apart)\n"
+        f"{layout.held_note().strip()}",
         fontsize="medium",
     )
     return fig
