@@ -30,7 +30,7 @@ def valve_study(reference_rtol: str) -> str:
     text = find_study("valve_step_accuracy").read_text(encoding="utf-8")
     for old, new in (
         (
-            r'levels = \["lanes", "lanes_f32", "rk4", "rk4_switch_aware"\]',
+            r'levels = \["lanes", "lanes_f32", "rk4", "rk4_switch_aware", "dopri"\]',
             'levels = ["rk4", "lanes"]',
         ),
         (r"levels = \[1.0, 0.5, 0.25, 0.125\]", "levels = [1.0]"),
