@@ -108,27 +108,28 @@ def _lane_block(excitation, table_step, table_start, params, settings, block, su
 
 
 @jit
-def block_starts(substeps, order):
-    """Split cases sorted by sub-step count into blocks of ≤ ``LANES`` with one count each.
+def block_starts(keys, order):
+    """Split cases sorted by key into blocks of ≤ ``LANES`` with one key each.
 
-    substeps : 1-D int64  Sub-steps per case from the stability guard (0: not integrated).
-    order    : 1-D int64  Case indices sorted by ``substeps``.
+    keys  : 1-D int64  Block key per case: its sub-step count here, (N, sub-steps) for the
+                       multi-mass spring; 0: not integrated.
+    order : 1-D int64  Case indices sorted by ``keys``.
     Returns the block boundaries as positions in ``order`` (block b is
-    ``order[starts[b]:starts[b + 1]]``); cases with 0 sub-steps are left out.
+    ``order[starts[b]:starts[b + 1]]``); cases with key 0 are left out.
     """
     n = order.shape[0]
     starts = np.empty(n + 1, dtype=np.int64)
     blocks = 0
     i = 0
-    while i < n and substeps[order[i]] == 0:
+    while i < n and keys[order[i]] == 0:
         i += 1
     while i < n:
         starts[blocks] = i
         blocks += 1
-        count = substeps[order[i]]
+        key = keys[order[i]]
         end = min(i + LANES, n)
         i += 1
-        while i < end and substeps[order[i]] == count:
+        while i < end and keys[order[i]] == key:
             i += 1
     starts[blocks] = n
     return starts[: blocks + 1]

@@ -38,32 +38,6 @@ _KEY_BASE = MAX_SPRING_MASSES + 1
 
 
 @jit
-def chain_block_starts(keys, order):
-    """Split cases sorted by key into blocks of ≤ ``LANES`` with one key (N, sub-steps) each.
-
-    keys  : 1-D int64  Block key per case (0: not integrated);  order : cases sorted by key.
-    Returns the block boundaries as positions in ``order`` (block b is
-    ``order[starts[b]:starts[b + 1]]``); cases with key 0 are left out.
-    """
-    n = order.shape[0]
-    starts = np.empty(n + 1, dtype=np.int64)
-    blocks = 0
-    i = 0
-    while i < n and keys[order[i]] == 0:
-        i += 1
-    while i < n:
-        starts[blocks] = i
-        blocks += 1
-        key = keys[order[i]]
-        end = min(i + LANES, n)
-        i += 1
-        while i < end and keys[order[i]] == key:
-            i += 1
-    starts[blocks] = n
-    return starts[: blocks + 1]
-
-
-@jit
 def block_key(substeps, params):
     """Block key of a case: sub-steps · (MAX_SPRING_MASSES + 1) + N, or 0 if the guard refused
     it (``substeps`` 0). Sorting by key groups the lanes of a block and sorts blocks by cost.

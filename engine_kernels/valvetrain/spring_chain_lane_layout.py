@@ -27,6 +27,7 @@ import math
 import numpy as np
 
 from engine_kernels._jit import jit, jit_inline
+from engine_kernels.valvetrain.lanes import LANES
 from engine_kernels.valvetrain.spring_chain import chain_coefficients
 from engine_kernels.valvetrain.spring_chain_guard import chain_status
 from engine_kernels.valvetrain.spring_chain_layout import (
@@ -52,8 +53,6 @@ from engine_kernels.valvetrain.spring_chain_layout import (
     SC_INITIAL_VELOCITY,
     SC_SPRING_RATE,
 )
-
-LANES = 32
 
 # Coefficients (chain_coefficients without N) and time steps of each lane [SI].
 (LK_VALVE_MASS, LK_COIL_MASS, LK_RATE, LK_DAMPER, LK_GAP, LK_KC, LK_CC) = range(7)

@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 from engine_kernels._jit import batch, jit, prange
-from engine_kernels.valvetrain.lane_batch import spread_order
+from engine_kernels.valvetrain.lane_batch import block_starts, spread_order
 from engine_kernels.valvetrain.model import excitation_lift_slope, positive_part
 from engine_kernels.valvetrain.spring_chain import (
     chain_accelerations,
@@ -36,7 +36,6 @@ from engine_kernels.valvetrain.spring_chain_guard import chain_status, prepare_c
 from engine_kernels.valvetrain.spring_chain_lane_batch import (
     MIN_BLOCK_CASES,
     block_key,
-    chain_block_starts,
     lane_block,
 )
 from engine_kernels.valvetrain.spring_chain_layout import (
@@ -277,7 +276,7 @@ def spring_chain_response_batch(excitation, table_step, table_start, params, set
         substeps = prepare_chain_case(excitation, table_step, params[i], settings, out[i])
         keys[i] = block_key(substeps, params[i])
     order = np.argsort(keys, kind="mergesort")
-    starts = chain_block_starts(keys, order)
+    starts = block_starts(keys, order)
     schedule = spread_order(starts.shape[0] - 1)
     for i in prange(schedule.shape[0]):
         b = schedule[i]

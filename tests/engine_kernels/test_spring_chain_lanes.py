@@ -26,6 +26,7 @@ from engine_kernels.valvetrain import spring_chain_lane_batch as lane_batch
 from engine_kernels.valvetrain import spring_chain_lane_layout as lane_layout
 from engine_kernels.valvetrain import spring_chain_lanes as lane_loops
 from engine_kernels.valvetrain import spring_chain_layout as layout
+from engine_kernels.valvetrain.lane_batch import block_starts
 from engine_kernels.valvetrain.spring_chain_guard import prepare_chain_case
 from engine_kernels.valvetrain.spring_chain_response import (
     spring_chain_one_case_batch,
@@ -203,7 +204,7 @@ def test_blocks_hold_one_key_each(keys):
     # Closed form: a key held by c cases fills ceil(c / LANES) blocks; refused cases (0) none.
     keys = np.array(keys, dtype=np.int64)
     order = np.argsort(keys, kind="mergesort")
-    starts = lane_batch.chain_block_starts(keys, order)
+    starts = block_starts(keys, order)
     blocks = [order[a:b] for a, b in itertools.pairwise(starts)]
     assert all(0 < len(block) <= lane_layout.LANES for block in blocks)
     assert all(len(set(keys[block])) == 1 for block in blocks)

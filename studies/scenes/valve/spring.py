@@ -87,11 +87,15 @@ _SPRING_COLUMN = {
 
 
 def surge_frequency(points: dict[str, np.ndarray], masses: int) -> np.ndarray:
-    """First fixed–fixed frequency [Hz] of the N-mass spring of each point [V4]."""
-    rate, mass = points["spring_rate"], points["spring_mass"]
-    return np.array(
-        [chain_natural_frequency(k, m, masses, 1) / TWO_PI for k, m in zip(rate, mass, strict=True)]
+    """First fixed–fixed frequency [Hz] of the N-mass spring of each point [V4], computed
+    once per distinct (spring rate, spring mass) pair."""
+    pairs, where = np.unique(
+        np.stack([points["spring_rate"], points["spring_mass"]], axis=1),
+        axis=0,
+        return_inverse=True,
     )
+    frequency = [chain_natural_frequency(k, m, masses, 1) / TWO_PI for k, m in pairs]
+    return np.asarray(frequency)[where.ravel()]
 
 
 def uses_chain(settings: dict[str, Any]) -> bool:
