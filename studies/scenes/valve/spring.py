@@ -59,7 +59,8 @@ STEADY_COLUMNS = [
     sc.CO_CLASH_COUNT,
     sc.CO_STATUS,
 ]
-"""Chain outputs a run over several revolutions gives for the spring responses."""
+"""Chain outputs a run over several revolutions gives for the spring responses: all of
+``SURGE_OUTPUT``'s columns, so the single-event run is needed only for the dynamics or curves."""
 # response -> (chain output column, factor from SI to the response's units)
 SURGE_OUTPUT = {
     "surge_amplitude": (sc.CO_SURGE_AMPLITUDE, MM),
@@ -212,12 +213,13 @@ def surge_stage(scene: ValveScene, ctx: dict[str, Any]) -> None:
             ctx["chain_out"][idx, sc.CO_STATUS] = STATUS_NOT_RUN
             continue
         rows = scene.spring_rows(ctx, idx)
-        out, trace = run_chain(scene.excitation(ctx, key, step), rows, flags, want)
-        ctx["chain_out"][idx] = out
-        if trace is not None:
-            first = round((scene.window(ctx, key)[0] + HALF_TURN_DEG) / step)
-            ctx["chain_traces"][idx, :, first : first + trace.shape[2]] = trace
         turns = int(settings["revolutions"])
+        if turns == 1 or want or uses_chain(settings):  # else every answer is the steady run's
+            out, trace = run_chain(scene.excitation(ctx, key, step), rows, flags, want)
+            ctx["chain_out"][idx] = out
+            if trace is not None:
+                first = round((scene.window(ctx, key)[0] + HALF_TURN_DEG) / step)
+                ctx["chain_traces"][idx, :, first : first + trace.shape[2]] = trace
         if turns > 1:
             turn = scene.excitation(ctx, key, step, (-HALF_TURN_DEG, HALF_TURN_DEG))
             steady = steady_surge(turn, rows, flags, turns)
