@@ -15,6 +15,7 @@ import json
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import TracebackType
 
 LABELS = "labels.json"
 TAG = re.compile(r"^[A-Za-z][A-Za-z0-9._+-]{0,63}$")
@@ -84,3 +85,38 @@ def add_note(folder: Path, written: str, text: str) -> None:
     labels = read_labels(folder)
     labels.notes.append({"written": written, "text": text})
     write_labels(folder, labels)
+
+
+class Undo:
+    """Snapshots of labels files (:meth:`save` before changing one), put back as they were
+    when the ``with`` block fails: a registry that refuses a tag leaves the folders as before."""
+
+    def __init__(self) -> None:
+        self._saved: list[tuple[Path, bytes | None]] = []
+
+    def save(self, folder: Path) -> None:
+        path = folder / LABELS
+        try:
+            self._saved.append((path, path.read_bytes()))
+        except FileNotFoundError:
+            self._saved.append((path, None))
+
+    def __enter__(self) -> Undo:
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        error: BaseException | None,
+        trace: TracebackType | None,
+    ) -> None:
+        if error is None:
+            return
+        for path, data in reversed(self._saved):
+            try:
+                if data is None:
+                    path.unlink(missing_ok=True)
+                else:
+                    path.write_bytes(data)
+            except OSError:
+                continue

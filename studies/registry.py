@@ -322,36 +322,45 @@ def set_tag(outputs: Path, run_id: str, tag: str) -> str | None:
     moves), if another. ValueError for a tag that could be taken for a run id."""
     labels.check_tag(tag)
     when = dt.datetime.now(dt.UTC).isoformat(timespec="milliseconds")
-    with connection(outputs) as con, writing(con):
+    with connection(outputs) as con, labels.Undo() as undo, writing(con):
         folder = _folder(con, outputs, run_id)
         before = con.execute("SELECT run_id FROM tags WHERE tag = ?", (tag,)).fetchone()
         moved = before["run_id"] if before and before["run_id"] != run_id else None
+        undo.save(folder)
         labels.add_tag(folder, tag, when)
         if moved is not None:
             try:
-                labels.drop_tag(_folder(con, outputs, moved), tag)
+                previous = _folder(con, outputs, moved)
             except FileNotFoundError:
-                pass  # the other run's folder is gone: only its row names the tag
+                previous = None  # the other run's folder is gone: only its row names the tag
+            if previous is not None:
+                undo.save(previous)
+                labels.drop_tag(previous, tag)
         con.execute("INSERT OR REPLACE INTO tags (tag, run_id) VALUES (?, ?)", (tag, run_id))
     return moved
 
 
 def remove_tag(outputs: Path, tag: str) -> bool:
-    with connection(outputs) as con, writing(con):
+    with connection(outputs) as con, labels.Undo() as undo, writing(con):
         before = con.execute("SELECT run_id FROM tags WHERE tag = ?", (tag,)).fetchone()
         if before is None:
             return False
         try:
-            labels.drop_tag(_folder(con, outputs, before["run_id"]), tag)
+            folder = _folder(con, outputs, before["run_id"])
         except FileNotFoundError:
-            pass
+            folder = None
+        if folder is not None:
+            undo.save(folder)
+            labels.drop_tag(folder, tag)
         con.execute("DELETE FROM tags WHERE tag = ?", (tag,))
         return True
 
 
 def add_note(outputs: Path, run_id: str, written: str, text: str) -> None:
-    with connection(outputs) as con, writing(con):
-        labels.add_note(_folder(con, outputs, run_id), written, text)
+    with connection(outputs) as con, labels.Undo() as undo, writing(con):
+        folder = _folder(con, outputs, run_id)
+        undo.save(folder)
+        labels.add_note(folder, written, text)
         con.execute("INSERT INTO notes VALUES (?, ?, ?)", (run_id, written, text))
 
 

@@ -75,7 +75,10 @@ def unusable(exc: sqlite3.Error, outputs: Path) -> RegistryUnusable:
     elif code in _DAMAGED:
         return damaged(outputs, detail)
     else:
-        text = f"the registry {path} could not be read or written ({detail}): check the disk"
+        text = (
+            f"the registry {path} could not be written or read ({detail}); nothing was "
+            "changed: check its disk (free space, quota, file size limit) and run it again"
+        )
     return RegistryUnusable(text)
 
 

@@ -139,10 +139,11 @@ def reindex(outputs: Path) -> Reindexed:
             if record is None:
                 done.skipped.append(f"{folder}: no readable run.json of run {folder.name}")
                 continue
-            for tag, run_id in old_tags.items():
-                if run_id == folder.name and tag not in claims:
-                    labels.add_tag(folder, tag, "")
             found = labels.read_labels(folder)
+            for tag, run_id in old_tags.items():
+                if run_id == folder.name and tag not in claims and tag not in found.tags:
+                    labels.add_tag(folder, tag, "")
+                    found.tags[tag] = ""
             for tag, when in found.tags.items():
                 earlier = claims.get(tag)
                 if earlier is not None:
