@@ -81,13 +81,15 @@ class RunRecord:
 
 
 def liveness(record: dict[str, Any], folder: Path | None = None) -> str:
-    """The status of a recorded run as it is now: a "running" run is running while a process
-    holds the lock on its ``folder``; otherwise it is "interrupted" when its process is gone
-    (same host) or its heartbeat is older than ``STALE_S`` (another host)."""
-    if record.get("status") != "running":
-        return str(record.get("status", ""))
-    if folder is not None and is_locked(folder):
+    """The status of a recorded run as it is now: an unfinished run is running while a
+    process holds the lock on its ``folder`` (a resume, from its first instant); otherwise a
+    "running" run is "interrupted" when its process is gone (same host) or its heartbeat is
+    older than ``STALE_S`` (another host)."""
+    status = str(record.get("status", ""))
+    if status in ("running", "failed") and folder is not None and is_locked(folder):
         return "running"
+    if status != "running":
+        return status
     same_host = record.get("host", {}).get("node") == platform.node()
     pid = int(record.get("pid") or 0)
     if same_host and pid:
