@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from studies import labels, registry, trash, tracking
+from studies import labels, registry, tracking, trash
 from studies.liveness import is_locked, lock_folder
 from studies.registry_file import writing
 from studies.reindex import read_record, run_folders

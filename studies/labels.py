@@ -16,6 +16,7 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import TracebackType
+from typing import Self
 
 LABELS = "labels.json"
 TAG = re.compile(r"^[A-Za-z][A-Za-z0-9._+-]{0,63}$")
@@ -101,7 +102,7 @@ class Undo:
         except FileNotFoundError:
             self._saved.append((path, None))
 
-    def __enter__(self) -> Undo:
+    def __enter__(self) -> Self:
         return self
 
     def __exit__(

@@ -28,7 +28,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from studies import registry
+from studies import registry, trash
 from studies.liveness import is_locked
 from studies.reindex import reconcile
 from studies.runner import DEFAULT_CHUNK_SIZE
@@ -241,6 +241,11 @@ def resolve_run(outputs: Path, ref: str) -> dict[str, Any]:
     if matches:
         msg = (
             f"{ref!r} matches {len(matches)} runs ({', '.join(matches[:4])}…): give more of the id"
+        )
+    elif trash.holds(outputs, ref):
+        msg = (
+            f"run {ref} is in the trash: bring it back with "
+            f"python -m studies restore {ref} --outputs {outputs}"
         )
     else:
         msg = (

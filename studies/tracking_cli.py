@@ -121,7 +121,7 @@ def _show(args: argparse.Namespace) -> int:
         raise FileNotFoundError(
             f"run {row['run_id']} is in the registry but its folder {row['folder']} is gone"
         )
-    record["status"] = status
+    record["status"], record["folder"] = status, row["folder"]  # where it is now
     tags, notes = registry.tags_and_notes(args.outputs)
     record["tags"] = tags.get(row["run_id"], [])
     record["notes"] = notes.get(row["run_id"], [])
@@ -230,7 +230,9 @@ def _gc(args: argparse.Namespace) -> int:
     done = collect_garbage(args.outputs, parse_age(args.older_than), args.keep_tagged, args.dry_run)
     would = "would " if args.dry_run else ""
     for row in done.trashed:
-        print(f"{would}move {row['run_id']} ({row['study']}, started {row['started']}) to the trash")
+        print(
+            f"{would}move {row['run_id']} ({row['study']}, started {row['started']}) to the trash"
+        )
     for e in done.purged:
         print(f"{would}delete {e.run_id} ({e.study}, trashed {e.removed:%Y-%m-%d %H:%M}) for good")
     print(

@@ -11,6 +11,7 @@ it; leftovers of a purge that was killed are deleted by the next ``gc``.
 from __future__ import annotations
 
 import datetime as dt
+import glob
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
@@ -69,7 +70,7 @@ def entries(outputs: Path) -> list[Trashed]:
 
 def holds(outputs: Path, run_id: str) -> bool:
     """Whether the run ``run_id`` is in the trash."""
-    return any((outputs / TRASH).glob(f"*/*/{run_id}"))
+    return "/" not in run_id and any((outputs / TRASH).glob(f"*/*/{glob.escape(run_id)}"))
 
 
 def move_in(outputs: Path, folder: Path, study: str) -> Path:

@@ -16,10 +16,11 @@ that race: it must then fail cleanly and leave nothing half-done.
 
 from __future__ import annotations
 
+import contextlib
 import datetime as dt
 from pathlib import Path
 
-from studies import registry, trash, tracking
+from studies import registry, tracking, trash
 from studies.housekeeping import collect_garbage, remove_run, restore_run
 from studies.liveness import lock_folder
 
@@ -55,10 +56,8 @@ def register_many(outputs: str, writer: int) -> None:
         if i % 5 in (1, 2):
             remove_run(root, row)
         if i % 5 == 2:
-            try:
+            with contextlib.suppress(KeyError):  # another writer's purge pass took it first
                 restore_run(root, folder.name)
-            except KeyError:
-                pass  # another writer's purge pass took it first
         if i % 5 == 3:
             registry.set_tag(root, folder.name, f"w{writer}-{i}")
             registry.add_note(root, folder.name, tracking.now(), f"note of w{writer}-{i}")
@@ -67,4 +66,3 @@ def register_many(outputs: str, writer: int) -> None:
             for entry in trash.entries(root):
                 if int(entry.run_id[12:18]) % 5 in (2, 4):
                     trash.purge(entry)
-

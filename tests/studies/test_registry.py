@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 from registry_writers import RUNS_EACH, register_many, run_id
 
-from studies import labels, registry, trash, tracking
+from studies import labels, registry, tracking, trash
 from studies.cli import main
 from studies.study_run import run_study
 

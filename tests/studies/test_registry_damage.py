@@ -31,6 +31,13 @@ cam_speed = 1000.0
 levels = [16.0, 18.0]
 """
 PAGE = 4096  # SQLite's default page size
+HOLD_LOCK = """
+import sqlite3, sys, time
+con = sqlite3.connect(sys.argv[1], isolation_level=None)
+con.execute("BEGIN EXCLUSIVE")
+print("locked", flush=True)
+time.sleep(120)
+"""
 
 
 @pytest.fixture(scope="module")
@@ -143,13 +150,7 @@ def locked(outputs: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
     """Another process holds the registry's exclusive lock; commands wait 0.3 s for it."""
     monkeypatch.setattr(registry_file, "BUSY_TIMEOUT_S", 0.3)
     holder = subprocess.Popen(
-        [sys.executable, "-c",
-         "import sqlite3, sys, time\n"
-         "con = sqlite3.connect(sys.argv[1], isolation_level=None)\n"
-         "con.execute('BEGIN EXCLUSIVE')\n"
-         "print('locked', flush=True)\n"
-         "time.sleep(120)\n",
-         str(outputs / registry.REGISTRY)],
+        [sys.executable, "-c", HOLD_LOCK, str(outputs / registry.REGISTRY)],
         stdout=subprocess.PIPE, text=True,
     )  # fmt: skip
     assert holder.stdout is not None
@@ -213,7 +214,7 @@ def test_a_full_disk_under_the_registry_gives_one_line(
             [sys.executable, "-c",
              f"{limit}\nfrom studies.cli import main\nraise SystemExit(main())",
              *command, "--outputs", str(outputs)],
-            capture_output=True, text=True, timeout=300,
+            check=False, capture_output=True, text=True, timeout=300,
         )  # fmt: skip
         assert done.returncode == 4, (command, done.stderr)
         line = one_line(done.stderr)

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from run_faults import fail_on_call
 
-from studies import registry, study_run, trash, tracking
+from studies import registry, study_run, tracking, trash
 from studies.cli import main
 from studies.liveness import lock_folder
 from studies.plan import plan_text
@@ -120,7 +120,11 @@ def test_a_resume_is_refused_while_another_holds_the_run_folder(
 
 def kill_at(phase: str, *command: str) -> None:
     done = subprocess.run(
-        [sys.executable, str(KILLS), phase, *command], capture_output=True, text=True, timeout=600
+        [sys.executable, str(KILLS), phase, *command],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=600,
     )
     assert done.returncode == -9, done.stderr  # SIGKILL
 
