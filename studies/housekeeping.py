@@ -41,7 +41,8 @@ def parse_age(text: str) -> dt.timedelta:
 
 def remove_run(outputs: Path, row: dict[str, Any], force: bool = False) -> Path | None:
     """Move a run to the trash and delete its registry rows; return where it went (None when
-    its folder was gone already). ValueError while it runs, or if tagged and not ``force``."""
+    its folder was gone already). ValueError while it runs, or if tagged and not ``force``;
+    KeyError if another process moved it meanwhile."""
     run_id = row["run_id"]
     tags = registry.tags_and_notes(outputs)[0].get(run_id, [])
     if tags and not force:
@@ -60,6 +61,8 @@ def remove_run(outputs: Path, row: dict[str, Any], force: bool = False) -> Path 
     if lock is None:
         raise ValueError(f"run {run_id} is still running (its folder is locked): not removed")
     with lock:
+        if not lock.holds(folder):
+            raise KeyError(f"run {run_id} was moved by another process meanwhile: not removed")
         record = read_record(folder)
         if record is not None and tracking.liveness(record) == "running":
             raise ValueError(f"run {run_id} is still running: not removed")
@@ -83,18 +86,25 @@ def restore_run(outputs: Path, ref: str) -> tuple[trash.Trashed, Path, list[str]
     folder = outputs / entry.study / entry.run_id
     if folder.exists():
         raise ValueError(f"{folder} exists: run {entry.run_id} is not restored over it")
-    folder.parent.mkdir(parents=True, exist_ok=True)
     try:
-        entry.folder.rename(folder)
+        lock = lock_folder(entry.folder, LOCK_WAIT_S)  # held across the rename: same inode
     except FileNotFoundError:
-        raise KeyError(f"run {entry.run_id} left the trash meanwhile: not restored") from None
-    try:
-        with registry.connection(outputs) as con:
-            lost = registry.index_folder(con, outputs, record, folder)
-    except BaseException:
-        entry.folder.parent.mkdir(parents=True, exist_ok=True)
-        folder.rename(entry.folder)
-        raise
+        lock = None
+    if lock is None or not lock.holds(entry.folder):
+        raise KeyError(f"run {entry.run_id} left the trash meanwhile: not restored")
+    with lock:
+        folder.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            entry.folder.rename(folder)
+        except FileNotFoundError:
+            raise KeyError(f"run {entry.run_id} left the trash meanwhile: not restored") from None
+        try:
+            with registry.connection(outputs) as con:
+                lost = registry.index_folder(con, outputs, record, folder)
+        except BaseException:
+            entry.folder.parent.mkdir(parents=True, exist_ok=True)
+            folder.rename(entry.folder)
+            raise
     for tag in lost:
         labels.drop_tag(folder, tag)
     return entry, folder, lost
@@ -131,8 +141,8 @@ def collect_garbage(
     for row in chosen:
         try:
             remove_run(outputs, row, force=True)
-        except ValueError:
-            continue  # started again (a resume) since it was listed
+        except (ValueError, KeyError):
+            continue  # started again (a resume), or removed by another process, since listed
         done.trashed.append(row)
     done.purged = [e for e in expired if trash.purge(e)]
     trash.sweep(outputs)

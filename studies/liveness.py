@@ -32,6 +32,16 @@ class FolderLock:
     def __init__(self, fd: int | None) -> None:
         self._fd = fd
 
+    def holds(self, folder: Path) -> bool:
+        """Whether ``folder`` is still the folder locked (another process may have moved it
+        away while this one waited for the lock)."""
+        if self._fd is None:
+            return folder.is_dir()
+        try:
+            return os.path.samestat(os.fstat(self._fd), folder.stat())
+        except OSError:
+            return False
+
     def release(self) -> None:
         if self._fd is not None:
             os.close(self._fd)  # closing the descriptor drops the flock

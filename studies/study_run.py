@@ -123,6 +123,8 @@ def resume_run(run_id: str, outputs: Path | None = None, progress: bool = True) 
         )
         raise ValueError(msg)
     try:
+        if not lock.holds(folder):
+            raise KeyError(f"run {row['run_id']} was moved by another process: not resumed")
         record = tracking.RunRecord(**json.loads((folder / "run.json").read_text("utf-8")))
         record.folder = str(folder)  # where it was found (a copied tree records another)
         if record.status == "finished":

@@ -6,8 +6,10 @@ from __future__ import annotations
 import datetime as dt
 import json
 import multiprocessing
+import os
 import shutil
 import sqlite3
+import time
 from contextlib import closing
 from pathlib import Path
 
@@ -225,11 +227,23 @@ def test_gc_moves_old_runs_to_the_trash_and_empties_it_by_age(
     assert main(["gc", "--older-than", "99999999999w", "--dry-run", *out]) == 0
 
 
-def test_a_leftover_removing_folder_is_collected(tmp_path: Path) -> None:
+def test_gc_collects_what_killed_processes_left_and_nothing_else(tmp_path: Path) -> None:
     outputs = tmp_path / "out"
     tiny_run(tmp_path, outputs)
-    stray = outputs / "tiny" / "20200101T000000000-abcdef.removing"
+    stray = outputs / "tiny" / "20200101T000000000-abcdef.removing"  # an older version's rm
     shutil.copytree(next((outputs / "tiny").iterdir()), stray)
+    stillborn = outputs / "tiny" / "20200101T000000001-abcdef"  # killed before its run.json
+    starting = outputs / "tiny" / "20200101T000000002-abcdef"  # a run starting right now
+    for folder in (stillborn, starting):
+        folder.mkdir()
+        (folder / "study.toml").write_text(STUDY, encoding="utf-8")
+    hour_ago = time.time() - 3600
+    os.utime(stillborn, (hour_ago, hour_ago))
+    purging = outputs / trash.TRASH / "20200101T000000000000" / "tiny" / f"x{trash.PURGING}"
+    purging.mkdir(parents=True)  # a purge that was killed
     assert main(["gc", "--older-than", "1000d", "--outputs", str(outputs)]) == 0
     assert not stray.exists()
+    assert not stillborn.exists()
+    assert starting.exists()
+    assert not (outputs / trash.TRASH / "20200101T000000000000").exists()
     assert len(tracking.list_runs(outputs)) == 1
