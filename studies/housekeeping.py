@@ -80,9 +80,6 @@ def restore_run(outputs: Path, ref: str) -> tuple[trash.Trashed, Path, list[str]
     """Bring a run back from the trash, bit-identical, and register it; return the entry, its
     folder and the tags it could not take back (they name another run now)."""
     entry = trash.find(outputs, ref)
-    record = read_record(entry.folder)
-    if record is None:
-        raise ValueError(f"{entry.folder} holds no readable run.json: not restored")
     folder = outputs / entry.study / entry.run_id
     if folder.exists():
         raise ValueError(f"{folder} exists: run {entry.run_id} is not restored over it")
@@ -93,6 +90,9 @@ def restore_run(outputs: Path, ref: str) -> tuple[trash.Trashed, Path, list[str]
     if lock is None or not lock.holds(entry.folder):
         raise KeyError(f"run {entry.run_id} left the trash meanwhile: not restored")
     with lock:
+        record = read_record(entry.folder)
+        if record is None:
+            raise ValueError(f"{entry.folder} holds no readable run.json: not restored")
         folder.parent.mkdir(parents=True, exist_ok=True)
         try:
             entry.folder.rename(folder)

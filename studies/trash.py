@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from studies import labels
+from studies.liveness import lock_folder
 
 TRASH = ".trash"
 PURGING = ".purging"
@@ -98,12 +99,20 @@ def find(outputs: Path, ref: str) -> Trashed:
 
 
 def purge(entry: Trashed) -> bool:
-    """Delete a trashed run for good; False if it had left the trash meanwhile (restored)."""
+    """Delete a trashed run for good; False if it is leaving the trash (a restore holds it)
+    or has left it."""
     doomed = entry.folder.with_name(entry.folder.name + PURGING)
     try:
-        entry.folder.rename(doomed)
+        lock = lock_folder(entry.folder)
     except FileNotFoundError:
         return False
+    if lock is None:
+        return False
+    with lock:
+        try:
+            entry.folder.rename(doomed)
+        except FileNotFoundError:
+            return False
     shutil.rmtree(doomed, ignore_errors=True)
     return True
 
