@@ -2,8 +2,10 @@
 
     outputs/
       registry.sqlite              one row per run, its values, tags and notes (studies.registry)
+      .trash/                      removed runs (studies.trash)
       <study>/<run-id>/
         study.toml                 exact copy of the definition that ran
+        labels.json                its tags and notes (studies.labels)
         run.json                   id, status, git commit + dirty flag, versions, host,
                                    start/end, compile vs run time, accuracy settings
         results.nc                 the labelled results (see studies.results)

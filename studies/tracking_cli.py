@@ -228,17 +228,12 @@ def _gc(args: argparse.Namespace) -> int:
     from studies.housekeeping import collect_garbage, parse_age
 
     done = collect_garbage(args.outputs, parse_age(args.older_than), args.keep_tagged, args.dry_run)
-    would = "would " if args.dry_run else ""
+    move, delete = ("would move", "would delete") if args.dry_run else ("moved", "deleted")
     for row in done.trashed:
-        print(
-            f"{would}move {row['run_id']} ({row['study']}, started {row['started']}) to the trash"
-        )
+        print(f"{move} {row['run_id']} ({row['study']}, started {row['started']}) to the trash")
     for e in done.purged:
-        print(f"{would}delete {e.run_id} ({e.study}, trashed {e.removed:%Y-%m-%d %H:%M}) for good")
-    print(
-        f"{would}move {len(done.trashed)} run(s) to the trash, "
-        f"{would}delete {len(done.purged)} from it"
-    )
+        print(f"{delete} {e.run_id} ({e.study}, trashed {e.removed:%Y-%m-%d %H:%M}) for good")
+    print(f"{move} {len(done.trashed)} run(s) to the trash, {delete} {len(done.purged)} from it")
     return 0
 
 
