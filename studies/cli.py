@@ -10,19 +10,25 @@ show RUN_ID            one run's record
 compare RUN_A RUN_B…   what differs: definitions, code, versions, timings, responses
 regress BASE RUN       exit 1 when a response moved beyond tolerance
 tag RUN_ID TAG         name a run (tags work wherever a run id does); note RUN_ID TEXT
-rm RUN_ID, gc          remove runs (folder and registry rows together)
+rm RUN_ID, gc          move runs to the trash (outputs/.trash); restore RUN_ID, trash
+reindex                rebuild the registry from the run folders
 export RUN_ID          the results as CSV or Parquet
+
+Exit codes: 0 done, 1 regress: a response moved, 2 bad input, 3 --strict: points did not run,
+4 a file or the registry cannot be used (full disk, permissions, damage, locked), 130 Ctrl-C.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import sqlite3
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from studies.definition import StudyError, catalog_names, read_study
+from studies.registry_file import RegistryUnusable, unusable
 from studies.tracking_cli import add_commands
 
 if TYPE_CHECKING:
@@ -61,10 +67,15 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into `head` and the like
         sys.stderr.close()
         return 0
+    except sqlite3.Error as exc:  # the registry, on a path that did not say it more precisely
+        outputs = getattr(args, "outputs", None) or default_outputs()
+        print(f"error: {unusable(exc, outputs)}", file=sys.stderr)
+        return EXIT_OUTPUT_ERROR
     except OSError as exc:  # full disk, read-only or unreadable files: one line, how to go on
         what = f"{exc.strerror}: {exc.filename}" if exc.strerror and exc.filename else str(exc)
-        notes = "; ".join(getattr(exc, "__notes__", [])) or "nothing was recorded"
-        print(f"error: {what}; {notes}", file=sys.stderr)
+        said = isinstance(exc, RegistryUnusable)  # its message says what was changed
+        notes = "; ".join(getattr(exc, "__notes__", [])) or ("" if said else "nothing was recorded")
+        print(f"error: {what}" + (f"; {notes}" if notes else ""), file=sys.stderr)
         return EXIT_OUTPUT_ERROR
     except KeyboardInterrupt as exc:  # Ctrl-C: one line, and how to go on
         notes = "; ".join(getattr(exc, "__notes__", [])) or "nothing was recorded"

@@ -14,12 +14,12 @@ import datetime as dt
 import io
 import json
 import re
-from contextlib import closing
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from studies import registry, tracking
+from studies.reindex import reconcile
 
 EXPRESSION = re.compile(r"^\s*([A-Za-z_][\w.]*)\s*(==|=|!=|<=|>=|<|>)\s*([^<>=!\s].*?)\s*$")
 COLUMNS = {
@@ -107,7 +107,8 @@ def find_runs(
     tag: str | None = None,
 ) -> list[dict[str, Any]]:
     """Registry rows that satisfy every filter, newest first, each with its current status,
-    tags and notes."""
+    tags, notes and folder under ``outputs``."""
+    reconcile(outputs)
     if not (outputs / registry.REGISTRY).exists():
         return []
     conditions = [parse_condition(w) for w in where or []]
@@ -123,7 +124,7 @@ def find_runs(
     if tag:
         clauses.append("runs.run_id IN (SELECT run_id FROM tags WHERE tag = ?)")
         args.append(tag)
-    with closing(registry.connect(outputs)) as con:
+    with registry.connection(outputs) as con:
         known = dict(con.execute("SELECT DISTINCT name, kind FROM run_values").fetchall())
         for c in conditions:
             clause, extra = c.sql(known)
@@ -134,6 +135,7 @@ def find_runs(
     tags, notes = registry.tags_and_notes(outputs)
     out = []
     for row in rows:
+        row["folder"] = str(registry.folder_of(outputs, row))
         row["status"], _ = tracking.current_status(row)
         if status and row["status"] != status:
             continue

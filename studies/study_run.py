@@ -1,11 +1,14 @@
 """Run a study end to end: plan → evaluate → Dataset → netCDF → analysis → run record.
 
 The run folder and registry row are created only after the study has passed validation, so a
-malformed study writes nothing. Every finished chunk is checkpointed under ``chunks/`` in the
-run folder; a run that fails or is interrupted keeps its folder with ``run.json`` status
-``failed`` and the error, and :func:`resume_run` (``python -m studies run --resume RUN_ID``)
-finishes it from its last finished chunk. The checkpoints are removed once ``results.nc`` is
-written.
+malformed study writes nothing; a run the registry cannot record (damaged, locked, full) removes
+its folder again before computing anything. While the run lives it holds the lock on its folder
+and a thread keeps its heartbeat fresh (:mod:`studies.liveness`). Every finished chunk is
+checkpointed under ``chunks/`` in the run folder; a run that fails or is interrupted keeps its
+folder with ``run.json`` status ``failed`` and the error, and :func:`resume_run`
+(``python -m studies run --resume RUN_ID``) finishes it from its last finished chunk. A run is
+finished in one step, the atomic rewrite of ``run.json``; the checkpoints are removed and the
+registry updated after it (a registry that missed it catches up on sight).
 """
 
 from __future__ import annotations
@@ -24,9 +27,10 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from studies import provenance, tracking
+from studies import provenance, registry, tracking
 from studies.analysis import ANALYSIS_NAME
 from studies.definition import parse_study
+from studies.liveness import FolderLock, Heartbeat, lock_folder
 from studies.plan import Plan, plan_study
 from studies.report import write_analysis
 from studies.results import open_results
@@ -37,6 +41,7 @@ from studies.scenes import SceneOutput
 CHECKPOINTS = "chunks"
 RESULTS_NAME = "results.nc"
 ORIGINAL_STUDY = CHECKPOINTS + "/study.toml"  # the text the checkpoints were computed from
+RESUME_WAIT_S = 1.0  # a listing may hold a run folder's lock for an instant; a run holds it
 
 
 @dataclass(frozen=True)
@@ -71,9 +76,15 @@ def run_plan(
     d = plan.definition
     commit, dirty = provenance.git_state()
     run_id, folder = tracking.run_folder(outputs, d.name, tracking.new_run_id(d.text))
-    (folder / "study.toml").write_text(d.text, encoding="utf-8")
-    (folder / CHECKPOINTS).mkdir()
-    (folder / ORIGINAL_STUDY).write_text(d.text, encoding="utf-8")
+    lock = lock_folder(folder) or FolderLock(None)  # a new folder: no one else holds it
+    try:
+        (folder / "study.toml").write_text(d.text, encoding="utf-8")
+        (folder / CHECKPOINTS).mkdir()
+        (folder / ORIGINAL_STUDY).write_text(d.text, encoding="utf-8")
+    except BaseException:
+        shutil.rmtree(folder, ignore_errors=True)
+        lock.release()
+        raise
     record = tracking.RunRecord(
         run_id=run_id,
         study=d.name,
@@ -91,7 +102,10 @@ def run_plan(
         settings=dict(d.settings),
         chunk_size=chunk_size,
     )
-    return _execute(plan, outputs, record, progress, {}, executor)
+    try:
+        return _execute(plan, outputs, record, progress, {}, executor, fresh=True)
+    finally:
+        lock.release()
 
 
 def resume_run(run_id: str, outputs: Path | None = None, progress: bool = True) -> RunResult:
@@ -101,24 +115,41 @@ def resume_run(run_id: str, outputs: Path | None = None, progress: bool = True) 
     if row is None:
         raise KeyError(f"no unique run matches {run_id!r} under {outputs}")
     folder = Path(row["folder"])
-    record = tracking.RunRecord(**json.loads((folder / "run.json").read_text(encoding="utf-8")))
-    if record.status == "finished":
-        raise ValueError(f"run {record.run_id} is already finished: nothing to resume")
-    if tracking.liveness(asdict(record)) == "running":
+    lock = lock_folder(folder, RESUME_WAIT_S)
+    if lock is None:
         msg = (
-            f"run {record.run_id} is still running (process {record.pid} on "
-            f"{record.host.get('node', '?')}, last heartbeat {record.heartbeat}): not resumed"
+            f"run {row['run_id']} is being run or resumed by another process (its folder "
+            f"{folder} is locked): not resumed"
         )
         raise ValueError(msg)
-    _check_unchanged(folder / "study.toml", record.definition_sha256)
-    plan = plan_study(folder / "study.toml")
+    try:
+        if not lock.holds(folder):
+            raise KeyError(f"run {row['run_id']} was moved by another process: not resumed")
+        record = tracking.RunRecord(**json.loads((folder / "run.json").read_text("utf-8")))
+        record.folder = str(folder)  # where it was found (a copied tree records another)
+        if record.status == "finished":
+            raise ValueError(f"run {record.run_id} is already finished: nothing to resume")
+        if tracking.liveness(asdict(record)) == "running":
+            msg = (
+                f"run {record.run_id} is still running (process {record.pid} on "
+                f"{record.host.get('node', '?')}, last heartbeat {record.heartbeat}): not resumed"
+            )
+            raise ValueError(msg)
+        _check_unchanged(folder / "study.toml", record.definition_sha256)
+        plan = plan_study(folder / "study.toml")
+    except BaseException:
+        lock.release()
+        raise
     done = {
         int(path.stem): path
         for path in sorted((folder / CHECKPOINTS).glob("*.npz"))
         if path.stem.isdigit()  # not a temporary file a kill left mid-write
     }
     record.status, record.error = "running", ""
-    return _execute(plan, outputs, record, progress, done)
+    try:
+        return _execute(plan, outputs, record, progress, done)
+    finally:
+        lock.release()
 
 
 def _execute(
@@ -128,12 +159,14 @@ def _execute(
     progress: bool,
     done: dict[int, Path],
     executor: Executor | None = None,
+    fresh: bool = False,
 ) -> RunResult:
+    """Compute and record a run whose folder lock the caller holds (``fresh``: a new run,
+    whose folder is removed again if the registry cannot record it)."""
     folder = Path(record.folder)
     record.pid, record.host = os.getpid(), provenance.host()
-    record.heartbeat = tracking.now()
-    record.write()
-    tracking.register(outputs, record)
+    _start(outputs, record, fresh)
+    heartbeat = Heartbeat(record.beat, tracking.HEARTBEAT_S)
     attrs = {
         "run_id": record.run_id,
         "git_commit": record.git_commit,
@@ -143,6 +176,7 @@ def _execute(
     }
     writer = None
     try:
+        heartbeat.start()
         writer = ResultsWriter(plan, folder / RESULTS_NAME, attrs, record.chunk_size)
         parts = list(chunks(plan.runs, record.chunk_size))
         for index in sorted(done):
@@ -151,7 +185,6 @@ def _execute(
         def finished(index: int, out: SceneOutput) -> None:
             _save_chunk(folder, index, out)
             writer.write(parts[index], out)
-            record.beat()
 
         ev = evaluate(
             plan,
@@ -168,6 +201,7 @@ def _execute(
         with xr.open_dataset(folder / ANALYSIS_NAME) as an:
             record.points_without_value = int(an.attrs.get("points_without_value", 0))
     except BaseException as exc:
+        heartbeat.stop()
         if writer is not None:
             writer.abandon()
         record.status, record.finished, record.error = "failed", tracking.now(), repr(exc)
@@ -181,11 +215,31 @@ def _execute(
             f"{tracking.resume_command(record.run_id, outputs)}"
         )
         raise
-    shutil.rmtree(folder / CHECKPOINTS, ignore_errors=True)
+    heartbeat.stop()
     record.status, record.finished, record.timings = "finished", tracking.now(), ev.timings
-    record.write()
-    tracking.register(outputs, record)
+    record.write()  # the one step that finishes the run; the registry follows
+    shutil.rmtree(folder / CHECKPOINTS, ignore_errors=True)
+    try:
+        tracking.register(outputs, record)
+    except registry.RegistryUnusable as exc:
+        exc.add_note(
+            f"run {record.run_id} finished and its results are in {folder}; the registry "
+            "records it the next time runs are listed"
+        )
+        raise
     return RunResult(record, ds, folder, (folder / "study.toml", folder / "run.json", *files))
+
+
+def _start(outputs: Path, record: tracking.RunRecord, fresh: bool) -> None:
+    """Write run.json and register the run; a new run the registry refuses leaves nothing."""
+    record.beat()
+    try:
+        tracking.register(outputs, record)
+    except BaseException as exc:
+        if fresh:
+            shutil.rmtree(record.folder, ignore_errors=True)
+            exc.add_note(f"nothing was run: the run folder {record.folder} was removed again")
+        raise
 
 
 def _check_unchanged(study: Path, sha256: str) -> None:

@@ -2,8 +2,10 @@
 
     outputs/
       registry.sqlite              one row per run, its values, tags and notes (studies.registry)
+      .trash/                      removed runs (studies.trash)
       <study>/<run-id>/
         study.toml                 exact copy of the definition that ran
+        labels.json                its tags and notes (studies.labels)
         run.json                   id, status, git commit + dirty flag, versions, host,
                                    start/end, compile vs run time, accuracy settings
         results.nc                 the labelled results (see studies.results)
@@ -11,7 +13,9 @@
         *.png                      figures
 
 The run id is ``<UTC timestamp>-<6 hex digits of the definition hash>``, so ids sort by time
-and runs of the same definition share a suffix.
+and runs of the same definition share a suffix. The folders are the truth and the registry
+their index: listing or looking up runs first registers what the registry misses
+(:func:`studies.reindex.reconcile`), and rows address folders relative to the outputs root.
 """
 
 from __future__ import annotations
@@ -21,17 +25,20 @@ import hashlib
 import json
 import os
 import platform
-from contextlib import closing
+import threading
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from studies import registry
+from studies import registry, trash
+from studies.liveness import is_locked
+from studies.reindex import reconcile
 from studies.runner import DEFAULT_CHUNK_SIZE
 
 OUTPUTS_VARIABLE = "ENGINE_STUDIES_OUTPUTS"
-HEARTBEAT_S = 5.0  # a running run rewrites its heartbeat at most this often
-STALE_S = 600.0  # a heartbeat older than this marks a run on another host as interrupted
+HEARTBEAT_S = 5.0  # a live run's heartbeat thread rewrites run.json this often
+STALE_S = 120.0  # a heartbeat older than this marks a run on another host as interrupted
+_WRITING = threading.Lock()  # run.json is written by the run and by its heartbeat thread
 
 
 @dataclass
@@ -64,22 +71,27 @@ class RunRecord:
         """Write ``run.json`` (under a temporary name renamed into place: never half a file)."""
         path = Path(self.folder) / "run.json"
         tmp = path.with_name("run.json.writing")
-        tmp.write_text(json.dumps(asdict(self), indent=2, default=str) + "\n", encoding="utf-8")
-        tmp.replace(path)
+        with _WRITING:
+            text = json.dumps(asdict(self), indent=2, default=str) + "\n"
+            tmp.write_text(text, encoding="utf-8")
+            tmp.replace(path)
 
-    def beat(self, every_s: float = HEARTBEAT_S) -> None:
-        """Record that the run is alive (at most every ``every_s`` seconds)."""
-        last = dt.datetime.fromisoformat(self.heartbeat) if self.heartbeat else None
-        if last is None or (dt.datetime.now(dt.UTC) - last).total_seconds() >= every_s:
-            self.heartbeat = now()
-            self.write()
+    def beat(self) -> None:
+        """Record that the run is alive now (the heartbeat thread calls this)."""
+        self.heartbeat = dt.datetime.now(dt.UTC).isoformat(timespec="milliseconds")
+        self.write()
 
 
-def liveness(record: dict[str, Any]) -> str:
-    """The status of a recorded run as it is now: a "running" run whose process is gone (same
-    host) or whose heartbeat is older than ``STALE_S`` (another host) is "interrupted"."""
-    if record.get("status") != "running":
-        return str(record.get("status", ""))
+def liveness(record: dict[str, Any], folder: Path | None = None) -> str:
+    """The status of a recorded run as it is now: an unfinished run is running while a
+    process holds the lock on its ``folder`` (a resume, from its first instant); otherwise a
+    "running" run is "interrupted" when its process is gone (same host) or its heartbeat is
+    older than ``STALE_S`` (another host)."""
+    status = str(record.get("status", ""))
+    if status in ("running", "failed") and folder is not None and is_locked(folder):
+        return "running"
+    if status != "running":
+        return status
     same_host = record.get("host", {}).get("node") == platform.node()
     pid = int(record.get("pid") or 0)
     if same_host and pid:
@@ -108,11 +120,12 @@ def _alive(pid: int) -> bool:
 
 def current_status(row: dict[str, Any]) -> tuple[str, dict[str, Any] | None]:
     """A registry row's status now ("missing" when its folder is gone) and its run.json."""
-    path = Path(row["folder"]) / "run.json"
+    folder = Path(row["folder"])
+    path = folder / "run.json"
     if not path.exists():
         return "missing", None
     record = json.loads(path.read_text(encoding="utf-8"))
-    return liveness(record), record
+    return liveness(record, folder), record
 
 
 def resume_command(run_id: str, outputs: Path) -> str:
@@ -178,27 +191,25 @@ def run_folder(outputs: Path, study: str, run_id: str) -> tuple[str, Path]:
 
 def register(outputs: Path, record: RunRecord) -> None:
     """Insert or update the registry row of ``record`` (and its queryable values)."""
-    row = {
-        **{k: getattr(record, k) for k in registry.COLUMNS if hasattr(record, k)},
-        "git_dirty": int(record.git_dirty),
-        "compile_s": record.timings.get("compile_s"),
-        "run_s": record.timings.get("run_s"),
-    }
-    with closing(registry.connect(outputs)) as con:
-        registry.upsert_run(con, row)
+    row = registry.row_of(asdict(record), f"{record.study}/{record.run_id}")
+    with registry.connection(outputs) as con:
+        registry.upsert_run(con, row, outputs)
 
 
 def list_runs(outputs: Path, study: str | None = None) -> list[dict[str, Any]]:
-    """Registry rows, newest first (optionally of one study)."""
+    """Registry rows, newest first (optionally of one study), each with its ``folder`` under
+    ``outputs``; what the registry missed is registered first."""
+    reconcile(outputs)
     if not (outputs / registry.REGISTRY).exists():
         return []
-    with closing(registry.connect(outputs)) as con:
+    with registry.connection(outputs) as con:
         query = "SELECT * FROM runs"
         args: tuple[str, ...] = ()
         if study:
             query += " WHERE study = ?"
             args = (study,)
-        return [dict(r) for r in con.execute(query + " ORDER BY started DESC, run_id DESC", args)]
+        rows = [dict(r) for r in con.execute(query + " ORDER BY started DESC, run_id DESC", args)]
+    return [r | {"folder": str(registry.folder_of(outputs, r))} for r in rows]
 
 
 def finished_identical(outputs: Path, definition_sha256: str, commit: str) -> dict[str, Any] | None:
@@ -212,13 +223,15 @@ def finished_identical(outputs: Path, definition_sha256: str, commit: str) -> di
 
 
 def find_run(outputs: Path, run_id: str) -> dict[str, Any] | None:
-    """The registry row named by ``run_id``: a tag, the id, or a unique prefix of the id."""
-    if not (outputs / registry.REGISTRY).exists():
-        return None
-    run_id = registry.tagged_run(outputs, run_id) or run_id
-    rows = [r for r in list_runs(outputs) if r["run_id"].startswith(run_id)]
+    """The registry row named by ``run_id``: the id, else a tag, else a unique prefix of the id
+    (a tag never hides a run's own id)."""
+    rows = list_runs(outputs)
     exact = [r for r in rows if r["run_id"] == run_id]
-    return (exact or rows)[0] if len(exact or rows) == 1 else None
+    if not exact and rows:
+        tagged = registry.tagged_run(outputs, run_id)
+        exact = [r for r in rows if r["run_id"] == tagged]
+    chosen = exact or [r for r in rows if r["run_id"].startswith(run_id)]
+    return chosen[0] if len(chosen) == 1 else None
 
 
 def resolve_run(outputs: Path, ref: str) -> dict[str, Any]:
@@ -230,6 +243,11 @@ def resolve_run(outputs: Path, ref: str) -> dict[str, Any]:
     if matches:
         msg = (
             f"{ref!r} matches {len(matches)} runs ({', '.join(matches[:4])}…): give more of the id"
+        )
+    elif trash.holds(outputs, ref):
+        msg = (
+            f"run {ref} is in the trash: bring it back with "
+            f"python -m studies restore {ref} --outputs {outputs}"
         )
     else:
         msg = (

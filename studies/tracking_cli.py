@@ -1,8 +1,11 @@
 """The tracking commands of ``python -m studies``: runs, show, compare, regress, tag, note, rm,
-gc, export. Wherever a RUN_ID is asked for, a tag or a unique prefix of the id works too.
+restore, trash, gc, reindex, export. Wherever a RUN_ID is asked for, a tag or a unique prefix
+of the id works too (the id itself always wins over a tag).
 
 Exit codes: 0 done, 1 ``regress`` found a response beyond tolerance, 2 bad input (unknown run
-or tag, no shared responses, a --where that does not parse), with one line on stderr.
+or tag, no shared responses, a --where that does not parse, a tagged or running run to ``rm``),
+4 the registry or a file cannot be used (damaged, locked past the wait, read-only, full disk),
+with one line on stderr saying what to do (a damaged registry: ``reindex``).
 """
 
 from __future__ import annotations
@@ -63,12 +66,23 @@ def add_commands(sub: Any, outputs_help: str) -> None:
     note.add_argument("run_id")
     note.add_argument("text")
 
-    command("rm", "remove a run: its folder and registry rows", _rm).add_argument("run_id")
+    rm = command("rm", "move a run to the trash (outputs/.trash; `restore` undoes it)", _rm)
+    rm.add_argument("run_id")
+    rm.add_argument("--force", action="store_true", help="remove a tagged run too")
 
-    gc = command("gc", "remove old runs", _gc)
+    restore = command("restore", "bring a run back from the trash", _restore)
+    restore.add_argument("run_id", help="its id, a unique prefix, or a tag it had")
+
+    command("trash", "list the runs in the trash", _trash)
+
+    gc = command(
+        "gc", "move runs older than AGE to the trash; delete what was trashed before AGE", _gc
+    )
     gc.add_argument("--older-than", required=True, metavar="AGE", help="e.g. 30d, 12h, 2w")
     gc.add_argument("--keep-tagged", action="store_true", help="never remove a tagged run")
     gc.add_argument("--dry-run", action="store_true", help="list what would be removed")
+
+    command("reindex", "rebuild the registry from the run folders (keeps the old one)", _reindex)
 
     export = command("export", "a run's results as CSV or Parquet", _export)
     export.add_argument("run_id")
@@ -107,7 +121,7 @@ def _show(args: argparse.Namespace) -> int:
         raise FileNotFoundError(
             f"run {row['run_id']} is in the registry but its folder {row['folder']} is gone"
         )
-    record["status"] = status
+    record["status"], record["folder"] = status, row["folder"]  # where it is now
     tags, notes = registry.tags_and_notes(args.outputs)
     record["tags"] = tags.get(row["run_id"], [])
     record["notes"] = notes.get(row["run_id"], [])
@@ -179,19 +193,62 @@ def _rm(args: argparse.Namespace) -> int:
     from studies.tracking import resolve_run
 
     row = resolve_run(args.outputs, args.run_id)
-    remove_run(args.outputs, row)
-    print(f"removed {row['run_id']} ({row['folder']})")
+    where = remove_run(args.outputs, row, args.force)
+    if where is None:
+        print(f"removed {row['run_id']} from the registry (its folder was gone already)")
+    else:
+        undo = f"python -m studies restore {row['run_id']} --outputs {args.outputs}"
+        print(f"moved {row['run_id']} to the trash ({where}); undo with: {undo}")
+    return 0
+
+
+def _restore(args: argparse.Namespace) -> int:
+    from studies.housekeeping import restore_run
+
+    entry, folder, lost = restore_run(args.outputs, args.run_id)
+    print(f"restored {entry.run_id} to {folder}")
+    for tag in lost:
+        print(f"  tag {tag} names another run now: left there")
+    return 0
+
+
+def _trash(args: argparse.Namespace) -> int:
+    from studies.trash import entries
+
+    found = entries(args.outputs)
+    for e in found:
+        tags = f" tags: {' '.join(e.tags())}" if e.tags() else ""
+        removed = e.removed.isoformat(timespec="seconds")
+        print(f"{e.run_id:<30} {e.study:<20} removed {removed}{tags}")
+    print(f"{len(found)} run(s) in the trash under {args.outputs}")
     return 0
 
 
 def _gc(args: argparse.Namespace) -> int:
     from studies.housekeeping import collect_garbage, parse_age
 
-    rows = collect_garbage(args.outputs, parse_age(args.older_than), args.keep_tagged, args.dry_run)
-    verb = "would remove" if args.dry_run else "removed"
-    for row in rows:
-        print(f"{verb} {row['run_id']} ({row['study']}, started {row['started']})")
-    print(f"{verb} {len(rows)} run(s)")
+    done = collect_garbage(args.outputs, parse_age(args.older_than), args.keep_tagged, args.dry_run)
+    move, delete = ("would move", "would delete") if args.dry_run else ("moved", "deleted")
+    for row in done.trashed:
+        print(f"{move} {row['run_id']} ({row['study']}, started {row['started']}) to the trash")
+    for e in done.purged:
+        print(f"{delete} {e.run_id} ({e.study}, trashed {e.removed:%Y-%m-%d %H:%M}) for good")
+    print(f"{move} {len(done.trashed)} run(s) to the trash, {delete} {len(done.purged)} from it")
+    return 0
+
+
+def _reindex(args: argparse.Namespace) -> int:
+    from studies.reindex import reindex
+
+    done = reindex(args.outputs)
+    print(
+        f"reindexed {done.runs} run(s), {done.tags} tag(s) and {done.notes} note(s) from the run "
+        f"folders under {args.outputs}"
+    )
+    if done.kept_as is not None:
+        print(f"the old registry is kept as {done.kept_as}")
+    for line in done.skipped:
+        print(f"skipped {line}")
     return 0
 
 

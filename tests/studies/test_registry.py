@@ -1,19 +1,22 @@
-"""The registry: schema version and migration, concurrent writers, tags, notes, rm and gc."""
+"""The registry: schema version and migration, concurrent writers (registering, removing,
+restoring and collecting at once), tags, notes, rm and gc."""
 
 from __future__ import annotations
 
 import datetime as dt
 import json
 import multiprocessing
+import os
 import shutil
 import sqlite3
+import time
 from contextlib import closing
 from pathlib import Path
 
 import pytest
-from registry_writers import RUNS_EACH, register_many
+from registry_writers import RUNS_EACH, register_many, run_id
 
-from studies import registry, tracking
+from studies import labels, registry, tracking, trash
 from studies.cli import main
 from studies.study_run import run_study
 
@@ -76,7 +79,9 @@ def test_a_newer_registry_is_refused_with_exit_2(
     assert "upgrade engine-studies" in capsys.readouterr().err
 
 
-def test_four_processes_registering_at_once_leave_the_registry_intact(tmp_path: Path) -> None:
+def test_four_processes_registering_removing_restoring_at_once_leave_it_consistent(
+    tmp_path: Path,
+) -> None:
     context = multiprocessing.get_context("spawn")
     workers = [
         context.Process(target=register_many, args=(str(tmp_path), w)) for w in range(WRITERS)
@@ -88,8 +93,27 @@ def test_four_processes_registering_at_once_leave_the_registry_intact(tmp_path: 
     assert [w.exitcode for w in workers] == [0] * WRITERS
     with closing(sqlite3.connect(tmp_path / registry.REGISTRY)) as con:
         assert con.execute("PRAGMA integrity_check").fetchone()[0] == "ok"
-        ids = {r[0] for r in con.execute("SELECT run_id FROM runs WHERE status = 'finished'")}
-    assert ids == {f"{w}-{i}" for w in range(WRITERS) for i in range(RUNS_EACH)}
+        rows = dict(con.execute("SELECT run_id, status FROM runs").fetchall())
+        tags = dict(con.execute("SELECT tag, run_id FROM tags").fetchall())
+        indexed = {r[0] for r in con.execute("SELECT run_id FROM run_values")}
+        noted = {r[0] for r in con.execute("SELECT run_id FROM notes")}
+    folders = {p.parent.name for p in (tmp_path / "many").glob("*/run.json")}
+    trashed = {e.run_id for e in trash.entries(tmp_path)}
+    # the registry indexes exactly the folders in place, none in the trash
+    assert set(rows) == folders
+    assert not folders & trashed
+    assert set(rows.values()) == {"finished"}
+    assert indexed <= folders
+    every = [(w, i) for w in range(WRITERS) for i in range(RUNS_EACH)]
+    assert {run_id(w, i) for w, i in every if i % 5 in (0, 3)} <= folders  # kept
+    assert {run_id(w, i) for w, i in every if i % 5 == 1} <= trashed  # removed
+    assert not {run_id(w, i) for w, i in every if i % 5 in (2, 4)} & trashed  # purge passes
+    assert tags == {f"w{w}-{i}": run_id(w, i) for w, i in every if i % 5 == 3}
+    assert noted == set(tags.values())
+    for tag, run in tags.items():  # each folder holds its own tags and notes
+        found = labels.read_labels(tmp_path / "many" / run)
+        assert list(found.tags) == [tag]
+        assert found.notes[0]["text"] == f"note of {tag}"
 
 
 def test_tags_and_notes_work_wherever_a_run_id_does(
@@ -116,17 +140,44 @@ def test_tags_and_notes_work_wherever_a_run_id_does(
     assert "no tag 'nothing'" in capsys.readouterr().err
 
 
-def test_rm_removes_folder_and_rows_together(tmp_path: Path) -> None:
+def tree(folder: Path) -> dict[str, bytes]:
+    """Every file under ``folder`` and its bytes (with the modes, to compare bit for bit)."""
+    return {
+        f"{p.relative_to(folder)} {p.stat().st_mode:o}": p.read_bytes()
+        for p in sorted(folder.rglob("*"))
+        if p.is_file()
+    }
+
+
+def test_rm_of_a_tagged_run_needs_force_and_restore_brings_it_back_bit_identical(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     outputs = tmp_path / "out"
     run_id = tiny_run(tmp_path, outputs)
     folder = Path(tracking.find_run(outputs, run_id)["folder"])
-    registry.set_tag(outputs, run_id, "keep")
-    assert main(["rm", "keep", "--outputs", str(outputs)]) == 0
+    out = ["--outputs", str(outputs)]
+    assert main(["tag", run_id, "keepme", *out]) == 0
+    assert main(["note", "keepme", "the review's run", *out]) == 0
+    before = tree(folder)
+    values = registry.run_values(outputs, run_id)
+    assert main(["rm", "keepme", *out]) == 2
+    assert "is tagged (keepme)" in capsys.readouterr().err
+    assert tree(folder) == before
+    assert main(["rm", "keepme", "--force", *out]) == 0
+    assert "restore" in capsys.readouterr().out
     assert not folder.exists()
-    assert not list(folder.parent.iterdir())
     assert tracking.list_runs(outputs) == []
     assert registry.run_values(outputs, run_id) == []
-    assert registry.tagged_run(outputs, "keep") is None
+    assert registry.tagged_run(outputs, "keepme") is None
+    assert main(["trash", *out]) == 0
+    assert f"{run_id}" in capsys.readouterr().out
+    assert main(["restore", "keepme", *out]) == 0  # a tag it had finds it in the trash
+    assert tree(folder) == before
+    assert registry.run_values(outputs, run_id) == values
+    assert registry.tagged_run(outputs, "keepme") == run_id
+    _, notes = registry.tags_and_notes(outputs)
+    assert notes[run_id][0].endswith("the review's run")
+    assert trash.entries(outputs) == []
 
 
 def test_rm_keeps_the_folder_when_the_registry_cannot_change(
@@ -136,18 +187,20 @@ def test_rm_keeps_the_folder_when_the_registry_cannot_change(
 
     outputs = tmp_path / "out"
     row = tracking.find_run(outputs, tiny_run(tmp_path, outputs))
-
-    def locked(*_: object) -> None:
-        raise sqlite3.OperationalError("database is locked")
-
-    monkeypatch.setattr(registry, "delete_run", locked)
-    with pytest.raises(sqlite3.OperationalError):
-        remove_run(outputs, row)
+    monkeypatch.setattr("studies.registry_file.BUSY_TIMEOUT_S", 0.2)
+    with closing(sqlite3.connect(outputs / registry.REGISTRY, isolation_level=None)) as other:
+        other.execute("BEGIN IMMEDIATE")  # another writer holds the write lock; reads go on
+        with pytest.raises(registry.RegistryUnusable, match="is locked by another process"):
+            remove_run(outputs, row)
+        other.execute("ROLLBACK")
     assert (Path(row["folder"]) / "results.nc").exists()
     assert tracking.find_run(outputs, row["run_id"]) is not None
+    assert trash.entries(outputs) == []
 
 
-def test_gc_removes_old_untagged_runs(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_gc_moves_old_runs_to_the_trash_and_empties_it_by_age(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     outputs = tmp_path / "out"
     old, tagged, new = (tiny_run(tmp_path, outputs, s) for s in (1000.0, 1100.0, 1200.0))
     registry.set_tag(outputs, tagged, "baseline")
@@ -156,22 +209,41 @@ def test_gc_removes_old_untagged_runs(tmp_path: Path, capsys: pytest.CaptureFixt
         con.execute("UPDATE runs SET started = ? WHERE run_id IN (?, ?)", (long_ago, old, tagged))
     out = ["--outputs", str(outputs)]
     assert main(["gc", "--older-than", "30d", "--keep-tagged", "--dry-run", *out]) == 0
-    assert f"would remove {old}" in capsys.readouterr().out
+    assert f"would move {old}" in capsys.readouterr().out
     assert len(tracking.list_runs(outputs)) == 3
     assert main(["gc", "--older-than", "30d", "--keep-tagged", *out]) == 0
     assert {r["run_id"] for r in tracking.list_runs(outputs)} == {tagged, new}
     assert sorted(p.name for p in (outputs / "tiny").iterdir()) == sorted([tagged, new])
-    assert main(["gc", "--older-than", "30d", *out]) == 0
+    assert [e.run_id for e in trash.entries(outputs)] == [old]
+    assert main(["gc", "--older-than", "30d", *out]) == 0  # trashed just now: kept 30 days
     assert [r["run_id"] for r in tracking.list_runs(outputs)] == [new]
+    assert {e.run_id for e in trash.entries(outputs)} == {old, tagged}
+    assert main(["gc", "--older-than", "0s", "--dry-run", *out]) == 0
+    assert "would delete 2 from it" in capsys.readouterr().out
+    assert main(["gc", "--older-than", "0s", *out]) == 0
+    assert {e.run_id for e in trash.entries(outputs)} == {new}  # the last one moved in
     assert main(["gc", "--older-than", "thirty days", *out]) == 2
     assert "--older-than 'thirty days'" in capsys.readouterr().err
+    assert main(["gc", "--older-than", "99999999999w", "--dry-run", *out]) == 0
 
 
-def test_a_leftover_removing_folder_is_collected(tmp_path: Path) -> None:
+def test_gc_collects_what_killed_processes_left_and_nothing_else(tmp_path: Path) -> None:
     outputs = tmp_path / "out"
     tiny_run(tmp_path, outputs)
-    stray = outputs / "tiny" / "20200101T000000000-abcdef.removing"
+    stray = outputs / "tiny" / "20200101T000000000-abcdef.removing"  # an older version's rm
     shutil.copytree(next((outputs / "tiny").iterdir()), stray)
+    stillborn = outputs / "tiny" / "20200101T000000001-abcdef"  # killed before its run.json
+    starting = outputs / "tiny" / "20200101T000000002-abcdef"  # a run starting right now
+    for folder in (stillborn, starting):
+        folder.mkdir()
+        (folder / "study.toml").write_text(STUDY, encoding="utf-8")
+    hour_ago = time.time() - 3600
+    os.utime(stillborn, (hour_ago, hour_ago))
+    purging = outputs / trash.TRASH / "20200101T000000000000" / "tiny" / f"x{trash.PURGING}"
+    purging.mkdir(parents=True)  # a purge that was killed
     assert main(["gc", "--older-than", "1000d", "--outputs", str(outputs)]) == 0
     assert not stray.exists()
+    assert not stillborn.exists()
+    assert starting.exists()
+    assert not (outputs / trash.TRASH / "20200101T000000000000").exists()
     assert len(tracking.list_runs(outputs)) == 1

@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import sqlite3
 import subprocess
 import sys
 import time
@@ -15,7 +14,7 @@ import numpy as np
 import pytest
 from run_faults import fail_on_call
 
-from studies import tracking
+from studies import registry, tracking
 from studies.cli import main
 from studies.plan import plan_text
 from studies.results import open_results
@@ -170,7 +169,7 @@ def test_ctrl_c_ends_with_one_line_naming_the_run_and_the_resume_command(
 def registered(outputs: Path) -> bool:
     try:
         return bool(tracking.list_runs(outputs))
-    except sqlite3.OperationalError:  # the other process is creating the registry
+    except registry.RegistryUnusable:  # the other process held the registry past the wait
         return False
 
 
