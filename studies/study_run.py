@@ -70,6 +70,7 @@ def run_plan(
     outputs = (outputs or tracking.default_outputs()).resolve()
     d = plan.definition
     commit, dirty = provenance.git_state()
+    code = provenance.code(type(plan.scene))
     run_id, folder = tracking.run_folder(outputs, d.name, tracking.new_run_id(d.text))
     (folder / "study.toml").write_text(d.text, encoding="utf-8")
     (folder / CHECKPOINTS).mkdir()
@@ -85,6 +86,8 @@ def run_plan(
         git_commit=commit,
         git_dirty=dirty,
         definition_sha256=tracking.definition_hash(d.text, d.input_files()),
+        code=code,
+        code_sha256=provenance.code_hash(code),
         folder=str(folder),
         versions=provenance.versions(),
         host=provenance.host(),
@@ -139,6 +142,7 @@ def _execute(
         "git_commit": record.git_commit,
         "git_dirty": record.git_dirty,
         "versions": record.versions,
+        "code": record.code,
         "created": record.started,
     }
     writer = None

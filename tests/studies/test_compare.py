@@ -68,7 +68,7 @@ def test_runs_differing_in_one_setting_name_it_and_the_responses_it_moved(
 
     assert main(["compare", a, b, "--outputs", str(outputs)]) == 0
     out = capsys.readouterr().out
-    assert re.search(r"setting reference_rtol\s+1e-10 \| 1e-05", out)
+    assert re.search(r"setting reference_rtol\s+1e-10 → 1e-05", out)
     assert "reference_error [mm]" in out
     assert "moved: reference_error" in out
 
@@ -84,7 +84,7 @@ def test_different_designs_compare_on_their_common_points(
     # common points: base radius 18 and 20 at both speeds; same definition there, same values
     assert {ch.points for ch in c.changes} == {4}
     assert c.moved() == []
-    assert [(d.kind, d.name) for d in c.definition] == [("factor", "base_radius.levels")]
+    assert [(d.kind, d.name) for d in c.definition] == [("factor", "base_radius")]
 
     assert (
         main(["compare", a, b, "--plot", "--to", str(tmp_path / "fig"), "--outputs", str(outputs)])

@@ -14,7 +14,6 @@ import pytest
 import xarray as xr
 
 from studies.cli import main
-from studies.mlflow_export import params_and_metrics
 from studies.study_run import run_study
 
 STUDY = """
@@ -154,34 +153,3 @@ def test_report_html_is_self_contained_with_every_figure(recorded) -> None:
     assert page.outside == []  # nothing loaded from anywhere
     assert page.tables >= 2
     assert 'addEventListener("click"' in (folder / "report.html").read_text(encoding="utf-8")
-
-
-def test_mlflow_round_trips_params_and_metrics(
-    recorded, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    mlflow = pytest.importorskip("mlflow")
-    from studies.mlflow_export import log_run
-    from studies.tracking import RunRecord
-
-    monkeypatch.setenv("MLFLOW_ALLOW_FILE_STORE", "true")  # a local file store, no server
-    outputs, _, fast = recorded
-    folder = outputs / "speeds" / fast
-    record = RunRecord(**json.loads((folder / "run.json").read_text(encoding="utf-8")))
-    uri = (tmp_path / "mlruns").as_uri()
-    mlflow_id = log_run(uri, record)
-    mlflow.set_tracking_uri(uri)
-    (row,) = mlflow.search_runs(experiment_names=["speeds"]).to_dict("records")
-    assert row["run_id"] == mlflow_id
-    assert row["tags.run_id"] == fast
-    assert row["params.factor.cam_speed"] == "4000.0|6000.0"
-    assert row["params.angle_step"] == "0.25"
-    with xr.open_dataset(folder / "results.nc") as ds:
-        assert row["metrics.max_jerk.max"] == pytest.approx(float(ds["max_jerk"].max()))
-        assert row["metrics.min_radius_of_curvature.min"] == pytest.approx(
-            float(ds["min_radius_of_curvature"].min())
-        )
-    params, metrics = params_and_metrics(folder)
-    assert {f"params.{k}" for k in params} <= set(row)
-    assert {f"metrics.{k}" for k in metrics} <= set(row)
-    artifacts = mlflow.artifacts.list_artifacts(run_id=mlflow_id)
-    assert {"results.nc", "report.html", "run.json"} <= {Path(a.path).name for a in artifacts}
