@@ -28,13 +28,22 @@ def add_commands(sub: Any, outputs_help: str) -> None:
     runs.add_argument("--study")
     runs.add_argument("--scene")
     runs.add_argument("--status", help="finished, running, interrupted, failed or missing")
-    runs.add_argument("--since", metavar="DATE", help="started on or after (ISO date)")
+    runs.add_argument(
+        "--since", metavar="WHEN", help="started on or after: an ISO date or an age (30d, 12h)"
+    )
     runs.add_argument("--tag", help="only the run with this tag")
     runs.add_argument(
         "--where",
         action="append",
         metavar="EXPR",
-        help='e.g. "cam_speed>=5000", "max_jerk.max<900", "integrator=rk4" (repeat: all hold)',
+        help='e.g. "cam_speed>=5000", "bore>=80 mm", "max_jerk.max<900", "status==finished", '
+        '"integrator=rk4" (numbers in the scene\'s units unless one follows; repeat: all hold)',
+    )
+    runs.add_argument(
+        "--columns",
+        metavar="NAMES",
+        help="comma-separated values to show as columns, in the scene's units "
+        '(e.g. "cam_speed,bore,max_jerk.max")',
     )
     shape = runs.add_mutually_exclusive_group()
     shape.add_argument("--json", action="store_true", help="JSON, with every recorded value")
@@ -119,7 +128,11 @@ def _runs(args: argparse.Namespace) -> int:
     if not rows:
         print(f"no runs recorded under {args.outputs} match")
         return 0
-    print(query.as_table(rows))
+    columns = [c.strip() for c in (args.columns or "").split(",") if c.strip()]
+    if columns:
+        rows = query.with_values(args.outputs, rows)
+        query.check_columns(rows, columns)
+    print(query.as_table(rows, columns))
     for r in rows:
         if r["status"] in ("interrupted", "failed"):
             print(f"resume {r['run_id']}: {resume_command(r['run_id'], args.outputs)}")
