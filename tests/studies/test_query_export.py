@@ -122,7 +122,7 @@ def test_where_takes_units_defaults_and_the_status(
 def test_runs_shows_value_columns_in_the_scenes_units(
     recorded, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    outputs, slow, fast = recorded
+    outputs, _, fast = recorded
     out = runs_out(capsys, outputs, "--columns", "cam_speed,angle_step,max_jerk.max")
     head, *lines = out.splitlines()
     assert "cam_speed [rpm]" in head

@@ -100,8 +100,10 @@ def test_a_full_factorial_on_the_plugin_scene_matches_the_closed_form(
 
 def install_plugin(target: Path) -> Path:
     subprocess.run(
-        [sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--target", str(target)]
-        + [str(PLUGIN)],
+        [
+            *(sys.executable, "-m", "pip", "install", "--quiet", "--no-deps"),
+            *("--target", str(target), str(PLUGIN)),
+        ],
         check=True,
         capture_output=True,
     )
