@@ -26,6 +26,8 @@ from studies.definition import StudyError, catalog_names, read_study
 from studies.tracking_cli import add_commands
 
 if TYPE_CHECKING:
+    from concurrent.futures import Executor
+
     from studies.plan import Plan
     from studies.study_run import RunResult
 
@@ -197,10 +199,8 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from studies import provenance, tracking
     from studies.plan import plan_study
-    from studies.runner import DEFAULT_CHUNK_SIZE, dask_executor
-    from studies.study_run import resume_run, run_plan
+    from studies.study_run import resume_run
 
     if args.all == bool(args.study or args.resume):
         print("error: name one study, --resume RUN_ID or --all", file=sys.stderr)
@@ -216,7 +216,20 @@ def _cmd_run(args: argparse.Namespace) -> int:
         return 0
     names = catalog_names() if args.all else [args.study]
     plans = [plan_study(n) for n in names]
-    executor = dask_executor(args.scheduler) if args.scheduler else None
+    if not args.scheduler:
+        return _run_plans(args, plans, None)
+    from studies.cluster import cluster_executor
+
+    with cluster_executor(args.scheduler, sorted({p.definition.scene for p in plans})) as pool:
+        return _run_plans(args, plans, pool)
+
+
+def _run_plans(args: argparse.Namespace, plans: list[Plan], executor: Executor | None) -> int:
+    """Run (or reuse) each plan; chunks on ``executor`` when given."""
+    from studies import provenance, tracking
+    from studies.runner import DEFAULT_CHUNK_SIZE
+    from studies.study_run import run_plan
+
     incomplete = 0
     for plan in plans:
         key = tracking.definition_hash(plan.definition.text, plan.definition.input_files())

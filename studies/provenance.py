@@ -129,23 +129,24 @@ def engine_code() -> dict[str, str]:
     }
 
 
-@cache
 def scene_code(scene_class: type) -> dict[str, Any]:
     """The code of a scene: for a built-in scene the engine's, for a plugin its distribution,
     version and the hash of its top-level package (or module) source."""
     name = str(getattr(scene_class, "name", scene_class.__name__))
-    module = sys.modules[scene_class.__module__]
-    source = Path(module.__file__ or "").resolve()
+    source = Path(sys.modules[scene_class.__module__].__file__ or "").resolve()
     if source.is_relative_to(SOURCE_ROOT / "studies"):
         return {"scene": name, "plugin": False, **engine_code()}
+    return {"scene": name, "plugin": True, **_plugin_code(scene_class, source)}
+
+
+@cache
+def _plugin_code(scene_class: type, source: Path) -> dict[str, str]:
     top = scene_class.__module__.split(".", 1)[0]
     distribution = _distribution_of(top)
     root = Path(getattr(sys.modules.get(top), "__file__", None) or source).resolve()
     package = root.parent if root.name == "__init__.py" else root
     base = package.parent
     return {
-        "scene": name,
-        "plugin": True,
         "distribution": distribution,
         "version": _version(distribution) if distribution else "",
         "source_sha256": tree_sha256(base, source_files(package)),
@@ -158,14 +159,16 @@ def _distribution_of(top_level: str) -> str:
     return names[0] if names else ""
 
 
+def libraries() -> dict[str, str]:
+    """The versions of Python and of the libraries that compute (:data:`LIBRARIES`)."""
+    return {"python": platform.python_version()} | {
+        n: _version(n) or "not installed" for n in LIBRARIES
+    }
+
+
 def code(scene_class: type) -> dict[str, Any]:
     """Everything that computed a run of a scene: the engine, the scene and the libraries."""
-    return {
-        "engine": engine_code(),
-        "scene": scene_code(scene_class),
-        "libraries": {"python": platform.python_version()}
-        | {n: _version(n) or "not installed" for n in LIBRARIES},
-    }
+    return {"engine": engine_code(), "scene": scene_code(scene_class), "libraries": libraries()}
 
 
 def code_hash(recorded: dict[str, Any]) -> str:
