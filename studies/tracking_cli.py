@@ -86,7 +86,9 @@ def add_commands(sub: Any, outputs_help: str) -> None:
         "--to", required=True, metavar="URI", help="tracking URI, e.g. sqlite:///mlflow.db"
     )
 
-    export = command("export", "a run's results as CSV or Parquet", _export)
+    export = command(
+        "export", "a run's results as CSV or Parquet (curves in a second, long table)", _export
+    )
     export.add_argument("run_id")
     export.add_argument("--format", choices=("csv", "parquet"), default="csv")
     export.add_argument("--to", type=Path, help="file to write (default: in the run folder)")
@@ -263,5 +265,6 @@ def _export(args: argparse.Namespace) -> int:
     if not results.exists():
         raise FileNotFoundError(f"run {row['run_id']} has no results.nc: nothing to export")
     to = args.to or results.with_suffix(f".{args.format}")
-    print(f"wrote {export_results(results, to, args.format)}")
+    for path in export_results(results, to, args.format):
+        print(f"wrote {path}")
     return 0

@@ -10,6 +10,7 @@ import math
 from html.parser import HTMLParser
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 import xarray as xr
@@ -206,3 +207,37 @@ def test_report_html_is_self_contained_with_every_figure(recorded) -> None:
     assert page.outside == []  # nothing loaded from anywhere
     assert page.tables >= 2
     assert 'addEventListener("click"' in (folder / "report.html").read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize("file_format", ["csv", "parquet"])
+def test_export_writes_the_curves_in_long_format(
+    tmp_path: Path, file_format: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    pytest.importorskip("pyarrow")
+    from studies import export
+
+    monkeypatch.setattr(export, "CURVE_CHUNK", 2)  # 3 design points: blocks of 2 and 1
+    study = tmp_path / "curved.toml"
+    study.write_text(
+        STUDY.format(speeds="[1000.0]", step=1.0)
+        .replace("16.0, 18.0", "16.0, 18.0, 20.0")
+        .replace("[settings]", 'curves = ["lift"]\n[settings]'),
+        encoding="utf-8",
+    )
+    outputs = tmp_path / "out"
+    run_id = run_study(study, outputs=outputs, progress=False).record.run_id
+    to = tmp_path / f"curved.{file_format}"
+    argv = ["export", run_id, "--format", file_format, "--to", str(to), "--outputs", str(outputs)]
+    assert main(argv) == 0
+    curves = to.with_name(f"curved_curves.{file_format}")
+    table = pd.read_csv(curves) if file_format == "csv" else pd.read_parquet(curves)
+    (results,) = outputs.glob(f"speeds/{run_id}/results.nc")
+    with xr.open_dataset(results) as ds:
+        lift, angles = ds["lift"].values, ds["cam_angle"].values
+        radii = ds["base_radius"].values
+        assert ds["lift"].attrs["units"] == "mm"
+    assert len(table) == lift.size  # one row per design point and angle
+    assert list(table["lift [mm]"]) == pytest.approx(lift.reshape(-1).tolist())
+    assert list(table["cam_angle [degree]"]) == pytest.approx(np.tile(angles, 3).tolist())
+    assert list(table["base_radius [mm]"]) == pytest.approx(radii.repeat(angles.size).tolist())
+    assert list(table["run"]) == np.arange(3).repeat(angles.size).tolist()
