@@ -11,7 +11,8 @@ compare RUN_A RUN_B…   what differs: definitions, code, versions, timings, res
 regress BASE RUN       exit 1 when a response moved beyond tolerance
 tag RUN_ID TAG         name a run (tags work wherever a run id does); note RUN_ID TEXT
 rm RUN_ID, gc          remove runs (folder and registry rows together)
-export RUN_ID          the results as CSV or Parquet
+mlflow RUN_ID --to URI log recorded runs to MLflow (e.g. sqlite:///mlflow.db)
+export RUN_ID          the results (and curves) as CSV or Parquet
 """
 
 from __future__ import annotations
