@@ -115,6 +115,15 @@ def resume_run(run_id: str, outputs: Path | None = None, progress: bool = True) 
         raise ValueError(msg)
     _check_unchanged(folder / "study.toml", record.definition_sha256)
     plan = plan_study(folder / "study.toml")
+    code = provenance.code(type(plan.scene))
+    if record.code_sha256 and provenance.code_hash(code) != record.code_sha256:
+        msg = (
+            f"the code changed since run {record.run_id} started (engine or scene source, or "
+            "the numba/numpy/scipy versions: `python -m studies show` has what it ran with). "
+            "Resuming would mix design points computed by two codes; run the study anew: "
+            f"python -m studies run {folder / 'study.toml'}"
+        )
+        raise ValueError(msg)
     done = {
         int(path.stem): path
         for path in sorted((folder / CHECKPOINTS).glob("*.npz"))
