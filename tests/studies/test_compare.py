@@ -9,6 +9,7 @@ import pytest
 
 from studies.cli import main
 from studies.compare import compare, load_run
+from studies.compare_plots import overlay_figure
 from studies.definition import find_study
 from studies.registry import run_values
 from studies.study_run import run_study
@@ -95,6 +96,12 @@ def test_different_designs_compare_on_their_common_points(
     assert sorted(p.name for p in (tmp_path / "fig").iterdir()) == [
         "compare_max_jerk.png",
         "compare_min_radius_of_curvature.png",
+    ]
+    # the legend names what differs between the runs, not their ids
+    legend = overlay_figure(c, "max_jerk").axes[0].get_legend()
+    assert [t.get_text() for t in legend.get_texts()] == [
+        "base_radius [16, 18, 20] mm",
+        "base_radius [18, 20, 22, 24] mm",
     ]
     assert "points" in capsys.readouterr().out
 

@@ -99,3 +99,29 @@ def test_a_store_mlflow_refuses_is_one_line_before_anything_runs(
     assert "MLflow cannot use this store" in err
     assert "sqlite:///mlflow.db" in err
     assert len(tracking.list_runs(outputs)) == before  # no run recorded for a failed export
+
+
+def test_an_export_that_fails_part_way_leaves_no_mlflow_run_behind(
+    logged, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from studies.mlflow_export import log_run
+
+    here, outputs, _, _ = logged
+    study = tmp_path / "tiny_fail.toml"
+    study.write_text(TINY.replace("tiny_cam", "tiny_fail"), encoding="utf-8")
+    assert main(["run", str(study), "--outputs", str(outputs), "--no-progress"]) == 0
+    (run,) = tracking.list_runs(outputs, "tiny_fail")
+    uri = f"sqlite:///{here / 'mlflow.db'}"
+
+    def broken(*args, **kwargs):
+        raise OSError("disk full while copying artifacts")
+
+    with monkeypatch.context() as patch:
+        patch.setattr(mlflow, "log_artifacts", broken)
+        with pytest.raises(ValueError, match="disk full while copying artifacts"):
+            log_run(uri, Path(run["folder"]), [], [])
+    assert mlflow.search_runs(experiment_names=["tiny_fail"]).empty  # the partial run is gone
+    mlflow_id, new = log_run(uri, Path(run["folder"]), [], [])
+    assert new
+    (row,) = mlflow.search_runs(experiment_names=["tiny_fail"]).to_dict("records")
+    assert row["run_id"] == mlflow_id
