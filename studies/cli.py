@@ -206,23 +206,29 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if args.all == bool(args.study or args.resume):
         print("error: name one study, --resume RUN_ID or --all", file=sys.stderr)
         return EXIT_STUDY_ERROR
-    if args.mlflow:
-        from studies.mlflow_export import check_store
-
-        check_store(args.mlflow)  # before anything runs: a refused store records nothing
     if args.resume:
+        _check_mlflow(args)
         result = resume_run(args.resume, args.outputs, progress=not args.no_progress)
         _report(result)
         _track(args, Path(result.folder), result.record.run_id)
         return 0
     names = catalog_names() if args.all else [args.study]
     plans = [plan_study(n) for n in names]
+    _check_mlflow(args)
     if not args.scheduler:
         return _run_plans(args, plans, None)
     from studies.cluster import cluster_executor
 
     with cluster_executor(args.scheduler, sorted({p.definition.scene for p in plans})) as pool:
         return _run_plans(args, plans, pool)
+
+
+def _check_mlflow(args: argparse.Namespace) -> None:
+    """Before anything runs: a store MLflow refuses records nothing."""
+    if args.mlflow:
+        from studies.mlflow_export import check_store
+
+        check_store(args.mlflow)
 
 
 def _run_plans(args: argparse.Namespace, plans: list[Plan], executor: Executor | None) -> int:

@@ -5,9 +5,9 @@ NAME is a registry column (study, scene, design, status, runs, git_commit, compi
 started, finished), a parameter (fixed or left at its default) or setting (its value), a factor
 (true when any of its levels satisfies it) or a response summary ``<response>.min|mean|max``.
 A number is in the units the scene declares for NAME (those of ``python -m studies scenes``,
-whatever units each study file wrote) unless a unit follows it (``bore>=80 mm``,
-``cam_speed<0.5 krpm`` is refused: the unit must measure what NAME measures); values are
-compared in SI, ``==`` to 12 significant digits. Anything else compares as text (quotes
+whatever units each study file wrote) unless a unit follows it (``bore>=80 mm``; one that
+does not measure what NAME measures, ``cam_speed>=80 mm``, is refused); values are compared in
+SI, ``==`` to 12 significant digits. Anything else compares as text (quotes
 optional).
 """
 
