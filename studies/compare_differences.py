@@ -10,7 +10,7 @@ the scene's distribution, version and source hash, recorded in ``run.json``
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -32,6 +32,7 @@ class Difference:
     name: str
     values: list[str]
     note: str = ""
+    detail: list[str] = field(default_factory=list)  # per run, where values alone are equal
 
     def text(self) -> str:
         """The values, ``a → b`` for two runs and ``a | b | c`` for more, then the note."""
@@ -40,7 +41,8 @@ class Difference:
 
     def label(self, index: int) -> str:
         """What this difference is in run ``index`` (a plot legend's words)."""
-        return f"{self.name} {self.values[index]}"
+        detail = f" ({self.detail[index]})" if self.detail else ""
+        return f"{self.name} {self.values[index]}{detail}"
 
 
 def definition_differences(
@@ -81,7 +83,7 @@ def _value_differences(values: list[list[dict[str, Any]]]) -> list[Difference]:
     for name in names:
         entries = [t.get(name, ("", MISSING, MISSING)) for t in tables]
         if len({key for _, key, _ in entries}) > 1:
-            kinds = {kind for kind, _, _ in entries}
+            kinds = {kind for kind, _, _ in entries if kind}
             kind = "factor" if "factor" in kinds else KINDS.get(min(kinds), "fixed parameter")
             out.append(Difference(kind, name, [shown for _, _, shown in entries]))
     return out
@@ -134,18 +136,27 @@ def code_differences(records: list[dict[str, Any]]) -> list[Difference]:
     codes = [x.get("code", {}) for x in records]
     engines = [c.get("engine", {}) for c in codes]
     scenes = [c.get("scene", {}) for c in codes]
-    names = {s.get("scene") for s in scenes if s} or {records[0].get("scene", "?")}
-    for what, entries in (("engine", engines), (f"scene {'/'.join(sorted(names))}", scenes)):
-        if (
-            len({str(e.get("source_sha256")) for e in entries}) > 1
-            or len({str(e.get("version")) for e in entries}) > 1
-        ):
-            shown = [describe_scene_code(e).rsplit(", source", 1)[0] for e in entries]
-            hashes = [str(e.get("source_sha256", ""))[:8] or MISSING for e in entries]
-            note = "source changed" if len(set(hashes)) > 1 else ""
-            note += f" ({' → '.join(hashes)})" if note and len(hashes) == 2 else ""
-            out.append(Difference("code", what, shown, note))
+    names = "/".join(sorted({str(s.get("scene")) for s in scenes if s}))
+    engine_words = [f"{e.get('distribution', '?')} {e.get('version', '?')}" for e in engines]
+    out += _code_difference("engine", engines, engine_words)
+    if any(s.get("plugin") for s in scenes):  # a built-in scene's code is the engine's
+        words = [describe_scene_code(s).rsplit(", source", 1)[0] for s in scenes]
+        out += _code_difference(f"scene {names}", scenes, words)
     return out
+
+
+def _code_difference(
+    what: str, entries: list[dict[str, Any]], words: list[str]
+) -> list[Difference]:
+    """One difference when the distributions, versions or source hashes differ."""
+    hashes = [str(e.get("source_sha256", ""))[:8] or MISSING for e in entries]
+    if len(set(words)) == 1 and len(set(hashes)) == 1:
+        return []
+    note = detail = None
+    if len(set(hashes)) > 1:
+        note = "source changed" + (f" ({' → '.join(hashes)})" if len(hashes) == 2 else "")
+        detail = [f"source {h}" for h in hashes]
+    return [Difference("code", what, words, note or "", detail or [])]
 
 
 def version_differences(records: list[dict[str, Any]]) -> list[Difference]:

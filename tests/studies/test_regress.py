@@ -166,8 +166,8 @@ def test_regress_takes_a_results_file_and_compare_names_the_changed_engine_sourc
     # hash, not a commit, tells the runs apart
     assert main(["compare", base, changed, "--outputs", str(outputs), "--rtol", "1e-3"]) == 0
     out = capsys.readouterr().out
-    assert re.search(r"code engine\s+built-in engine-studies \S+ → built-in engine-studies", out)
-    assert "source changed" in out
+    assert re.search(r"code engine\s+engine-studies \S+ → engine-studies \S+, source changed", out)
+    assert "code scene" not in out  # a built-in scene's code is the engine's: said once
     assert "moved: max_contact_stress" in out
     (line,) = [x for x in out.splitlines() if x.strip().startswith("max_contact_stress [MPa]")]
     assert "9/9" in line  # one line for the moved response, every point beyond 1e-3
