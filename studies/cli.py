@@ -12,7 +12,8 @@ regress BASE RUN       exit 1 when a response moved beyond tolerance
 tag RUN_ID TAG         name a run (tags work wherever a run id does); note RUN_ID TEXT
 rm RUN_ID, gc          move runs to the trash (outputs/.trash); restore RUN_ID, trash
 reindex                rebuild the registry from the run folders
-export RUN_ID          the results as CSV or Parquet
+mlflow RUN_ID --to URI log recorded runs to MLflow (e.g. sqlite:///mlflow.db)
+export RUN_ID          the results (and curves) as CSV or Parquet
 
 Exit codes: 0 done, 1 regress: a response moved, 2 bad input, 3 --strict: points did not run,
 4 a file or the registry cannot be used (full disk, permissions, damage, locked), 130 Ctrl-C.
@@ -32,6 +33,8 @@ from studies.registry_file import RegistryUnusable, unusable
 from studies.tracking_cli import add_commands
 
 if TYPE_CHECKING:
+    from concurrent.futures import Executor
+
     from studies.plan import Plan
     from studies.study_run import RunResult
 
@@ -121,8 +124,11 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--mlflow",
         metavar="URI",
-        help="also log the run to MLflow (tracking URI, e.g. file:./mlruns; optional extra)",
+        help="also log the run to MLflow (tracking URI, e.g. sqlite:///mlflow.db; the [mlflow] "
+        "extra); a reused run is logged too, once",
     )
+    run.add_argument("--tag", action="append", default=[], help="tag the run (repeat for more)")
+    run.add_argument("--note", help="add a note to the run")
     run.set_defaults(func=_cmd_run)
 
     check = sub.add_parser("check", help="validate a study without running it")
@@ -205,34 +211,56 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from studies import provenance, tracking
     from studies.plan import plan_study
-    from studies.runner import DEFAULT_CHUNK_SIZE, dask_executor
-    from studies.study_run import resume_run, run_plan
+    from studies.study_run import resume_run
 
-    if args.resume:
-        result = resume_run(args.resume, args.outputs, progress=not args.no_progress)
-        _report(result, args.mlflow)
-        return 0
-    if args.all == bool(args.study):
-        print("error: name one study or use --all", file=sys.stderr)
+    if args.all == bool(args.study or args.resume):
+        print("error: name one study, --resume RUN_ID or --all", file=sys.stderr)
         return EXIT_STUDY_ERROR
+    if args.resume:
+        _check_mlflow(args)
+        result = resume_run(args.resume, args.outputs, progress=not args.no_progress)
+        _report(result)
+        _track(args, Path(result.folder), result.record.run_id)
+        return 0
     names = catalog_names() if args.all else [args.study]
     plans = [plan_study(n) for n in names]
-    commit, dirty = provenance.git_state()
-    executor = dask_executor(args.scheduler) if args.scheduler else None
+    _check_mlflow(args)
+    if not args.scheduler:
+        return _run_plans(args, plans, None)
+    from studies.cluster import cluster_executor
+
+    with cluster_executor(args.scheduler, sorted({p.definition.scene for p in plans})) as pool:
+        return _run_plans(args, plans, pool)
+
+
+def _check_mlflow(args: argparse.Namespace) -> None:
+    """Before anything runs: a store MLflow refuses records nothing."""
+    if args.mlflow:
+        from studies.mlflow_export import check_store
+
+        check_store(args.mlflow)
+
+
+def _run_plans(args: argparse.Namespace, plans: list[Plan], executor: Executor | None) -> int:
+    """Run (or reuse) each plan; chunks on ``executor`` when given."""
+    from studies import provenance, tracking
+    from studies.runner import DEFAULT_CHUNK_SIZE
+    from studies.study_run import run_plan
+
     incomplete = 0
     for plan in plans:
         key = tracking.definition_hash(plan.definition.text, plan.definition.input_files())
-        earlier = (
-            None if args.force or dirty else tracking.finished_identical(args.outputs, key, commit)
-        )
+        code = provenance.code_hash(provenance.code(type(plan.scene)))
+        earlier = None if args.force else tracking.finished_identical(args.outputs, key, code)
         if earlier is not None:
             print(
-                f"{plan.definition.name}: identical definition already ran on commit "
-                f"{commit[:10]}: reusing run {earlier['run_id']} (--force recomputes)"
+                f"{plan.definition.name}: identical definition already ran on identical code "
+                f"(engine and scene sources, library versions): reusing run "
+                f"{earlier['run_id']} (--force recomputes)"
             )
             print(f"  {Path(earlier['folder']) / 'results.nc'}")
+            _track(args, Path(earlier["folder"]), earlier["run_id"])
             continue
         _warn(plan)
         result = run_plan(
@@ -242,7 +270,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
             not args.no_progress,
             executor,
         )
-        _report(result, args.mlflow)
+        _report(result)
+        _track(args, result.folder, result.record.run_id)
         incomplete += result.record.points_without_value > 0
     if args.strict and incomplete:
         print(
@@ -253,7 +282,36 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _report(result: RunResult, mlflow_uri: str | None = None) -> None:
+def _track(args: argparse.Namespace, folder: Path, run_id: str) -> None:
+    """``run --tag/--note/--mlflow``: tag and note the run, then log it to MLflow."""
+    from studies import registry
+    from studies.tracking import now
+
+    for tag in args.tag:
+        registry.set_tag(args.outputs, run_id, tag)
+        print(f"  tagged {tag}")
+    if args.note:
+        registry.add_note(args.outputs, run_id, now(), args.note)
+    if args.mlflow:
+        from studies.mlflow_export import log_run
+
+        tags, notes = registry.tags_and_notes(args.outputs)
+        try:
+            mlflow_id, new = log_run(
+                args.mlflow, folder, tags.get(run_id, []), notes.get(run_id, [])
+            )
+        except (ValueError, OSError) as exc:
+            msg = (
+                f"run {run_id} is recorded, but its MLflow export failed ({exc}); log it "
+                f"later with: python -m studies mlflow {run_id} --to {args.mlflow} "
+                f"--outputs {args.outputs}"
+            )
+            raise ValueError(msg) from None
+        verb = "logged to" if new else "already logged to"
+        print(f"  {verb} MLflow at {args.mlflow} as run {mlflow_id}")
+
+
+def _report(result: RunResult) -> None:
     r = result.record
     t = r.timings
     print(
@@ -268,10 +326,6 @@ def _report(result: RunResult, mlflow_uri: str | None = None) -> None:
             f"value for any response (they did not run; reasons in {r.folder}/analysis.txt)",
             file=sys.stderr,
         )
-    if mlflow_uri:
-        from studies.mlflow_export import log_run
-
-        print(f"  logged to MLflow at {mlflow_uri} as run {log_run(mlflow_uri, r)}")
 
 
 def _cmd_check(args: argparse.Namespace) -> int:

@@ -2,15 +2,17 @@
 
 Everything is read from the run folders (``study.toml``, ``run.json``, ``results.nc``) and the
 registry, never from scene code, so runs of scenes that are no longer installed still compare.
-Design points are matched by the values of the factors the runs share: two different designs
-over the same factors compare on the points they have in common.
+Design points are matched by the values of the factors the runs share, in SI (so levels written
+in mm and in m match): two different designs over the same factors compare on the points they
+have in common. A response "moved" when a common point differs beyond its tolerance
+(:mod:`studies.tolerances`; by default rtol 1e-7).
 """
 
 from __future__ import annotations
 
 import json
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -18,12 +20,17 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from studies import tracking
+from studies import registry, tracking
+from studies.compare_differences import (
+    Difference,
+    code_differences,
+    definition_differences,
+    short,
+    version_differences,
+)
 from studies.results import is_status, open_results
-
-TOP_POINTS = 3  # design points listed per response, those that moved most
-MISSING = "—"
-SECTIONS = {"parameters": "fixed parameter", "settings": "setting", "factors": "factor"}
+from studies.tolerances import DEFAULT, Tolerance, deviations
+from studies.units import UNITS, to_si
 
 
 @dataclass
@@ -34,6 +41,7 @@ class RecordedRun:
     record: dict[str, Any]
     definition: dict[str, Any]
     results: xr.Dataset
+    values: list[dict[str, Any]] = field(default_factory=list)  # the registry's, in SI
 
     @property
     def factors(self) -> list[str]:
@@ -53,15 +61,6 @@ class RecordedRun:
 
 
 @dataclass
-class Difference:
-    """One entry of a definition that differs between runs (a value per run)."""
-
-    kind: str  # "fixed parameter", "setting", "factor", "study"
-    name: str
-    values: list[str]
-
-
-@dataclass
 class ResponseChange:
     """How one response moved from the reference run to another run on their common points."""
 
@@ -71,11 +70,13 @@ class ResponseChange:
     points: int
     max_abs: float
     max_rel: float
-    moved: list[tuple[str, float, float]]  # (point, reference value, value), largest first
+    beyond: int  # points outside the tolerance
+    tolerance: Tolerance
+    worst: tuple[str, float, float] | None  # (point, reference value, value) that moved most
 
     @property
     def changed(self) -> bool:
-        return bool(self.moved)
+        return self.beyond > 0
 
 
 @dataclass
@@ -86,6 +87,15 @@ class Comparison:
     versions: list[Difference]
     matched_on: list[str]
     changes: list[ResponseChange]
+
+    def label(self, index: int, most: int = 3) -> str:
+        """What run ``index`` is, in the words of what differs (a legend entry); its id when
+        nothing but the id differs."""
+        differing = self.definition + self.code + self.versions
+        if not differing:
+            return self.runs[index].run_id
+        words = "; ".join(d.label(index) for d in differing[:most])
+        return words + (f"; +{len(differing) - most} more" if len(differing) > most else "")
 
     def moved(self) -> list[str]:
         """Responses that moved in any run (reference order)."""
@@ -102,11 +112,28 @@ def load_run(outputs: Path, ref: str) -> RecordedRun:
         raise FileNotFoundError(msg)
     record = json.loads((folder / "run.json").read_text(encoding="utf-8"))
     definition = tomllib.loads((folder / "study.toml").read_text(encoding="utf-8"))
-    return RecordedRun(row["run_id"], record, definition, open_results(results).load())
+    values = registry.run_values(outputs, row["run_id"])
+    return RecordedRun(row["run_id"], record, definition, open_results(results).load(), values)
 
 
-def compare(runs: list[RecordedRun]) -> Comparison:
-    """Compare runs with the first (the reference)."""
+def load_results(outputs: Path, ref: str) -> tuple[str, xr.Dataset]:
+    """A results Dataset named by a run reference or by the path of a results ``.nc`` file
+    (a reviewed baseline kept outside any registry): (what to call it, the Dataset)."""
+    path = Path(ref)
+    if path.suffix == ".nc" and path.is_file():
+        return str(path), open_results(path).load()
+    run = load_run(outputs, ref)
+    return f"run {run.run_id}", run.results
+
+
+def compare(
+    runs: list[RecordedRun],
+    default: Tolerance = DEFAULT,
+    tolerances: dict[str, Tolerance] | None = None,
+) -> Comparison:
+    """Compare runs with the first (the reference); a response moved where a point differs
+    beyond its tolerance (``tolerances`` per response, else ``default``)."""
+    tolerances = tolerances or {}
     if len(runs) < 2:
         raise ValueError("name at least two runs to compare")
     shared = [r for r in runs[0].responses() if all(r in x.responses() for x in runs[1:])]
@@ -120,14 +147,21 @@ def compare(runs: list[RecordedRun]) -> Comparison:
     for other in runs[1:]:
         common = matched_points(runs[0].results, other.results, factors)
         changes += [
-            _change(common, r, str(runs[0].results[r].attrs.get("units", "")), other.run_id)
+            _change(
+                common,
+                r,
+                str(runs[0].results[r].attrs.get("units", "")),
+                other.run_id,
+                tolerances.get(r, default),
+            )
             for r in shared
         ]
+    records = [x.record for x in runs]
     return Comparison(
         runs,
-        _definition_differences(runs),
-        _code_differences(runs),
-        _version_differences(runs),
+        definition_differences([x.definition for x in runs], [x.values for x in runs]),
+        code_differences(records),
+        version_differences(records),
         factors,
         changes,
     )
@@ -142,8 +176,8 @@ def shared_factors(runs: list[RecordedRun]) -> list[str]:
 
 
 def point_table(ds: xr.Dataset, factors: list[str], responses: list[str]) -> pd.DataFrame:
-    """Responses indexed by the values of ``factors`` (ValueError if they repeat)."""
-    frame = pd.DataFrame({f: ds[f].values for f in factors})
+    """Responses indexed by the values of ``factors`` in SI (ValueError if they repeat)."""
+    frame = pd.DataFrame({f: _si(ds[f]) for f in factors})
     for r in responses:
         frame[r] = ds[r].values.astype(np.float64)
     indexed = frame.set_index(factors)
@@ -170,22 +204,33 @@ def matched_points(reference: xr.Dataset, other: xr.Dataset, factors: list[str])
     return common
 
 
+def _si(coordinate: xr.DataArray) -> np.ndarray:
+    """A factor's values in SI when its units are known (else as stored)."""
+    units = str(coordinate.attrs.get("units", ""))
+    values = coordinate.values
+    if units in UNITS and values.dtype.kind in "fiu":
+        return np.asarray(to_si(values.astype(np.float64), units))
+    return values
+
+
 def point_label(index: Any, factors: list[str]) -> str:
+    """A design point as ``factor=value`` pairs (values in SI, as matched)."""
     values = index if isinstance(index, tuple) else (index,)
-    return ", ".join(f"{f}={_short(v)}" for f, v in zip(factors, values, strict=True))
+    return ", ".join(f"{f}={short(v)}" for f, v in zip(factors, values, strict=True))
 
 
-def _change(common: pd.DataFrame, response: str, units: str, run_id: str) -> ResponseChange:
+def _change(
+    common: pd.DataFrame, response: str, units: str, run_id: str, tol: Tolerance
+) -> ResponseChange:
     a = common[response].to_numpy()
     b = common[f"{response}_other"].to_numpy()
-    same = (a == b) | (np.isnan(a) & np.isnan(b))  # equal, the same infinity, or both NaN
-    with np.errstate(invalid="ignore", divide="ignore"):
-        diff = np.where(same, 0.0, np.abs(b - a))
-        diff = np.where(np.isnan(diff), np.inf, diff)  # NaN in one run only: it moved
-        rel = np.where(diff == 0, 0.0, diff / np.abs(a))
-    order = [i for i in np.argsort(-diff, kind="stable")[:TOP_POINTS] if diff[i] > 0]
-    factors = [str(n) for n in common.index.names]
-    moved = [(point_label(common.index[i], factors), float(a[i]), float(b[i])) for i in order]
+    inside, diff, rel = deviations(a, b, tol)
+    beyond = np.where(inside, 0.0, diff)
+    worst = None
+    if not inside.all():
+        i = int(np.argmax(beyond))
+        factors = [str(n) for n in common.index.names]
+        worst = (point_label(common.index[i], factors), float(a[i]), float(b[i]))
     return ResponseChange(
         response,
         units,
@@ -193,69 +238,21 @@ def _change(common: pd.DataFrame, response: str, units: str, run_id: str) -> Res
         len(common),
         float(diff.max(initial=0.0)),
         float(rel.max(initial=0.0)),
-        moved,
+        int((~inside).sum()),
+        tol,
+        worst,
     )
 
 
-def _flatten(table: dict[str, Any], prefix: str = "") -> dict[str, Any]:
-    out: dict[str, Any] = {}
-    for key, value in table.items():
-        name = f"{prefix}{key}"
-        if isinstance(value, dict):
-            out |= _flatten(value, f"{name}.")
-        else:
-            out[name] = value
-    return out
-
-
-def _definition_differences(runs: list[RecordedRun]) -> list[Difference]:
-    flat = [_flatten({k: v for k, v in x.definition.items() if k != "description"}) for x in runs]
-    keys = list(dict.fromkeys(k for f in flat for k in f))
-    out = []
-    for key in keys:
-        values = [_short(f.get(key, MISSING)) for f in flat]
-        if len(set(values)) > 1:
-            section, _, name = key.partition(".")
-            out.append(Difference(SECTIONS.get(section, "study"), name or section, values))
-    return out
-
-
-def _code_differences(runs: list[RecordedRun]) -> list[Difference]:
-    commits = [
-        f"{x.record.get('git_commit', '?')[:10]}{' +dirty' if x.record.get('git_dirty') else ''}"
-        for x in runs
-    ]
-    return [Difference("code", "commit", commits)] if len(set(commits)) > 1 else []
-
-
-def _version_differences(runs: list[RecordedRun]) -> list[Difference]:
-    versions = [x.record.get("versions", {}) for x in runs]
-    names = list(dict.fromkeys(k for v in versions for k in v))
-    return [
-        Difference("version", n, [str(v.get(n, MISSING)) for v in versions])
-        for n in names
-        if len({str(v.get(n, MISSING)) for v in versions}) > 1
-    ]
-
-
-def _short(value: Any) -> str:
-    if isinstance(value, float | np.floating):
-        return f"{float(value):.6g}"
-    if isinstance(value, list):
-        return "[" + ", ".join(_short(v) for v in value) + "]"
-    if isinstance(value, np.generic):
-        return str(value.item())
-    return str(value)
-
-
 def format_comparison(c: Comparison) -> str:
-    """The comparison as text: differences, timings, then a table per response."""
+    """The comparison as text: differences, timings, then one line per moved response (its
+    largest change and where), and the responses within tolerance."""
     ids = [x.run_id for x in c.runs]
     lines = [f"reference {ids[0]}; compared: {', '.join(ids[1:])}", ""]
     differing = c.definition + c.code + c.versions
     lines.append("what differs:" if differing else "definitions, code and versions: identical")
     width = max((len(f"{d.kind} {d.name}") for d in differing), default=0)
-    lines += [f"  {f'{d.kind} {d.name}':<{width}}  {' | '.join(d.values)}" for d in differing]
+    lines += [f"  {f'{d.kind} {d.name}':<{width}}  {d.text()}" for d in differing]
     lines += ["", "timings:"]
     for x in c.runs:
         t = x.record.get("timings", {})
@@ -263,20 +260,29 @@ def format_comparison(c: Comparison) -> str:
             f"  {x.run_id:<30} compile {t.get('compile_s', float('nan')):.2f} s, "
             f"run {t.get('run_s', float('nan')):.3f} s, {x.results.sizes['run']} design points"
         )
-    lines += ["", f"responses (matched on {', '.join(c.matched_on)}):"]
-    header = f"  {'response':<34} {'run':<30} {'points':>6} {'max |Δ|':>12} {'max |Δ|/|ref|':>14}"
-    lines.append(header)
-    for ch in c.changes:
-        name = f"{ch.response} [{ch.units}]" if ch.units not in ("", "1") else ch.response
-        lines.append(
-            f"  {name:<34} {ch.run_id:<30} {ch.points:>6} {ch.max_abs:>12.4g} {ch.max_rel:>14.3g}"
-        )
-        lines += [f"      moved most at {p}: {a:.6g} → {b:.6g}" for p, a, b in ch.moved]
-    moved = c.moved()
-    still = [r for r in dict.fromkeys(ch.response for ch in c.changes) if r not in moved]
+    tolerances = sorted({(ch.tolerance.rtol, ch.tolerance.atol) for ch in c.changes})
+    limits = "; ".join(f"rtol {r:g}, atol {a:g}" for r, a in tolerances)
     lines += [
         "",
-        f"moved: {', '.join(moved) or 'none'}",
-        f"unchanged: {', '.join(still) or 'none'}",
+        f"responses (matched on {', '.join(c.matched_on)} in SI; moved: beyond {limits}):",
+    ]
+    moved = [ch for ch in c.changes if ch.changed]
+    if moved:
+        lines.append(
+            f"  {'response':<34} {'run':<30} {'moved':>9} {'max |Δ|':>11} {'max rel':>9}  most at"
+        )
+    for ch in moved:
+        name = f"{ch.response} [{ch.units}]" if ch.units not in ("", "1") else ch.response
+        where = f"{ch.worst[0]}: {ch.worst[1]:.6g} → {ch.worst[2]:.6g}" if ch.worst else ""
+        lines.append(
+            f"  {name:<34} {ch.run_id:<30} {f'{ch.beyond}/{ch.points}':>9} "
+            f"{ch.max_abs:>11.4g} {ch.max_rel:>9.3g}  {where}"
+        )
+    names = c.moved()
+    still = [r for r in dict.fromkeys(ch.response for ch in c.changes) if r not in names]
+    lines += [
+        "",
+        f"moved: {', '.join(names) or 'none'}",
+        f"within tolerance: {', '.join(still) or 'none'}",
     ]
     return "\n".join(lines)

@@ -1,7 +1,8 @@
 """``compare --plot``: the main effects of several runs overlaid, one figure per response.
 
 Each panel is one factor the runs share: the mean of the response at each of the factor's
-values, over the design points the runs have in common, one line per run.
+values (in SI), over the design points the runs have in common, one line per run, labelled
+with what differs between the runs (``reference_rtol 1e-10``), not their ids.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from matplotlib.figure import Figure
 from studies.compare import Comparison, matched_points
 from studies.figure_style import axis_label
 from studies.plots import DPI, PANEL_SIZE
+from studies.units import UNITS, si_unit
 
 
 def overlay_figure(c: Comparison, response: str) -> Figure:
@@ -29,15 +31,19 @@ def overlay_figure(c: Comparison, response: str) -> Figure:
             means = common.groupby(f, sort=True)[column].mean()
             x = means.index.to_numpy()
             positions = x if np.issubdtype(x.dtype, np.number) else np.arange(x.size)
-            ax.plot(positions, means.to_numpy(), marker="o", label=run.run_id)
+            ax.plot(positions, means.to_numpy(), marker="o", label=c.label(i))
             if positions is not x:
                 ax.set_xticks(positions, [str(v) for v in x])
     for ax, f in zip(axes, factors, strict=True):
-        ax.set_xlabel(axis_label(f, reference[f].attrs.get("units", "")))
+        ax.set_xlabel(axis_label(f, _si_units(str(reference[f].attrs.get("units", "")))))
     axes[0].set_ylabel(axis_label(response, reference[response].attrs.get("units", "")))
     axes[0].legend(fontsize="small")
     fig.suptitle(f"Main effects on {response}: {len(c.runs)} runs on their common points")
     return fig
+
+
+def _si_units(units: str) -> str:
+    return si_unit(units) if units in UNITS else units
 
 
 def save_overlays(c: Comparison, folder: Path) -> list[Path]:

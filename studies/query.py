@@ -1,10 +1,14 @@
 """Find runs: filters on the registry's rows and indexed values, output as text, JSON or CSV.
 
-A ``--where`` expression is ``NAME OP VALUE`` with OP one of ``== = != < <= > >=``. NAME is a
-registry column (study, scene, design, runs, git_commit, compile_s, run_s, started, finished),
-a fixed parameter or setting (its value), a factor (true when any of its levels satisfies it)
-or a response summary ``<response>.min|mean|max``. A number compares numerically, anything else
-as text (quotes optional).
+A ``--where`` expression is ``NAME OP VALUE [UNIT]`` with OP one of ``== = != < <= > >=``.
+NAME is a registry column (study, scene, design, status, runs, git_commit, compile_s, run_s,
+started, finished), a parameter (fixed or left at its default) or setting (its value), a factor
+(true when any of its levels satisfies it) or a response summary ``<response>.min|mean|max``.
+A number is in the units the scene declares for NAME (those of ``python -m studies scenes``,
+whatever units each study file wrote) unless a unit follows it (``bore>=80 mm``; one that
+does not measure what NAME measures, ``cam_speed>=80 mm``, is refused); values are compared in
+SI, ``==`` to 12 significant digits. Anything else compares as text (quotes
+optional).
 """
 
 from __future__ import annotations
@@ -19,9 +23,14 @@ from pathlib import Path
 from typing import Any
 
 from studies import registry, tracking
+from studies.housekeeping import parse_age
 from studies.reindex import reconcile
+from studies.units import UNITS, compatible_units, from_si, to_si
 
 EXPRESSION = re.compile(r"^\s*([A-Za-z_][\w.]*)\s*(==|=|!=|<=|>=|<|>)\s*([^<>=!\s].*?)\s*$")
+NUMBER = re.compile(r"^([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(\S*)$")
+SAME = 1e-12  # relative difference below which == holds (the round-off of a unit conversion)
+STATUS = "status"  # a run's status now (liveness), not the registry's last word: filtered here
 COLUMNS = {
     "study",
     "scene",
@@ -41,31 +50,49 @@ class Condition:
     name: str
     op: str
     value: str | float
+    units: str = ""  # of a number, when written
 
-    def sql(self, known: dict[str, str]) -> tuple[str, list[Any]]:
-        """A WHERE clause on ``runs`` and its arguments (``known``: value name → kind)."""
+    def sql(self, known: dict[str, tuple[str, str]]) -> tuple[str, list[Any]]:
+        """A WHERE clause on ``runs`` and its arguments (``known``: value name → (kind, the
+        scene's units))."""
         op = "=" if self.op == "==" else self.op
         if self.name in COLUMNS:
             return f"runs.{self.name} {op} ?", [self.value]
-        kind = known.get(self.name)
-        if kind is None:
-            responses = {n.rsplit(".", 1)[0] for n, k in known.items() if k == "response"}
+        kind, declared = known.get(self.name, ("", ""))
+        if not kind:
+            responses = {n.rsplit(".", 1)[0] for n, (k, _) in known.items() if k == "response"}
             if self.name in responses:
                 msg = f"{self.name} is a response: filter on {self.name}.min, .mean or .max"
             else:
-                names = sorted({*COLUMNS, *known})
+                names = sorted({*COLUMNS, STATUS, *known})
                 msg = (
                     f"--where names {self.name!r}, which no run records (known: {', '.join(names)})"
                 )
             raise ValueError(msg)
-        field = "num" if isinstance(self.value, float) else "text"
-        return (
-            (
-                "EXISTS (SELECT 1 FROM run_values v WHERE v.run_id = runs.run_id AND v.name = ? "
-                f"AND v.{field} {op} ?)"
-            ),
-            [self.name, self.value],
-        )
+        head = "EXISTS (SELECT 1 FROM run_values v WHERE v.run_id = runs.run_id AND v.name = ? "
+        if not isinstance(self.value, float):
+            return head + f"AND v.text {op} ?)", [self.name, self.value]
+        si = self.si(declared)
+        if op in ("=", "!="):
+            near = "ABS(v.num - ?) <= ? * ABS(?)"
+            test = near if op == "=" else f"NOT ({near})"
+            return head + f"AND {test})", [self.name, si, SAME, si]
+        return head + f"AND v.num {op} ?)", [self.name, si]
+
+    def si(self, declared: str) -> float:
+        """The number in SI: in its own units if written, else in the scene's (``declared``)."""
+        assert isinstance(self.value, float)
+        units = self.units or declared
+        if units not in UNITS:
+            return self.value
+        if declared in UNITS and UNITS[units].dimension != UNITS[declared].dimension:
+            msg = (
+                f"--where {self.name}: {units!r} measures {UNITS[units].dimension}, "
+                f"{self.name} is in {declared!r} (use one of "
+                f"{', '.join(compatible_units(declared))})"
+            )
+            raise ValueError(msg)
+        return to_si(self.value, units)
 
 
 def parse_condition(text: str) -> Condition:
@@ -79,19 +106,30 @@ def parse_condition(text: str) -> Condition:
         raise ValueError(msg)
     name, op, raw = match.groups()
     raw = raw.strip("'\"")
-    try:
-        value: str | float = float(raw)
-    except ValueError:
-        value = raw
-    return Condition(name, op, value)
+    number = NUMBER.match(raw)
+    if number is None:
+        return Condition(name, op, raw)
+    value, units = number.groups()
+    if units and units not in UNITS:
+        msg = (
+            f'--where {text!r}: unknown units {units!r} (write e.g. "bore>=80 mm"; '
+            "`python -m studies scenes` lists each name's units)"
+        )
+        raise ValueError(msg)
+    return Condition(name, op, float(value), units)
 
 
 def since_date(text: str) -> str:
-    """An ISO date or time → the ISO string the registry's ``started`` is compared with."""
+    """An ISO date or time, or an age (``30d``, ``12h``, ``2w``) → the ISO string the
+    registry's ``started`` is compared with."""
     try:
         when = dt.datetime.fromisoformat(text)
     except ValueError:
-        raise ValueError(f"--since {text!r} is not a date: write e.g. 2026-11-01") from None
+        try:
+            when = dt.datetime.now(dt.UTC) - parse_age(text)
+        except (ValueError, OverflowError):
+            msg = f"--since {text!r} is not a date or an age: write e.g. 2026-11-01 or 30d"
+            raise ValueError(msg) from None
     if when.tzinfo is None:
         when = when.replace(tzinfo=dt.UTC)
     return when.isoformat(timespec="seconds")
@@ -112,6 +150,11 @@ def find_runs(
     if not (outputs / registry.REGISTRY).exists():
         return []
     conditions = [parse_condition(w) for w in where or []]
+    current = [c for c in conditions if c.name == STATUS]
+    conditions = [c for c in conditions if c.name != STATUS]
+    for c in current:
+        if c.op not in ("==", "=", "!="):
+            raise ValueError(f"--where status: use == or != (e.g. status==finished), not {c.op}")
     clauses: list[str] = []
     args: list[Any] = []
     for column, value in (("study", study), ("scene", scene)):
@@ -125,7 +168,10 @@ def find_runs(
         clauses.append("runs.run_id IN (SELECT run_id FROM tags WHERE tag = ?)")
         args.append(tag)
     with registry.connection(outputs) as con:
-        known = dict(con.execute("SELECT DISTINCT name, kind FROM run_values").fetchall())
+        known = {
+            r["name"]: (r["kind"], r["declared_units"] or "")
+            for r in con.execute("SELECT DISTINCT name, kind, declared_units FROM run_values")
+        }
         for c in conditions:
             clause, extra = c.sql(known)
             clauses.append(clause)
@@ -139,6 +185,8 @@ def find_runs(
         row["status"], _ = tracking.current_status(row)
         if status and row["status"] != status:
             continue
+        if any((row["status"] == str(c.value)) != (c.op != "!=") for c in current):
+            continue
         row["tags"] = tags.get(row["run_id"], [])
         row["notes"] = notes.get(row["run_id"], [])
         out.append(row)
@@ -146,24 +194,31 @@ def find_runs(
 
 
 def with_values(outputs: Path, rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Rows with their parameters, settings, factor levels and response summaries."""
+    """Rows with their parameters (fixed, and left at their defaults), settings, factor levels
+    and response summaries, in SI; ``units`` maps each name to its SI unit and
+    ``declared_units`` to the unit its scene declares."""
     for row in rows:
         values: dict[str, dict[str, Any]] = {
             "parameters": {},
+            "defaults": {},
             "settings": {},
             "factors": {},
             "responses": {},
+            "units": {},
+            "declared_units": {},
         }
         for v in registry.run_values(outputs, row["run_id"]):
             value = v["num"] if v["num"] is not None else v["text"]
+            name = v["name"]
             if v["kind"] == "factor":
-                values["factors"].setdefault(v["name"], []).append(value)
+                values["factors"].setdefault(name, []).append(value)
             elif v["kind"] == "response":
-                name, summary = v["name"].rsplit(".", 1)
-                entry = values["responses"].setdefault(name, {"units": v["units"]})
-                entry[summary] = value
+                name, summary = name.rsplit(".", 1)
+                values["responses"].setdefault(name, {"units": v["units"]})[summary] = value
             else:
-                values[f"{v['kind']}s"][v["name"]] = value
+                values[f"{v['kind']}s"][name] = value
+            values["units"][name] = v["units"] or ""
+            values["declared_units"][name] = v["declared_units"] or v["units"] or ""
         row.update(values)
     return rows
 
@@ -173,18 +228,25 @@ def as_json(rows: list[dict[str, Any]]) -> str:
 
 
 def as_csv(rows: list[dict[str, Any]]) -> str:
-    """One line per run: the registry columns, tags, notes, then every value flattened
-    (factors as their levels joined by ``|``, responses as ``<name>.<summary> [units]``)."""
+    """One line per run: the registry columns, tags, notes, then every value flattened, in SI
+    with the unit in the column name (``bore [m]``; factors as their levels joined by ``|``,
+    responses as ``<name>.<summary> [units]``)."""
     flat = []
     for row in rows:
         line = {k: v for k, v in row.items() if not isinstance(v, dict | list)}
         line["tags"] = " ".join(row.get("tags", []))
         line["notes"] = " | ".join(row.get("notes", []))
-        line |= row.get("parameters", {}) | row.get("settings", {})
-        line |= {k: "|".join(map(str, v)) for k, v in row.get("factors", {}).items()}
+        units = row.get("units", {})
+        for section in ("parameters", "defaults", "settings"):
+            line |= {_header(k, units.get(k)): v for k, v in row.get(section, {}).items()}
+        line |= {
+            _header(k, units.get(k)): "|".join(map(str, v))
+            for k, v in row.get("factors", {}).items()
+        }
         for name, entry in row.get("responses", {}).items():
-            units = f" [{entry['units']}]" if entry.get("units") not in ("", "1", None) else ""
-            line |= {f"{name}.{s}{units}": entry.get(s) for s in registry.SUMMARIES}
+            line |= {
+                _header(f"{name}.{s}", entry.get("units")): entry.get(s) for s in registry.SUMMARIES
+            }
         flat.append(line)
     header = list(dict.fromkeys(k for line in flat for k in line))
     buffer = io.StringIO()
@@ -194,21 +256,82 @@ def as_csv(rows: list[dict[str, Any]]) -> str:
     return buffer.getvalue()
 
 
-def as_table(rows: list[dict[str, Any]]) -> str:
+def _header(name: str, units: str | None) -> str:
+    return f"{name} [{units}]" if units not in ("", "1", None) else name
+
+
+def as_table(rows: list[dict[str, Any]], columns: list[str] | None = None) -> str:
+    """The runs as a text table; ``columns`` adds values (``bore``, ``cam_speed`` for a
+    factor's levels, ``max_jerk.max``) in the units the scene declares (rows need
+    :func:`with_values`)."""
+    columns = columns or []
+    shown = [[_column(r, c) for c in columns] for r in rows]
+    units = {c: _declared(rows, c) for c in columns}
+    heads = [_header(c, units[c]) for c in columns]
+    widths = [max([len(h)] + [len(v[i]) for v in shown]) for i, h in enumerate(heads)]
+    extra = "".join(f" {h:>{w}}" for h, w in zip(heads, widths, strict=True))
     lines = [
         (
             f"{'run id':<30} {'study':<20} {'status':<11} {'runs':>6} {'compile s':>10} "
-            f"{'run s':>8}  {'commit':<16} tags"
+            f"{'run s':>8}  {'commit':<16}{extra} tags"
         )
     ]
-    for r in rows:
+    for r, values in zip(rows, shown, strict=True):
         dirty = "+dirty" if r["git_dirty"] else ""
+        cells = "".join(f" {v:>{w}}" for v, w in zip(values, widths, strict=True))
         lines.append(
             f"{r['run_id']:<30} {r['study']:<20} {r['status']:<11} {r['runs']:>6} "
             f"{_num(r['compile_s']):>10} {_num(r['run_s']):>8}  "
-            f"{(r['git_commit'] or '')[:10] + dirty:<16} {' '.join(r['tags'])}"
+            f"{(r['git_commit'] or 'none')[:10] + dirty:<16}{cells} {' '.join(r['tags'])}"
         )
     return "\n".join(lines)
+
+
+def check_columns(rows: list[dict[str, Any]], columns: list[str]) -> None:
+    """ValueError naming a ``--columns`` name that no listed run records."""
+    known = {n for r in rows for n in r.get("declared_units", {})}
+    unknown = [c for c in columns if c not in known and c.rsplit(".", 1)[0] not in known]
+    if rows and unknown:
+        msg = (
+            f"--columns names {', '.join(map(repr, unknown))}, which no listed run records "
+            f"(known: {', '.join(sorted(known))})"
+        )
+        raise ValueError(msg)
+
+
+def _declared(rows: list[dict[str, Any]], column: str) -> str:
+    """The unit a column is shown in: the scene's for that name."""
+    return next((_locate(r, column)[1] for r in rows if _locate(r, column)[1]), "")
+
+
+def _column(row: dict[str, Any], column: str) -> str:
+    """One value of a run in the unit its scene declares ("-" when the run has none)."""
+    value, declared = _locate(row, column)
+    return _shown(value, declared)
+
+
+def _locate(row: dict[str, Any], column: str) -> tuple[Any, str]:
+    """(value in SI, the scene's unit) of a column of a run; a response summary is
+    ``<response>.<summary>``."""
+    name, _, summary = column.rpartition(".")
+    responses = row.get("responses", {})
+    if name in responses:
+        value = responses[name].get(summary)
+    else:
+        name = column
+        sections = ("factors", "parameters", "defaults", "settings")
+        value = next((row[s][name] for s in sections if name in row.get(s, {})), None)
+    return value, row.get("declared_units", {}).get(name, "")
+
+
+def _shown(value: Any, declared: str) -> str:
+    if value is None:
+        return "-"
+    if isinstance(value, list):
+        return "|".join(_shown(v, declared) for v in value)
+    if isinstance(value, float):
+        return f"{from_si(value, declared) if declared in UNITS else value:.6g}"
+    return str(value)
 
 
 def _num(x: float | None) -> str:

@@ -1,11 +1,13 @@
 """The run registry ``outputs/registry.sqlite``: its schema, versions and queryable values.
 
-Tables (schema version 2, in ``PRAGMA user_version``):
+Tables (schema version 3, in ``PRAGMA user_version``):
 
-    runs        one row per run: id, study, scene, design, status, commit, timings, folder
-    run_values  per run, one row per fixed parameter, setting, factor level and response
-                summary (``<response>.min|mean|max``): kind, name, value as text and as number,
-                units; what ``runs --where`` filters on
+    runs        one row per run: id, study, scene, design, status, commit, timings, folder,
+                the cache key (definition_sha256 and code_sha256)
+    run_values  per run, one row per fixed parameter, parameter at its default, setting,
+                factor level and response summary (``<response>.min|mean|max``): kind, name,
+                value as text and as number in SI, its SI unit and the unit the scene declares
+                (:mod:`studies.run_values`); what ``runs --where`` filters on
     tags        tag → run id (a tag names one run; tagging another run moves it)
     notes       free-text notes on a run, timestamped
 
@@ -13,30 +15,25 @@ The registry is an index, never the truth: each run's folder holds its record (`
 definition, results and labels (:mod:`studies.labels`), and ``studies reindex`` rebuilds the
 registry from them. A run's folder is stored relative to the outputs root (``<study>/<run-id>``)
 and resolved against the root the registry was found in, so a copied outputs tree addresses
-its own folders. Version 1 registries (the ``runs`` table alone, user_version 0) are migrated in
-place the first time they are opened: the new tables are created and filled from each run's
-folder. Every write is one transaction; connections wait up to :data:`BUSY_TIMEOUT_S` for a
-lock, so several processes may register runs into one registry at once. Any failure of the
-file (damaged, locked, read-only, full) is :class:`RegistryUnusable`, in one line
+its own folders. Older registries are migrated in place the first time they are opened:
+version 1 (the ``runs`` table alone, user_version 0) gets the new tables, version 2 the new
+columns, and both are indexed again from each run's folder (version 2 held values in the
+file's units). Every write is one transaction; connections wait up to :data:`BUSY_TIMEOUT_S`
+for a lock, so several processes may register runs into one registry at once. Any failure of
+the file (damaged, locked, read-only, full) is :class:`RegistryUnusable`, in one line
 (:mod:`studies.registry_file`).
 """
 
 from __future__ import annotations
 
 import datetime as dt
-import json
-import math
 import sqlite3
-import tomllib
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from studies import labels
-from studies.definition import parse_study
 from studies.registry_file import (
     BUSY_TIMEOUT_S,
     REGISTRY,
@@ -46,11 +43,10 @@ from studies.registry_file import (
     unusable,
     writing,
 )
-from studies.results import open_results
+from studies.run_values import SUMMARIES, Value, values_of
 
-__all__ = ["BUSY_TIMEOUT_S", "REGISTRY", "RegistryUnusable"]
-SCHEMA_VERSION = 2
-SUMMARIES = ("min", "mean", "max")
+__all__ = ["BUSY_TIMEOUT_S", "REGISTRY", "SUMMARIES", "RegistryUnusable", "Value", "values_of"]
+SCHEMA_VERSION = 3
 COLUMNS = (
     "run_id",
     "study",
@@ -66,16 +62,18 @@ COLUMNS = (
     "run_s",
     "folder",
     "definition_sha256",
+    "code_sha256",
 )
 _TABLES = (
     (
         "CREATE TABLE IF NOT EXISTS runs (run_id TEXT PRIMARY KEY, study TEXT, scene TEXT, "
         "design TEXT, runs INTEGER, status TEXT, started TEXT, finished TEXT, git_commit TEXT, "
-        "git_dirty INTEGER, compile_s REAL, run_s REAL, folder TEXT, definition_sha256 TEXT)"
+        "git_dirty INTEGER, compile_s REAL, run_s REAL, folder TEXT, definition_sha256 TEXT, "
+        "code_sha256 TEXT)"
     ),
     (
         "CREATE TABLE IF NOT EXISTS run_values (run_id TEXT NOT NULL, kind TEXT NOT NULL, "
-        "name TEXT NOT NULL, text TEXT, num REAL, units TEXT)"
+        "name TEXT NOT NULL, text TEXT, num REAL, units TEXT, declared_units TEXT)"
     ),
     "CREATE INDEX IF NOT EXISTS run_values_by_run ON run_values (run_id)",
     "CREATE INDEX IF NOT EXISTS run_values_by_name ON run_values (name, num)",
@@ -83,9 +81,6 @@ _TABLES = (
     "CREATE TABLE IF NOT EXISTS notes (run_id TEXT NOT NULL, written TEXT, text TEXT)",
 )
 TABLES = ("runs", "run_values", "tags", "notes")
-
-
-Value = tuple[str, str, str, float | None, str]  # kind, name, text, number, units
 
 
 class RegistryError(ValueError):
@@ -154,7 +149,11 @@ def _migrate(con: sqlite3.Connection, outputs: Path) -> None:
     )
     for statement in _TABLES:
         con.execute(statement)
-    if had_runs:  # version 1: index what each run's folder holds
+    for table, column in (("runs", "code_sha256"), ("run_values", "declared_units")):
+        present = {r["name"] for r in con.execute(f"PRAGMA table_info({table})")}
+        if column not in present:  # versions 1 and 2
+            con.execute(f"ALTER TABLE {table} ADD COLUMN {column} TEXT")
+    if had_runs:  # versions 1 and 2: index what each run's folder holds, in SI
         for row in con.execute("SELECT * FROM runs").fetchall():
             values = values_of(folder_of(outputs, dict(row)), row["status"])
             store_values(con, row["run_id"], values)
@@ -231,77 +230,22 @@ def index_folder(
     return lost
 
 
-def values_of(folder: Path, status: str) -> list[Value]:
-    """A run's queryable values: parameters, settings and factor levels from its
-    ``study.toml``; response min/mean/max from its ``results.nc`` once it is finished."""
-    rows = _definition_values(folder / "study.toml")
-    if status == "finished":
-        rows += _response_values(folder / "results.nc")
-    return rows
-
-
 def store_values(con: sqlite3.Connection, run_id: str, rows: list[Value]) -> None:
     """Replace the run's indexed values by ``rows``."""
     con.execute("DELETE FROM run_values WHERE run_id = ?", (run_id,))
     con.executemany(
-        "INSERT INTO run_values (run_id, kind, name, text, num, units) VALUES (?, ?, ?, ?, ?, ?)",
+        "INSERT INTO run_values (run_id, kind, name, text, num, units, declared_units) "
+        "VALUES (?, ?, ?, ?, ?, ?, ?)",
         [(run_id, *r) for r in rows],
     )
 
 
-def _value(kind: str, name: str, value: Any, units: str = "") -> Value:
-    number = (
-        float(value) if isinstance(value, int | float) and not isinstance(value, bool) else None
-    )
-    text = value if isinstance(value, str) else json.dumps(value)
-    return kind, name, text, number, units
-
-
-def _definition_values(study: Path) -> list[Value]:
-    try:
-        text = study.read_text(encoding="utf-8")
-    except OSError:
-        return []
-    definition, _ = parse_study(text, str(study))
-    if definition is None:  # recorded text that no longer validates: keep what TOML gives
-        try:
-            raw = tomllib.loads(text)
-        except tomllib.TOMLDecodeError:
-            return []
-        return [_value("setting", k, v) for k, v in raw.get("settings", {}).items()]
-    rows = [_value("parameter", k, v, u) for k, (v, u) in definition.parameters.items()]
-    rows += [_value("setting", k, v) for k, v in definition.settings.items()]
-    rows += [_value("factor", f.name, v, f.units) for f in definition.factors for v in f.levels]
-    return rows
-
-
-def _response_values(results: Path) -> list[Value]:
-    try:
-        ds = open_results(results)  # lazily, one response at a time: flat memory
-    except (OSError, ValueError):
-        return []
-    with ds:
-        names = json.loads(ds.attrs.get("responses", "[]"))
-        rows = []
-        for name in names:
-            if name not in ds or ds[name].dims != ("run",) or ds[name].dtype.kind != "f":
-                continue
-            stored = ds[name].values
-            values = stored[np.isfinite(stored)]
-            units = str(ds[name].attrs.get("units", ""))
-            summaries = (
-                (values.min(), values.mean(), values.max()) if values.size else (math.nan,) * 3
-            )
-            for summary, x in zip(SUMMARIES, summaries, strict=True):
-                rows.append(_value("response", f"{name}.{summary}", float(x), units))
-        return rows
-
-
 def run_values(outputs: Path, run_id: str) -> list[dict[str, Any]]:
-    """The indexed values of one run (kind, name, text, num, units)."""
+    """The indexed values of one run (kind, name, text, num in SI, units: the SI unit,
+    declared_units: the scene's)."""
     with connection(outputs) as con:
         rows = con.execute(
-            "SELECT kind, name, text, num, units FROM run_values WHERE run_id = ? "
+            "SELECT kind, name, text, num, units, declared_units FROM run_values WHERE run_id = ? "
             "ORDER BY kind, name, num",
             (run_id,),
         )

@@ -15,24 +15,23 @@ from __future__ import annotations
 
 import json
 import math
-import tomllib
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
 from studies.compare import matched_points, point_label, point_table
 from studies.results import is_status
+from studies.tolerances import (
+    DEFAULT,
+    DEFAULT_ATOL,
+    DEFAULT_RTOL,
+    Tolerance,
+    deviations,
+    read_tolerances,
+)
 
-DEFAULT_RTOL = 1e-7
-DEFAULT_ATOL = 0.0
-
-
-@dataclass(frozen=True)
-class Tolerance:
-    rtol: float = DEFAULT_RTOL
-    atol: float = DEFAULT_ATOL
+__all__ = ["DEFAULT_ATOL", "DEFAULT_RTOL", "Tolerance", "read_tolerances"]
 
 
 @dataclass(frozen=True)
@@ -54,24 +53,6 @@ class Check:
         return self.beyond == 0 and not self.problem
 
 
-def read_tolerances(path: Path) -> dict[str, Tolerance]:
-    """``[response] rtol = …, atol = …`` tables of a TOML file (ValueError on anything else)."""
-    try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"{path}: not valid TOML ({exc})") from None
-    out = {}
-    for name, table in raw.items():
-        unknown = set(table) - {"rtol", "atol"} if isinstance(table, dict) else {"(not a table)"}
-        if unknown:
-            msg = f"{path}: [{name}] may hold rtol and atol only, not {', '.join(sorted(unknown))}"
-            raise ValueError(msg)
-        out[name] = Tolerance(
-            float(table.get("rtol", DEFAULT_RTOL)), float(table.get("atol", DEFAULT_ATOL))
-        )
-    return out
-
-
 def compared_responses(ds: xr.Dataset) -> list[str]:
     names = json.loads(ds.attrs.get("responses", "[]")) or list(ds.data_vars)
     return [str(n) for n in names if n in ds and ds[n].dims == ("run",)]
@@ -81,7 +62,7 @@ def check_results(
     results: xr.Dataset,
     baseline: xr.Dataset,
     tolerances: dict[str, Tolerance] | None = None,
-    default: Tolerance = Tolerance(),
+    default: Tolerance = DEFAULT,
 ) -> list[Check]:
     """A :class:`Check` per response of the baseline (ValueError when nothing is comparable)."""
     tolerances = tolerances or {}
@@ -120,15 +101,8 @@ def _check(
 ) -> Check:
     expected = common[response].to_numpy(np.float64)
     actual = common[f"{response}_other"].to_numpy(np.float64)
-    rtol, atol = (0.0, 0.0) if exact else (tol.rtol, tol.atol)
-    with np.errstate(invalid="ignore"):
-        diff = np.abs(actual - expected)
-        same = (actual == expected) | (np.isnan(actual) & np.isnan(expected))  # incl. ±inf
-        inside = same | (np.isfinite(diff) & (diff <= atol + rtol * np.abs(expected)))
-        if math.isinf(rtol) or math.isinf(atol):
-            inside[:] = True
-        diff = np.where(same, 0.0, np.where(np.isnan(diff), np.inf, diff))
-        rel = np.where(diff == 0, 0.0, diff / np.abs(expected))
+    tol = Tolerance(0.0, 0.0) if exact else tol
+    inside, diff, rel = deviations(expected, actual, tol)
     worst = int(np.argmax(diff)) if diff.size else 0
     where = point_label(common.index[worst], factors) if diff.size and diff[worst] > 0 else ""
     if where:
@@ -136,7 +110,7 @@ def _check(
     return Check(
         response,
         units,
-        Tolerance(rtol, atol),
+        tol,
         len(common),
         int((~inside).sum()),
         float(diff.max(initial=0.0)),

@@ -158,18 +158,24 @@ def _results(
 
 
 def dask_executor(scheduler: str) -> Executor:
-    """An executor on a Dask cluster: ``scheduler`` is an address or ``local``.
+    """An executor on a Dask cluster: ``scheduler`` is an address or ``local``
+    (:func:`dask_client`)."""
+    return dask_client(scheduler).get_executor()
+
+
+def dask_client(scheduler: str) -> Any:
+    """A client of a Dask cluster: ``scheduler`` is an address or ``local``.
 
     ``local`` starts a cluster of worker processes on this machine. Needs the ``cluster``
-    extra (``pip install engine-studies[cluster]``).
+    extra (``pip install -e '.[cluster]'``).
     """
     try:
         from dask.distributed import Client  # noqa: PLC0415  (optional dependency)
     except ImportError:
-        msg = "--scheduler needs dask.distributed: pip install 'engine-studies[cluster]'"
+        msg = "--scheduler needs dask.distributed: pip install -e '.[cluster]'"
         raise ValueError(msg) from None
     if scheduler == "local":
-        return Client().get_executor()
+        return Client(dashboard_address=None)
     try:
         client = Client(scheduler, timeout=SCHEDULER_TIMEOUT_S)
     except Exception as exc:  # noqa: BLE001  unreachable, malformed, or not a Dask scheduler
@@ -180,4 +186,4 @@ def dask_executor(scheduler: str) -> Executor:
             "check the address (e.g. tcp://host:8786) or use --scheduler local"
         )
         raise ValueError(msg) from None
-    return client.get_executor()
+    return client

@@ -75,6 +75,7 @@ def run_plan(
     outputs = (outputs or tracking.default_outputs()).resolve()
     d = plan.definition
     commit, dirty = provenance.git_state()
+    code = provenance.code(type(plan.scene))
     run_id, folder = tracking.run_folder(outputs, d.name, tracking.new_run_id(d.text))
     lock = lock_folder(folder) or FolderLock(None)  # a new folder: no one else holds it
     try:
@@ -96,6 +97,8 @@ def run_plan(
         git_commit=commit,
         git_dirty=dirty,
         definition_sha256=tracking.definition_hash(d.text, d.input_files()),
+        code=code,
+        code_sha256=provenance.code_hash(code),
         folder=str(folder),
         versions=provenance.versions(),
         host=provenance.host(),
@@ -137,6 +140,15 @@ def resume_run(run_id: str, outputs: Path | None = None, progress: bool = True) 
             raise ValueError(msg)
         _check_unchanged(folder / "study.toml", record.definition_sha256)
         plan = plan_study(folder / "study.toml")
+        code = provenance.code(type(plan.scene))
+        if record.code_sha256 and provenance.code_hash(code) != record.code_sha256:
+            msg = (
+                f"the code changed since run {record.run_id} started (engine or scene source, "
+                "or the numba/numpy/scipy versions: `python -m studies show` has what it ran "
+                "with). Resuming would mix design points computed by two codes; run the study "
+                f"anew: python -m studies run {folder / 'study.toml'}"
+            )
+            raise ValueError(msg)
     except BaseException:
         lock.release()
         raise
@@ -172,6 +184,7 @@ def _execute(
         "git_commit": record.git_commit,
         "git_dirty": record.git_dirty,
         "versions": record.versions,
+        "code": record.code,
         "created": record.started,
     }
     writer = None

@@ -6,8 +6,9 @@
       <study>/<run-id>/
         study.toml                 exact copy of the definition that ran
         labels.json                its tags and notes (studies.labels)
-        run.json                   id, status, git commit + dirty flag, versions, host,
-                                   start/end, compile vs run time, accuracy settings
+        run.json                   id, status, code (engine and scene distributions, versions
+                                   and source hashes), git commit + dirty flag, versions,
+                                   host, start/end, compile vs run time, accuracy settings
         results.nc                 the labelled results (see studies.results)
         analysis.txt               range analysis and ANOVA tables
         *.png                      figures
@@ -66,6 +67,8 @@ class RunRecord:
     pid: int = 0
     heartbeat: str = ""
     points_without_value: int = 0
+    code: dict[str, Any] = field(default_factory=dict)
+    code_sha256: str = ""
 
     def write(self) -> None:
         """Write ``run.json`` (under a temporary name renamed into place: never half a file)."""
@@ -212,12 +215,14 @@ def list_runs(outputs: Path, study: str | None = None) -> list[dict[str, Any]]:
     return [r | {"folder": str(registry.folder_of(outputs, r))} for r in rows]
 
 
-def finished_identical(outputs: Path, definition_sha256: str, commit: str) -> dict[str, Any] | None:
-    """The newest finished run of the same definition on the same clean commit, if any."""
+def finished_identical(
+    outputs: Path, definition_sha256: str, code_sha256: str
+) -> dict[str, Any] | None:
+    """The newest finished run of the same definition (study text and input files) computed by
+    the same code (engine and scene sources, library versions: :func:`provenance.code_hash`)."""
     for row in list_runs(outputs):
-        same = row["definition_sha256"] == definition_sha256 and row["git_commit"] == commit
-        clean = row["status"] == "finished" and not row["git_dirty"]
-        if same and clean and (Path(row["folder"]) / "results.nc").exists():
+        same = row["definition_sha256"] == definition_sha256 and row["code_sha256"] == code_sha256
+        if same and row["status"] == "finished" and (Path(row["folder"]) / "results.nc").exists():
             return row
     return None
 

@@ -1,6 +1,6 @@
 """The tracking commands of ``python -m studies``: runs, show, compare, regress, tag, note, rm,
-restore, trash, gc, reindex, export. Wherever a RUN_ID is asked for, a tag or a unique prefix
-of the id works too (the id itself always wins over a tag).
+restore, trash, gc, reindex, mlflow, export. Wherever a RUN_ID is asked for, a tag or a unique
+prefix of the id works too (the id itself always wins over a tag).
 
 Exit codes: 0 done, 1 ``regress`` found a response beyond tolerance, 2 bad input (unknown run
 or tag, no shared responses, a --where that does not parse, a tagged or running run to ``rm``),
@@ -31,13 +31,22 @@ def add_commands(sub: Any, outputs_help: str) -> None:
     runs.add_argument("--study")
     runs.add_argument("--scene")
     runs.add_argument("--status", help="finished, running, interrupted, failed or missing")
-    runs.add_argument("--since", metavar="DATE", help="started on or after (ISO date)")
+    runs.add_argument(
+        "--since", metavar="WHEN", help="started on or after: an ISO date or an age (30d, 12h)"
+    )
     runs.add_argument("--tag", help="only the run with this tag")
     runs.add_argument(
         "--where",
         action="append",
         metavar="EXPR",
-        help='e.g. "cam_speed>=5000", "max_jerk.max<900", "integrator=rk4" (repeat: all hold)',
+        help='e.g. "cam_speed>=5000", "bore>=80 mm", "max_jerk.max<900", "status==finished", '
+        '"integrator=rk4" (numbers in the scene\'s units unless one follows; repeat: all hold)',
+    )
+    runs.add_argument(
+        "--columns",
+        metavar="NAMES",
+        help="comma-separated values to show as columns, in the scene's units "
+        '(e.g. "cam_speed,bore,max_jerk.max")',
     )
     shape = runs.add_mutually_exclusive_group()
     shape.add_argument("--json", action="store_true", help="JSON, with every recorded value")
@@ -49,13 +58,14 @@ def add_commands(sub: Any, outputs_help: str) -> None:
     compare.add_argument("run_ids", nargs="+", metavar="RUN_ID")
     compare.add_argument("--plot", action="store_true", help="overlay main effects per response")
     compare.add_argument("--to", type=Path, help="folder for the --plot figures")
+    _tolerance_options(compare, "a response moved where a point differs beyond")
 
     regress = command("regress", "exit 1 when a response moved beyond tolerance", _regress)
-    regress.add_argument("baseline", metavar="BASELINE")
-    regress.add_argument("run_id", metavar="RUN_ID")
-    regress.add_argument("--rtol", type=float, default=None, help="relative tolerance (1e-7)")
-    regress.add_argument("--atol", type=float, default=None, help="absolute tolerance (0)")
-    regress.add_argument("--tolerances", type=Path, help="TOML: [response] rtol = …, atol = …")
+    regress.add_argument(
+        "baseline", metavar="BASELINE", help="a run (id, prefix or tag) or a results .nc file"
+    )
+    regress.add_argument("run_id", metavar="RUN", help="a run or a results .nc file")
+    _tolerance_options(regress, "a point fails beyond")
 
     tag = command("tag", "tag a run (a tag names one run: it moves)", _tag)
     tag.add_argument("run_id")
@@ -84,10 +94,40 @@ def add_commands(sub: Any, outputs_help: str) -> None:
 
     command("reindex", "rebuild the registry from the run folders (keeps the old one)", _reindex)
 
-    export = command("export", "a run's results as CSV or Parquet", _export)
+    mlflow = command("mlflow", "log recorded runs to MLflow (each once)", _mlflow)
+    mlflow.add_argument("run_ids", nargs="+", metavar="RUN_ID")
+    mlflow.add_argument(
+        "--to", required=True, metavar="URI", help="tracking URI, e.g. sqlite:///mlflow.db"
+    )
+
+    export = command(
+        "export", "a run's results as CSV or Parquet (curves in a second, long table)", _export
+    )
     export.add_argument("run_id")
     export.add_argument("--format", choices=("csv", "parquet"), default="csv")
     export.add_argument("--to", type=Path, help="file to write (default: in the run folder)")
+
+
+def _tolerance_options(parser: argparse.ArgumentParser, meaning: str) -> None:
+    parser.add_argument(
+        "--rtol", type=float, default=None, help=f"{meaning} this relative tolerance (1e-7)"
+    )
+    parser.add_argument("--atol", type=float, default=None, help="absolute tolerance (0)")
+    parser.add_argument(
+        "--tolerances", type=Path, help="TOML: [response] rtol = …, atol = … (per response)"
+    )
+
+
+def _tolerances(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
+    """(the default Tolerance, the per-response ones) of --rtol, --atol and --tolerances."""
+    from studies import tolerances
+
+    per_response = tolerances.read_tolerances(args.tolerances) if args.tolerances else {}
+    default = tolerances.Tolerance(
+        tolerances.DEFAULT_RTOL if args.rtol is None else args.rtol,
+        tolerances.DEFAULT_ATOL if args.atol is None else args.atol,
+    )
+    return default, per_response
 
 
 def _runs(args: argparse.Namespace) -> int:
@@ -104,7 +144,11 @@ def _runs(args: argparse.Namespace) -> int:
     if not rows:
         print(f"no runs recorded under {args.outputs} match")
         return 0
-    print(query.as_table(rows))
+    columns = [c.strip() for c in (args.columns or "").split(",") if c.strip()]
+    if columns:
+        rows = query.with_values(args.outputs, rows)
+        query.check_columns(rows, columns)
+    print(query.as_table(rows, columns))
     for r in rows:
         if r["status"] in ("interrupted", "failed"):
             print(f"resume {r['run_id']}: {resume_command(r['run_id'], args.outputs)}")
@@ -135,7 +179,8 @@ def _compare(args: argparse.Namespace) -> int:
     from studies.compare import compare, format_comparison, load_run
 
     runs = [load_run(args.outputs, ref) for ref in args.run_ids]
-    comparison = compare(runs)
+    default, per_response = _tolerances(args)
+    comparison = compare(runs, default, per_response)
     print(format_comparison(comparison))
     if args.plot:
         from studies.compare_plots import save_overlays
@@ -148,17 +193,13 @@ def _compare(args: argparse.Namespace) -> int:
 
 def _regress(args: argparse.Namespace) -> int:
     from studies import regress
-    from studies.compare import load_run
+    from studies.compare import load_results
 
-    baseline = load_run(args.outputs, args.baseline)
-    run = load_run(args.outputs, args.run_id)
-    tolerances = regress.read_tolerances(args.tolerances) if args.tolerances else {}
-    default = regress.Tolerance(
-        regress.DEFAULT_RTOL if args.rtol is None else args.rtol,
-        regress.DEFAULT_ATOL if args.atol is None else args.atol,
-    )
-    checks = regress.check_results(run.results, baseline.results, tolerances, default)
-    print(f"run {run.run_id} against baseline {baseline.run_id}:")
+    baseline_id, baseline = load_results(args.outputs, args.baseline)
+    run_id, run = load_results(args.outputs, args.run_id)
+    default, per_response = _tolerances(args)
+    checks = regress.check_results(run, baseline, per_response, default)
+    print(f"{run_id} against baseline {baseline_id}:")
     print(regress.format_checks(checks))
     return 0 if all(c.ok for c in checks) else EXIT_REGRESSED
 
@@ -252,6 +293,26 @@ def _reindex(args: argparse.Namespace) -> int:
     return 0
 
 
+def _mlflow(args: argparse.Namespace) -> int:
+    from studies import registry
+    from studies.mlflow_export import check_store, log_run
+    from studies.tracking import current_status, resolve_run
+
+    rows = [resolve_run(args.outputs, ref) for ref in args.run_ids]
+    unfinished = [r["run_id"] for r in rows if current_status(r)[0] != "finished"]
+    if unfinished:
+        raise ValueError(f"only finished runs are logged: {', '.join(unfinished)} is not")
+    check_store(args.to)
+    tags, notes = registry.tags_and_notes(args.outputs)
+    for row in rows:
+        run_id = row["run_id"]
+        mlflow_id, new = log_run(
+            args.to, Path(row["folder"]), tags.get(run_id, []), notes.get(run_id, [])
+        )
+        print(f"{run_id}: {'logged' if new else 'already logged'} as MLflow run {mlflow_id}")
+    return 0
+
+
 def _export(args: argparse.Namespace) -> int:
     from studies.export import export_results
     from studies.tracking import resolve_run
@@ -261,5 +322,6 @@ def _export(args: argparse.Namespace) -> int:
     if not results.exists():
         raise FileNotFoundError(f"run {row['run_id']} has no results.nc: nothing to export")
     to = args.to or results.with_suffix(f".{args.format}")
-    print(f"wrote {export_results(results, to, args.format)}")
+    for path in export_results(results, to, args.format):
+        print(f"wrote {path}")
     return 0

@@ -8,7 +8,10 @@ dimension. Conversion happens once, at the boundary between a study and the kern
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple, TypeVar
+
+if TYPE_CHECKING:
+    import numpy as np
 
 
 class Unit(NamedTuple):
@@ -78,6 +81,37 @@ def compatible_units(unit: str) -> list[str]:
     """Every accepted unit with the same dimension as ``unit``."""
     dim = UNITS[unit].dimension
     return [name for name, u in CANONICAL.items() if u.dimension == dim]
+
+
+Number = TypeVar("Number", float, "np.ndarray")
+
+
+def to_si(value: Number, unit: str) -> Number:
+    """``value`` (a number or an array) in ``unit`` converted to SI. A decimal submultiple (mm,
+    g, ms, 1/GPa …) divides by its whole-number inverse instead of multiplying by an inexact
+    1e-3: the quotient is correctly rounded, so ``86 mm`` and ``0.086 m`` give the same double,
+    bit for bit."""
+    inverse = _inverse(unit)
+    return value / inverse if inverse else value * UNITS[unit].to_si
+
+
+def from_si(value: Number, unit: str) -> Number:
+    """An SI value (a number or an array) expressed in ``unit``: the inverse of :func:`to_si`."""
+    inverse = _inverse(unit)
+    return value * inverse if inverse else value / UNITS[unit].to_si
+
+
+def _inverse(unit: str) -> int:
+    """1/factor of a unit whose factor to SI is the reciprocal of a whole number, else 0."""
+    factor = UNITS[unit].to_si
+    inverse = round(1.0 / factor) if factor < 1.0 else 0
+    return inverse if inverse > 1 and inverse * factor == 1.0 else 0
+
+
+def si_unit(unit: str) -> str:
+    """The SI unit of the dimension ``unit`` measures (``mm`` → ``m``, ``rpm`` → ``rad/s``)."""
+    dimension = UNITS[unit].dimension
+    return next(n for n, u in CANONICAL.items() if u.dimension == dimension and u.to_si == 1.0)
 
 
 def conversion_factor(from_unit: str, to_unit: str) -> float:

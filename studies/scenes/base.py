@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from studies.units import UNITS
+from studies.units import UNITS, to_si
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -122,7 +122,7 @@ class Parameter:
         return None
 
     def to_si(self, value: float, units: str | None = None) -> float:
-        return float(value) * UNITS[units or self.units].to_si
+        return to_si(float(value), units or self.units)
 
 
 @dataclass(frozen=True)

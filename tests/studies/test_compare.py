@@ -9,8 +9,11 @@ import pytest
 
 from studies.cli import main
 from studies.compare import compare, load_run
+from studies.compare_plots import overlay_figure
 from studies.definition import find_study
+from studies.registry import run_values
 from studies.study_run import run_study
+from studies.tolerances import Tolerance
 from studies.tracking import list_runs
 
 CAM = """
@@ -68,7 +71,7 @@ def test_runs_differing_in_one_setting_name_it_and_the_responses_it_moved(
 
     assert main(["compare", a, b, "--outputs", str(outputs)]) == 0
     out = capsys.readouterr().out
-    assert re.search(r"setting reference_rtol\s+1e-10 \| 1e-05", out)
+    assert re.search(r"setting reference_rtol\s+1e-10 → 1e-05", out)
     assert "reference_error [mm]" in out
     assert "moved: reference_error" in out
 
@@ -84,7 +87,7 @@ def test_different_designs_compare_on_their_common_points(
     # common points: base radius 18 and 20 at both speeds; same definition there, same values
     assert {ch.points for ch in c.changes} == {4}
     assert c.moved() == []
-    assert [(d.kind, d.name) for d in c.definition] == [("factor", "base_radius.levels")]
+    assert [(d.kind, d.name) for d in c.definition] == [("factor", "base_radius")]
 
     assert (
         main(["compare", a, b, "--plot", "--to", str(tmp_path / "fig"), "--outputs", str(outputs)])
@@ -93,6 +96,12 @@ def test_different_designs_compare_on_their_common_points(
     assert sorted(p.name for p in (tmp_path / "fig").iterdir()) == [
         "compare_max_jerk.png",
         "compare_min_radius_of_curvature.png",
+    ]
+    # the legend names what differs between the runs, not their ids
+    legend = overlay_figure(c, "max_jerk").axes[0].get_legend()
+    assert [t.get_text() for t in legend.get_texts()] == [
+        "base_radius [16, 18, 20] mm",
+        "base_radius [18, 20, 22, 24] mm",
     ]
     assert "points" in capsys.readouterr().out
 
@@ -118,3 +127,52 @@ def test_bad_input_is_one_line_and_exit_2(
         assert message in err, (argv, err)
         assert "Traceback" not in err
     assert len(list_runs(outputs)) == 3
+
+
+SPELLED = """
+name = "spelled"
+scene = "cam"
+responses = ["max_jerk", "min_radius_of_curvature", "max_contact_stress"]
+design = "full_factorial"
+[parameters]
+lift = {lift}
+[factors.base_radius]
+levels = {base_radius}
+{units}
+[factors.cam_speed]
+levels = [1000.0, 1300.0]
+"""
+
+
+def test_runs_differing_only_in_how_units_are_written_are_identical(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    outputs = tmp_path / "out"
+    in_mm = SPELLED.format(lift="10.8", base_radius="[16.0, 20.5]", units="")
+    in_m = SPELLED.format(
+        lift='{value = 0.0108, units = "m"}', base_radius="[0.016, 0.0205]", units='units = "m"'
+    )
+    a = run_text(tmp_path, outputs, "a", in_mm)
+    b = run_text(tmp_path, outputs, "b", in_m)
+
+    def indexed(run_id: str) -> list[tuple]:
+        return sorted(tuple(v.values()) for v in run_values(outputs, run_id))
+
+    # the registry: every value the same, in SI (lift 10.8 mm = 0.0108 m)
+    assert indexed(a) == indexed(b)
+    lift = [v for v in run_values(outputs, a) if v["name"] == "lift"]
+    assert [(v["num"], v["units"], v["declared_units"]) for v in lift] == [(0.0108, "m", "mm")]
+
+    # compare: nothing differs, and no response moved even with zero tolerance
+    c = compare([load_run(outputs, a), load_run(outputs, b)], Tolerance(0.0, 0.0))
+    assert (c.definition, c.code, c.versions) == ([], [], [])
+    assert c.moved() == []
+    assert {ch.points for ch in c.changes} == {4}
+    assert main(["compare", a, b, "--rtol", "0", "--outputs", str(outputs)]) == 0
+    out = capsys.readouterr().out
+    assert "definitions, code and versions: identical" in out
+    assert "moved: none" in out
+
+    # regress: within a zero tolerance
+    assert main(["regress", a, b, "--rtol", "0", "--outputs", str(outputs)]) == 0
+    assert "all within tolerance" in capsys.readouterr().out

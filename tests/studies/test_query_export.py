@@ -6,15 +6,17 @@ import base64
 import csv
 import io
 import json
+import math
 from html.parser import HTMLParser
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 import xarray as xr
 
 from studies.cli import main
-from studies.mlflow_export import params_and_metrics
+from studies.scenes import get_scene
 from studies.study_run import run_study
 
 STUDY = """
@@ -69,20 +71,67 @@ def test_where_filters_on_factors_settings_and_response_summaries(
     assert "no runs" in runs_out(capsys, outputs, "--since", "2999-01-01")
     rows = json.loads(runs_out(capsys, outputs, "--json", "--study", "speeds", "--scene", "cam"))
     by_id = {r["run_id"]: r for r in rows}
-    assert by_id[fast]["factors"]["cam_speed"] == [4000.0, 6000.0]
-    assert by_id[slow]["settings"]["angle_step"] == 0.5
+    # values in SI: rpm → rad/s is × 2π/60, deg → rad × π/180, mm/rad^3 → m/rad^3 × 1e-3
+    assert by_id[fast]["factors"]["cam_speed"] == pytest.approx([4000 * RPM, 6000 * RPM])
+    assert by_id[fast]["units"]["cam_speed"] == "rad/s"
+    assert by_id[fast]["declared_units"]["cam_speed"] == "rpm"
+    assert by_id[slow]["settings"]["angle_step"] == pytest.approx(0.5 * math.pi / 180)
     jerk = by_id[fast]["responses"]["max_jerk"]
-    assert jerk["units"] == "mm/rad^3"
+    assert jerk["units"] == "m/rad^3"
     assert jerk["min"] <= jerk["mean"] <= jerk["max"]
-    # the summaries are those of the results file
+    # the summaries are those of the results file (stored in mm/rad^3)
     with xr.open_dataset(Path(by_id[fast]["folder"]) / "results.nc") as ds:
-        assert jerk["max"] == pytest.approx(float(ds["max_jerk"].max()))
-    below = f"max_jerk.max<{jerk['max'] * (1 + 1e-9)}"
-    assert fast in runs_out(capsys, outputs, "--where", below)
+        stored_max = float(ds["max_jerk"].max())
+        assert ds["max_jerk"].attrs["units"] == "mm/rad^3"
+    assert jerk["max"] == pytest.approx(stored_max * 1e-3)
+    # a bare number is in the scene's units (mm/rad^3), whatever the registry stores
+    assert fast in runs_out(capsys, outputs, "--where", f"max_jerk.max<{stored_max * (1 + 1e-9)}")
+    assert fast not in runs_out(
+        capsys, outputs, "--where", f"max_jerk.max<{stored_max * (1 - 1e-9)}"
+    )
     table = list(csv.DictReader(io.StringIO(runs_out(capsys, outputs, "--csv"))))
     assert {r["run_id"] for r in table} == {slow, fast}
-    assert {r["cam_speed"] for r in table} == {"1000.0|2000.0", "4000.0|6000.0"}
-    assert "max_jerk.max [mm/rad^3]" in table[0]
+    speeds = {r["run_id"]: [float(v) for v in r["cam_speed [rad/s]"].split("|")] for r in table}
+    assert speeds[slow] == pytest.approx([1000 * RPM, 2000 * RPM])
+    assert "max_jerk.max [m/rad^3]" in table[0]
+
+
+RPM = 2 * math.pi / 60  # rad/s per rpm
+
+
+def test_where_takes_units_defaults_and_the_status(
+    recorded, capsys: pytest.CaptureFixture[str]
+) -> None:
+    outputs, slow, fast = recorded
+    # 400 rad/s = 3820 rpm: between the slow runs' 2000 and the fast runs' 4000 rpm
+    above = runs_out(capsys, outputs, "--where", "cam_speed>=400 rad/s")
+    assert fast in above
+    assert slow not in above
+    assert slow in runs_out(capsys, outputs, "--where", "base_radius==0.016 m")
+    assert slow in runs_out(capsys, outputs, "--where", "base_radius==16")  # the scene's mm
+    assert "no runs" in runs_out(capsys, outputs, "--where", "base_radius==16 m")
+    default = get_scene("cam").parameter("cam_width")
+    assert default is not None  # a parameter neither study names: queryable at its default
+    at_default = f"cam_width=={default.default} {default.units}"
+    assert {slow, fast} <= set(runs_out(capsys, outputs, "--where", at_default).split())
+    assert "no runs" in runs_out(capsys, outputs, "--where", f"cam_width!={default.default}")
+    finished = runs_out(capsys, outputs, "--where", "status==finished", "--since", "1d")
+    assert {slow, fast} <= set(finished.split())
+    assert "no runs" in runs_out(capsys, outputs, "--where", "status!=finished")
+
+
+def test_runs_shows_value_columns_in_the_scenes_units(
+    recorded, capsys: pytest.CaptureFixture[str]
+) -> None:
+    outputs, _, fast = recorded
+    out = runs_out(capsys, outputs, "--columns", "cam_speed,angle_step,max_jerk.max")
+    head, *lines = out.splitlines()
+    assert "cam_speed [rpm]" in head
+    assert "angle_step [degree]" in head
+    assert "max_jerk.max [mm/rad^3]" in head
+    (fast_line,) = [line for line in lines if line.startswith(fast)]
+    assert " 4000|6000 " in fast_line
+    assert " 0.25 " in fast_line
 
 
 @pytest.mark.parametrize(
@@ -91,7 +140,11 @@ def test_where_filters_on_factors_settings_and_response_summaries(
         (["--where", "cam_speed>>5"], "cannot read --where"),
         (["--where", "no_such_name>1"], "--where names 'no_such_name'"),
         (["--where", "max_jerk<1"], "filter on max_jerk.min, .mean or .max"),
-        (["--since", "last week"], "is not a date"),
+        (["--since", "last week"], "is not a date or an age"),
+        (["--where", "cam_speed>=80 mm"], "'mm' measures length"),
+        (["--where", "cam_speed>=80 furlongs"], "unknown units 'furlongs'"),
+        (["--where", "status>finished"], "use == or !="),
+        (["--columns", "no_such_value"], "--columns names 'no_such_value'"),
     ],
 )
 def test_bad_filters_are_one_line_and_exit_2(
@@ -156,32 +209,35 @@ def test_report_html_is_self_contained_with_every_figure(recorded) -> None:
     assert 'addEventListener("click"' in (folder / "report.html").read_text(encoding="utf-8")
 
 
-def test_mlflow_round_trips_params_and_metrics(
-    recorded, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+@pytest.mark.parametrize("file_format", ["csv", "parquet"])
+def test_export_writes_the_curves_in_long_format(
+    tmp_path: Path, file_format: str, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    mlflow = pytest.importorskip("mlflow")
-    from studies.mlflow_export import log_run
-    from studies.tracking import RunRecord
+    pytest.importorskip("pyarrow")
+    from studies import export
 
-    monkeypatch.setenv("MLFLOW_ALLOW_FILE_STORE", "true")  # a local file store, no server
-    outputs, _, fast = recorded
-    folder = outputs / "speeds" / fast
-    record = RunRecord(**json.loads((folder / "run.json").read_text(encoding="utf-8")))
-    uri = (tmp_path / "mlruns").as_uri()
-    mlflow_id = log_run(uri, record)
-    mlflow.set_tracking_uri(uri)
-    (row,) = mlflow.search_runs(experiment_names=["speeds"]).to_dict("records")
-    assert row["run_id"] == mlflow_id
-    assert row["tags.run_id"] == fast
-    assert row["params.factor.cam_speed"] == "4000.0|6000.0"
-    assert row["params.angle_step"] == "0.25"
-    with xr.open_dataset(folder / "results.nc") as ds:
-        assert row["metrics.max_jerk.max"] == pytest.approx(float(ds["max_jerk"].max()))
-        assert row["metrics.min_radius_of_curvature.min"] == pytest.approx(
-            float(ds["min_radius_of_curvature"].min())
-        )
-    params, metrics = params_and_metrics(folder)
-    assert {f"params.{k}" for k in params} <= set(row)
-    assert {f"metrics.{k}" for k in metrics} <= set(row)
-    artifacts = mlflow.artifacts.list_artifacts(run_id=mlflow_id)
-    assert {"results.nc", "report.html", "run.json"} <= {Path(a.path).name for a in artifacts}
+    monkeypatch.setattr(export, "CURVE_CHUNK", 2)  # 3 design points: blocks of 2 and 1
+    study = tmp_path / "curved.toml"
+    study.write_text(
+        STUDY.format(speeds="[1000.0]", step=1.0)
+        .replace("16.0, 18.0", "16.0, 18.0, 20.0")
+        .replace("[settings]", 'curves = ["lift"]\n[settings]'),
+        encoding="utf-8",
+    )
+    outputs = tmp_path / "out"
+    run_id = run_study(study, outputs=outputs, progress=False).record.run_id
+    to = tmp_path / f"curved.{file_format}"
+    argv = ["export", run_id, "--format", file_format, "--to", str(to), "--outputs", str(outputs)]
+    assert main(argv) == 0
+    curves = to.with_name(f"curved_curves.{file_format}")
+    table = pd.read_csv(curves) if file_format == "csv" else pd.read_parquet(curves)
+    (results,) = outputs.glob(f"speeds/{run_id}/results.nc")
+    with xr.open_dataset(results) as ds:
+        lift, angles = ds["lift"].values, ds["cam_angle"].values
+        radii = ds["base_radius"].values
+        assert ds["lift"].attrs["units"] == "mm"
+    assert len(table) == lift.size  # one row per design point and angle
+    assert list(table["lift [mm]"]) == pytest.approx(lift.reshape(-1).tolist())
+    assert list(table["cam_angle [degree]"]) == pytest.approx(np.tile(angles, 3).tolist())
+    assert list(table["base_radius [mm]"]) == pytest.approx(radii.repeat(angles.size).tolist())
+    assert list(table["run"]) == np.arange(3).repeat(angles.size).tolist()

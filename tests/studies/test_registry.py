@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import datetime as dt
 import json
+import math
 import multiprocessing
 import os
 import shutil
@@ -52,7 +53,8 @@ def test_a_version_1_registry_is_migrated_in_place(tmp_path: Path) -> None:
         con.execute(V1_SCHEMA)
         folder = next((outputs / "tiny").iterdir())
         record = json.loads((folder / "run.json").read_text(encoding="utf-8"))
-        row = [record.get(c) for c in registry.COLUMNS if c not in ("compile_s", "run_s")]
+        skipped = ("compile_s", "run_s", "code_sha256")
+        row = [record.get(c) for c in registry.COLUMNS if c not in skipped]
         con.execute(
             "INSERT INTO runs (run_id, study, scene, design, runs, status, started, finished, "
             "git_commit, git_dirty, folder, definition_sha256) VALUES "
@@ -62,10 +64,46 @@ def test_a_version_1_registry_is_migrated_in_place(tmp_path: Path) -> None:
     values = {v["name"]: v for v in registry.run_values(outputs, run_id)}
     with closing(sqlite3.connect(outputs / registry.REGISTRY)) as con:
         assert con.execute("PRAGMA user_version").fetchone()[0] == registry.SCHEMA_VERSION
-    assert values["cam_speed"]["num"] == 1000.0
-    assert values["cam_speed"]["units"] == "rpm"
-    assert values["max_jerk.max"]["units"] == "mm/rad^3"
+    # indexed in SI: 1000 rpm = 1000 · 2π/60 rad/s; the scene's units kept beside
+    assert values["cam_speed"]["num"] == pytest.approx(1000.0 * 2 * math.pi / 60, rel=1e-15)
+    assert (values["cam_speed"]["units"], values["cam_speed"]["declared_units"]) == (
+        "rad/s",
+        "rpm",
+    )
+    assert values["max_jerk.max"]["units"] == "m/rad^3"
     assert [r["run_id"] for r in tracking.list_runs(outputs)] == [run_id]
+
+
+def test_a_version_2_registry_is_indexed_again_in_si(tmp_path: Path) -> None:
+    outputs = tmp_path / "out"
+    run_id = tiny_run(tmp_path, outputs)
+    (outputs / registry.REGISTRY).unlink()
+    with closing(sqlite3.connect(outputs / registry.REGISTRY)) as con, con:  # as version 2 wrote
+        con.execute(V1_SCHEMA)
+        con.execute(
+            "CREATE TABLE run_values (run_id TEXT NOT NULL, kind TEXT NOT NULL, "
+            "name TEXT NOT NULL, text TEXT, num REAL, units TEXT)"
+        )
+        con.execute("CREATE TABLE tags (tag TEXT PRIMARY KEY, run_id TEXT NOT NULL)")
+        con.execute("CREATE TABLE notes (run_id TEXT NOT NULL, written TEXT, text TEXT)")
+        folder = next((outputs / "tiny").iterdir())
+        con.execute(
+            "INSERT INTO runs (run_id, study, status, folder) VALUES (?, 'tiny', 'finished', ?)",
+            (run_id, str(folder)),
+        )
+        con.execute(  # version 2 held the file's units
+            "INSERT INTO run_values VALUES (?, 'parameter', 'cam_speed', '1000.0', 1000.0, 'rpm')",
+            (run_id,),
+        )
+        con.execute("INSERT INTO tags VALUES ('kept', ?)", (run_id,))
+        con.execute("PRAGMA user_version = 2")
+    values = [v for v in registry.run_values(outputs, run_id) if v["name"] == "cam_speed"]
+    (value,) = values  # 1000 rpm = 1000 · 2π/60 rad/s
+    assert value["num"] == pytest.approx(1000.0 * 2 * math.pi / 60, rel=1e-15)
+    assert value["units"] == "rad/s"
+    assert registry.tagged_run(outputs, "kept") == run_id
+    with closing(sqlite3.connect(outputs / registry.REGISTRY)) as con:
+        assert con.execute("PRAGMA user_version").fetchone()[0] == 3
 
 
 def test_a_newer_registry_is_refused_with_exit_2(
@@ -131,7 +169,7 @@ def test_tags_and_notes_work_wherever_a_run_id_does(
     assert shown["tags"] == ["baseline"]
     assert shown["notes"][0].endswith("the design review's run")
     assert main(["compare", "baseline", second, *out]) == 0
-    assert "fixed parameter cam_speed  1000 | 1200" in capsys.readouterr().out
+    assert "fixed parameter cam_speed  1000 rpm → 1200 rpm" in capsys.readouterr().out
     assert main(["tag", second, "baseline", *out]) == 0  # a tag names one run: it moves
     assert f"moved from {first}" in capsys.readouterr().out
     assert tracking.find_run(outputs, "baseline")["run_id"] == second

@@ -150,3 +150,24 @@ def test_equal_infinities_and_nans_are_unchanged(tmp_path: Path) -> None:
     flipped["y"].values[1] = -math.inf
     with pytest.raises(AssertionError, match="a=20"):
         assert_results_close(flipped, baseline)
+
+
+@pytest.mark.slow
+def test_regress_takes_a_results_file_and_compare_names_the_changed_engine_source(
+    runs, capsys: pytest.CaptureFixture[str]
+) -> None:
+    outputs, base, rerun, changed = runs
+    reviewed = next(outputs.glob(f"isac_l9/{base}/results.nc"))  # a baseline file, by path
+    assert main(["regress", str(reviewed), rerun, "--outputs", str(outputs)]) == 0
+    assert f"run {rerun} against baseline {reviewed}" in capsys.readouterr().out
+    assert main(["regress", str(reviewed), changed, "--outputs", str(outputs)]) == 1
+    capsys.readouterr()
+    # the scratch copy's kernel edit is uncommitted code outside any repository: its source
+    # hash, not a commit, tells the runs apart
+    assert main(["compare", base, changed, "--outputs", str(outputs), "--rtol", "1e-3"]) == 0
+    out = capsys.readouterr().out
+    assert re.search(r"code engine\s+engine-studies \S+ → engine-studies \S+, source changed", out)
+    assert "code scene" not in out  # a built-in scene's code is the engine's: said once
+    assert "moved: max_contact_stress" in out
+    (line,) = [x for x in out.splitlines() if x.strip().startswith("max_contact_stress [MPa]")]
+    assert "9/9" in line  # one line for the moved response, every point beyond 1e-3

@@ -6,7 +6,9 @@ steady state is checked against the closed-form frequency response."""
 
 from __future__ import annotations
 
+import json
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -94,3 +96,56 @@ def test_a_full_factorial_on_the_plugin_scene_matches_the_closed_form(
         np.testing.assert_allclose(ds["natural_frequency"].values, omega_n / (2 * np.pi))
         assert ds["amplitude"].attrs["units"] == "mm"
     assert (results.parent / "main_effects_amplitude.png").exists()
+
+
+def install_plugin(target: Path) -> Path:
+    subprocess.run(
+        [
+            *(sys.executable, "-m", "pip", "install", "--quiet", "--no-deps"),
+            *("--target", str(target), str(PLUGIN)),
+        ],
+        check=True,
+        capture_output=True,
+    )
+    return target
+
+
+def test_editing_the_plugins_source_invalidates_the_cache_and_compare_names_it(
+    tmp_path: Path,
+) -> None:
+    site = install_plugin(tmp_path / "site")
+    study = tmp_path / "oscillator_grid.toml"
+    study.write_text(STUDY, encoding="utf-8")
+    outputs = tmp_path / "out"
+    argv = ["run", str(study), "--outputs", str(outputs), "--no-progress"]
+    first = studies(site, *argv)
+    assert first.returncode == 0, first.stderr
+    again = studies(site, *argv)
+    assert "reusing run" in again.stdout  # same definition, same code: reused
+    (old,) = (outputs / "oscillator_grid").iterdir()
+    recorded = json.loads((old / "run.json").read_text(encoding="utf-8"))["code"]["scene"]
+    assert (recorded["distribution"], recorded["version"]) == ("engine-studies-oscillator", "0.1.0")
+    assert recorded["plugin"] is True
+
+    # the issue's edit: a response ×1000, no version bump, the package reinstalled in place
+    source = site / "oscillator_scene" / "__init__.py"
+    text = source.read_text(encoding="utf-8")
+    assert text.count("np.hypot(a, b) * 1e3") == 1
+    source.write_text(text.replace("np.hypot(a, b) * 1e3", "np.hypot(a, b) * 1e6"), "utf-8")
+    edited = studies(site, *argv)
+    assert edited.returncode == 0, edited.stderr
+    assert "reusing run" not in edited.stdout
+    new = next(p for p in (outputs / "oscillator_grid").iterdir() if p != old)
+    with xr.open_dataset(old / "results.nc") as a, xr.open_dataset(new / "results.nc") as b:
+        np.testing.assert_allclose(b["amplitude"].values, 1e3 * a["amplitude"].values)
+
+    compared = studies(site, "compare", old.name, new.name, "--outputs", str(outputs))
+    assert compared.returncode == 0, compared.stderr
+    # the scene's distribution and version are unchanged; its source hash is not
+    assert re.search(
+        r"code scene oscillator\s+plugin engine-studies-oscillator 0\.1\.0 → "
+        r"plugin engine-studies-oscillator 0\.1\.0, source changed",
+        compared.stdout,
+    ), compared.stdout
+    assert "moved: amplitude" in compared.stdout
+    assert "definitions, code and versions: identical" not in compared.stdout

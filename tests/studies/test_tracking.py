@@ -317,3 +317,17 @@ def test_resume_refuses_a_lift_table_changed_after_the_run_started(
         resume_run(run_id, tmp_path, progress=False)
     lift_table(table, peak_mm=10.0)  # the original contents: resumable again
     assert resume_run(run_id, tmp_path, progress=False).record.status == "finished"
+
+
+def test_resume_refuses_a_run_whose_code_changed_since_it_started(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    folder = failed_run(tmp_path, monkeypatch)
+    record = json.loads((folder / "run.json").read_text())
+    assert record["code"]["scene"]["scene"] == "cam"
+    edited = record["code"]["engine"] | {"source_sha256": "0" * 64}  # e.g. a kernel edited since
+    monkeypatch.setattr("studies.provenance.engine_code", lambda: edited)
+    with pytest.raises(ValueError, match="the code changed since run"):
+        resume_run(record["run_id"], tmp_path, progress=False)
+    assert not (folder / "results.nc").exists()
+    assert sorted(p.name for p in (folder / "chunks").glob("*.npz")) == ["000000.npz", "000001.npz"]
