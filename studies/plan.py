@@ -144,7 +144,7 @@ def max_points(text: str) -> int:
         value = float(text)
     except ValueError:
         value = math.nan
-    if not value >= 1:
+    if not 1 <= value < math.inf:
         msg = f"{MAX_POINTS_VARIABLE}={text!r} must be a number of design points, e.g. 5e7"
         raise ValueError(msg)
     return int(value)

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from studies.bounded_files import TABLE_FILE_BYTES, read_bounded_text
 from studies.compare import matched_points, point_label, point_table
 from studies.results import is_status
 
@@ -57,7 +58,7 @@ class Check:
 def read_tolerances(path: Path) -> dict[str, Tolerance]:
     """``[response] rtol = …, atol = …`` tables of a TOML file (ValueError on anything else)."""
     try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+        raw = tomllib.loads(read_bounded_text(path, "--tolerances", TABLE_FILE_BYTES))
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"{path}: not valid TOML ({exc})") from None
     out = {}

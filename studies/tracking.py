@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from studies import registry
+from studies.bounded_files import TABLE_FILE_BYTES, InputFileError, read_bounded_bytes
 from studies.runner import DEFAULT_CHUNK_SIZE
 
 OUTPUTS_VARIABLE = "ENGINE_STUDIES_OUTPUTS"
@@ -148,9 +149,9 @@ def definition_hash(text: str, inputs: tuple[Path, ...] = ()) -> str:
     for path in inputs:
         digest.update(b"\0" + str(path).encode("utf-8") + b"\0")
         try:
-            digest.update(path.read_bytes())
-        except OSError as exc:  # planning reports the unreadable file; the key just differs
-            digest.update(f"unreadable: {exc.strerror}".encode())
+            digest.update(read_bounded_bytes(path, "input file", TABLE_FILE_BYTES))
+        except InputFileError as exc:  # planning reports the unreadable file; the key differs
+            digest.update(f"unreadable: {exc}".encode())
     return digest.hexdigest()
 
 

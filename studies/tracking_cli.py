@@ -136,9 +136,9 @@ def _regress(args: argparse.Namespace) -> int:
     from studies import regress
     from studies.compare import load_run
 
+    tolerances = regress.read_tolerances(args.tolerances) if args.tolerances else {}
     baseline = load_run(args.outputs, args.baseline)
     run = load_run(args.outputs, args.run_id)
-    tolerances = regress.read_tolerances(args.tolerances) if args.tolerances else {}
     default = regress.Tolerance(
         regress.DEFAULT_RTOL if args.rtol is None else args.rtol,
         regress.DEFAULT_ATOL if args.atol is None else args.atol,
