@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from studies.definition import StudyError, catalog_names, read_study
+from studies.text_safety import TerminalText, printable_dataset
 from studies.tracking_cli import add_commands
 
 if TYPE_CHECKING:
@@ -39,6 +40,18 @@ EXIT_INTERRUPTED = 130  # the shell's code for a process ended by SIGINT
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run one command; return its exit code. What it prints passes through
+    :class:`~studies.text_safety.TerminalText` (no escape sequences from a description)."""
+    streams = sys.stdout, sys.stderr
+    sys.stdout, sys.stderr = TerminalText(sys.stdout), TerminalText(sys.stderr)
+    try:
+        return _main(argv)
+    finally:
+        sys.stdout, sys.stderr = streams
+
+
+def _main(argv: list[str] | None) -> int:
+    """:func:`main` with user text on the terminal stripped of control characters."""
     from studies.tracking import default_outputs
 
     parser = _parser()
@@ -311,7 +324,7 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     if folder.resolve() == args.results.parent.resolve():
         msg = f"--to {folder} is the run's own folder: its recorded analysis would be overwritten"
         raise ValueError(msg)
-    ds = open_results(args.results)
+    ds = printable_dataset(open_results(args.results))
     if args.no_pool or args.pool:
         ds.attrs["pool"] = json.dumps([] if args.no_pool else args.pool)
     files = write_analysis(ds, folder, args.response)
