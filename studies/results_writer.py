@@ -72,6 +72,10 @@ class ResultsWriter:
         variable.setncatts(attrs)
         self.dtypes[name] = dtype
 
+    def width(self, curve: str) -> int:
+        """The number of curve-axis values of ``curve`` (its second dimension)."""
+        return int(self.file[curve].shape[1])
+
     def write(self, part: slice, out: SceneOutput) -> None:
         """Store one chunk's responses and curves (design points ``part``)."""
         for name, values in out.scalars.items():

@@ -11,21 +11,18 @@ written.
 from __future__ import annotations
 
 import difflib
-import json
 import os
 import shutil
 import sqlite3
-import zipfile
-import zlib
 from concurrent.futures import Executor
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-import numpy as np
 import xarray as xr
 
 from studies import provenance, tracking
 from studies.analysis import ANALYSIS_NAME
+from studies.checkpoints import load_chunk, read_run_record, save_chunk
 from studies.definition import parse_study
 from studies.plan import Plan, plan_study
 from studies.report import write_analysis
@@ -101,7 +98,7 @@ def resume_run(run_id: str, outputs: Path | None = None, progress: bool = True) 
     if row is None:
         raise KeyError(f"no unique run matches {run_id!r} under {outputs}")
     folder = Path(row["folder"])
-    record = tracking.RunRecord(**json.loads((folder / "run.json").read_text(encoding="utf-8")))
+    record = read_run_record(folder / "run.json")
     if record.status == "finished":
         raise ValueError(f"run {record.run_id} is already finished: nothing to resume")
     if tracking.liveness(asdict(record)) == "running":
@@ -117,6 +114,14 @@ def resume_run(run_id: str, outputs: Path | None = None, progress: bool = True) 
         for path in sorted((folder / CHECKPOINTS).glob("*.npz"))
         if path.stem.isdigit()  # not a temporary file a kill left mid-write
     }
+    count = -(-plan.runs // record.chunk_size) if record.chunk_size > 0 else 0
+    beyond = sorted(str(done[i]) for i in done if i >= count)
+    if record.chunk_size < 1 or beyond:
+        msg = (
+            f"run {record.run_id}: chunk size {record.chunk_size} gives {count} chunks, but "
+            f"{', '.join(beyond[:3]) or 'none'} lie beyond them: delete those and resume"
+        )
+        raise ValueError(msg)
     record.status, record.error = "running", ""
     return _execute(plan, outputs, record, progress, done)
 
@@ -146,10 +151,10 @@ def _execute(
         writer = ResultsWriter(plan, folder / RESULTS_NAME, attrs, record.chunk_size)
         parts = list(chunks(plan.runs, record.chunk_size))
         for index in sorted(done):
-            writer.write(parts[index], _load_chunk(done[index]))
+            writer.write(parts[index], _load_chunk(done[index], parts[index], plan, writer))
 
         def finished(index: int, out: SceneOutput) -> None:
-            _save_chunk(folder, index, out)
+            _save_chunk(folder, index, parts[index], out)
             writer.write(parts[index], out)
             record.beat()
 
@@ -224,30 +229,11 @@ def _recorded_text(folder: Path) -> str:
     return record.read_text(encoding="utf-8") if record.exists() else ""
 
 
-def _save_chunk(folder: Path, index: int, out: SceneOutput) -> None:
-    path = folder / CHECKPOINTS / f"{index:06d}.npz"
-    path.parent.mkdir(exist_ok=True)
-    arrays = {f"scalar:{k}": v for k, v in out.scalars.items()}
-    arrays |= {f"curve:{k}": v for k, v in out.curves.items()}
-    tmp = path.with_suffix(".tmp.npz")
-    np.savez(tmp, **arrays)  # type: ignore[arg-type]
-    tmp.replace(path)  # a chunk file is either complete or absent
+def _save_chunk(folder: Path, index: int, part: slice, out: SceneOutput) -> None:
+    save_chunk(folder / CHECKPOINTS / f"{index:06d}.npz", part, out)
 
 
-class DamagedCheckpoint(OSError):
-    """A checkpoint chunk file that cannot be decoded (cut short, overwritten, bad disk)."""
-
-
-def _load_chunk(path: Path) -> SceneOutput:
-    """A checkpointed chunk (OSError if unreadable, :class:`DamagedCheckpoint` if damaged)."""
-    try:
-        with path.open("rb") as file, np.load(file) as data:  # file: closed even if damaged
-            scalars = {k.split(":", 1)[1]: data[k] for k in data.files if k.startswith("scalar:")}
-            curves = {k.split(":", 1)[1]: data[k] for k in data.files if k.startswith("curve:")}
-    except (ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error) as exc:
-        msg = (
-            f"checkpoint {path} is damaged ({type(exc).__name__}: {exc}); delete it and resume: "
-            "its design points are computed again"
-        )
-        raise DamagedCheckpoint(msg) from None
-    return SceneOutput(scalars, curves)
+def _load_chunk(path: Path, part: slice, plan: Plan, writer: ResultsWriter) -> SceneOutput:
+    """A checkpointed chunk, validated against the plan (see :mod:`studies.checkpoints`)."""
+    curves = {name: writer.width(name) for name in plan.definition.curves}
+    return load_chunk(path, part, plan.responses, curves)
