@@ -17,6 +17,7 @@ export RUN_ID          the results as CSV or Parquet
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 from pathlib import Path
@@ -324,10 +325,24 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     if folder.resolve() == args.results.parent.resolve():
         msg = f"--to {folder} is the run's own folder: its recorded analysis would be overwritten"
         raise ValueError(msg)
+    if (folder / "run.json").exists() or (folder / "results.nc").exists():
+        msg = f"--to {folder} holds a run's results: its recorded analysis would be overwritten"
+        raise ValueError(msg)
     ds = printable_dataset(open_results(args.results))
     if args.no_pool or args.pool:
         ds.attrs["pool"] = json.dumps([] if args.no_pool else args.pool)
-    files = write_analysis(ds, folder, args.response)
+    created = not folder.exists()
+    before = set(folder.iterdir()) if not created else set()
+    try:
+        files = write_analysis(ds, folder, args.response)
+    except BaseException:  # a full disk: remove what this attempt wrote, keep the rest
+        with contextlib.suppress(OSError):
+            for path in set(folder.iterdir()) - before:
+                with contextlib.suppress(OSError):
+                    path.unlink()
+            if created:
+                folder.rmdir()
+        raise
     print(files[0].read_text(encoding="utf-8"))
     for f in files:
         print(f"wrote {f}")

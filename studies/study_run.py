@@ -10,6 +10,7 @@ written.
 
 from __future__ import annotations
 
+import contextlib
 import difflib
 import os
 import shutil
@@ -147,6 +148,7 @@ def _execute(
         "created": record.started,
     }
     writer = None
+    before = set(folder.iterdir())
     try:
         writer = ResultsWriter(plan, folder / RESULTS_NAME, attrs, record.chunk_size)
         parts = list(chunks(plan.runs, record.chunk_size))
@@ -175,6 +177,7 @@ def _execute(
     except BaseException as exc:
         if writer is not None:
             writer.abandon()
+        _remove_new_files(folder, before)
         record.status, record.finished, record.error = "failed", tracking.now(), repr(exc)
         try:
             record.write()
@@ -191,6 +194,19 @@ def _execute(
     record.write()
     tracking.register(outputs, record)
     return RunResult(record, ds, folder, (folder / "study.toml", folder / "run.json", *files))
+
+
+def _remove_new_files(folder: Path, before: set[Path]) -> None:
+    """Delete the files a failed attempt wrote into the run folder (results, analysis,
+    figures: possibly cut short by a full disk); the checkpoints and the record stay.
+    Never raises: it runs while another error is being reported."""
+    try:
+        written = [p for p in folder.iterdir() if p not in before and p.name != "run.json"]
+    except OSError:
+        return
+    for path in written:
+        with contextlib.suppress(OSError):
+            path.unlink()
 
 
 def _check_unchanged(study: Path, sha256: str) -> None:
