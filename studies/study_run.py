@@ -66,6 +66,7 @@ def run_plan(
 ) -> RunResult:
     """Run a validated plan in a new run folder under ``outputs`` (chunks on ``executor``)."""
     outputs = (outputs or tracking.default_outputs()).resolve()
+    chunk_size = min(chunk_size, plan.max_chunk)  # fine settings: fewer points per chunk
     d = plan.definition
     commit, dirty = provenance.git_state()
     run_id, folder = tracking.run_folder(outputs, d.name, tracking.new_run_id(d.text))

@@ -23,6 +23,7 @@ from studies.scenes.base import (
     Response,
     Scene,
     SceneOutput,
+    WorkEstimate,
     short,
 )
 from studies.scenes.cam import CamScene
@@ -185,6 +186,7 @@ __all__ = [
     "Response",
     "Scene",
     "SceneOutput",
+    "WorkEstimate",
     "describe_scene",
     "get_scene",
 ]
