@@ -98,7 +98,7 @@ def load_plugins() -> dict[str, type[Scene]]:
     found: dict[str, type[Scene]] = {}
     for name, points in by_name.items():
         if len(points) > 1:
-            both = " and ".join(_origin(p) for p in points)
+            both = " and ".join(sorted(_origin(p) for p in points))
             _warn(f"scene {short(name)} is registered by {both}: neither is loaded (uninstall one)")
             continue
         (point,) = points

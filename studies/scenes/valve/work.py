@@ -20,7 +20,10 @@ BYTES = 8.0
 def work_estimate(
     settings: dict[str, Any], _responses: list[str], curves: list[str]
 ) -> WorkEstimate:
-    """The excitation tables once per chunk, the angle grid per design point [bytes]."""
+    """The excitation tables once per chunk, the angle grid per design point [bytes]
+    (nothing known for the scenes built on this one that have no ``angle_step``)."""
+    if "angle_step" not in settings:
+        return WorkEstimate()
     step = math.degrees(settings["angle_step"])
     table = step / 2.0
     if settings.get("tolerance", 0.0) > 0.0:
