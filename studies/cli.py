@@ -22,6 +22,7 @@ Exit codes: 0 done, 1 regress: a response moved, 2 bad input, 3 --strict: points
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sqlite3
 import sys
@@ -30,6 +31,7 @@ from typing import TYPE_CHECKING
 
 from studies.definition import StudyError, catalog_names, read_study
 from studies.registry_file import RegistryUnusable, unusable
+from studies.text_safety import TerminalText, printable_dataset
 from studies.tracking_cli import add_commands
 
 if TYPE_CHECKING:
@@ -48,6 +50,18 @@ EXIT_INTERRUPTED = 130  # the shell's code for a process ended by SIGINT
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run one command; return its exit code. What it prints passes through
+    :class:`~studies.text_safety.TerminalText` (no escape sequences from a description)."""
+    streams = sys.stdout, sys.stderr
+    sys.stdout, sys.stderr = TerminalText(sys.stdout), TerminalText(sys.stderr)
+    try:
+        return _main(argv)
+    finally:
+        sys.stdout, sys.stderr = streams
+
+
+def _main(argv: list[str] | None) -> int:
+    """:func:`main` with user text on the terminal stripped of control characters."""
     from studies.tracking import default_outputs
 
     parser = _parser()
@@ -376,10 +390,24 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     if folder.resolve() == args.results.parent.resolve():
         msg = f"--to {folder} is the run's own folder: its recorded analysis would be overwritten"
         raise ValueError(msg)
-    ds = open_results(args.results)
+    if (folder / "run.json").exists() or (folder / "results.nc").exists():
+        msg = f"--to {folder} holds a run's results: its recorded analysis would be overwritten"
+        raise ValueError(msg)
+    ds = printable_dataset(open_results(args.results))
     if args.no_pool or args.pool:
         ds.attrs["pool"] = json.dumps([] if args.no_pool else args.pool)
-    files = write_analysis(ds, folder, args.response)
+    created = not folder.exists()
+    before = set(folder.iterdir()) if not created else set()
+    try:
+        files = write_analysis(ds, folder, args.response)
+    except BaseException:  # a full disk: remove what this attempt wrote, keep the rest
+        with contextlib.suppress(OSError):
+            for path in set(folder.iterdir()) - before:
+                with contextlib.suppress(OSError):
+                    path.unlink()
+            if created:
+                folder.rmdir()
+        raise
     print(files[0].read_text(encoding="utf-8"))
     for f in files:
         print(f"wrote {f}")

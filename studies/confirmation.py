@@ -42,7 +42,8 @@ def confirmation_toml(ds: xr.Dataset, levels: Mapping[str, int]) -> str:
         factors[f] = {"levels": [value]} | ({"units": str(units)} if units else {})
     study["factors"] = factors
     run = ds.attrs.get("run_id", "")
-    header = f"# Confirmation run of {name}{f' (run {run})' if run else ''}: the chosen levels.\n"
+    shown = " ".join(f"{name}{f' (run {run})' if run else ''}".splitlines())  # one comment line
+    header = f"# Confirmation run of {shown}: the chosen levels.\n"
     return header + _toml(study)
 
 

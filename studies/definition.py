@@ -38,10 +38,12 @@ from __future__ import annotations
 
 import re
 import tomllib
+from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from studies.bounded_files import STUDY_FILE_BYTES, UTF8_BOM, InputFileError, read_bounded_text
 from studies.definition_values import Factor, ValueParser, suggest
 from studies.scenes import SCENES, Scene, get_scene
 from studies.scenes.base import short
@@ -62,6 +64,8 @@ TOP_LEVEL_KEYS = {
 DESIGN_KEYS = {"type", "error_columns", "interactions", "pool"}
 NAME_PATTERN = re.compile(r"[A-Za-z0-9_-]+")  # whole names only: used with fullmatch
 MAX_NAME_LENGTH = 64  # the name is a folder name; file systems allow 255 bytes
+MAX_NESTING = 10  # arrays/tables inside each other; a study needs 4 (factors.x.levels = [...])
+SHORT_KEY = 60  # characters of a key path shown in a message
 
 
 class StudyError(ValueError):
@@ -125,22 +129,54 @@ def catalog_names() -> list[str]:
 
 
 def read_study(name_or_path: str | Path) -> tuple[StudyDefinition | None, list[str]]:
-    """Parse a study file; return the definition (None if unusable) and the problems found."""
+    """Parse a study file; return the definition (None if unusable) and the problems found.
+    The file must be a regular file of at most ``STUDY_FILE_BYTES`` (StudyError otherwise)."""
     path = find_study(name_or_path)
     try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise StudyError(str(path), [f"cannot read the file: {exc.strerror}"]) from None
+        text = read_bounded_text(path, "study file", STUDY_FILE_BYTES)
+    except InputFileError as exc:
+        raise StudyError(str(path), [str(exc)]) from None
     return parse_study(text, str(path))
 
 
 def parse_study(text: str, source: str = "<string>") -> tuple[StudyDefinition | None, list[str]]:
-    """Parse TOML text; return the definition (None if unusable) and every problem found."""
+    """Parse TOML text; return the definition (None if unusable) and every problem found.
+    A leading UTF-8 byte-order mark is dropped; arrays and tables nested deeper than
+    ``MAX_NESTING`` are refused before anything looks at the values."""
+    text = text.removeprefix(UTF8_BOM)
+    if len(text) > STUDY_FILE_BYTES:  # characters ≤ bytes: a cheap bound before parsing
+        return None, [f"has {len(text)} characters: a study file holds at most {STUDY_FILE_BYTES}"]
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         return None, [f"is not valid TOML: {exc}"]
+    except RecursionError:
+        return None, [f"nests arrays or inline tables too deeply to read (at most {MAX_NESTING})"]
+    deep = _too_deep(data)
+    if deep:
+        return None, [deep]
     return _Parser(data, text, source).parse()
+
+
+def _too_deep(data: dict[str, Any]) -> str:
+    """A sentence naming the first key whose value nests more than ``MAX_NESTING`` arrays or
+    tables inside each other, or "" (walked without recursion: any depth is safe; only
+    containers are visited, so a long level list costs one pass over its items)."""
+    stack: list[tuple[Any, str, int]] = [(data, "", 0)]
+    while stack:
+        value, where, depth = stack.pop()
+        if depth > MAX_NESTING:
+            shown = where if len(where) <= SHORT_KEY else where[: SHORT_KEY - 3] + "..."
+            return (
+                f"{shown} nests arrays or tables more than {MAX_NESTING} deep: a study file "
+                "needs at most 4 (e.g. factors.x.levels = [...])"
+            )
+        items = value.items() if isinstance(value, dict) else enumerate(value)
+        for key, item in items:
+            if isinstance(item, dict | list):
+                path = f"{where}.{key}" if isinstance(key, str) else f"{where}[{key}]"
+                stack.append((item, path.removeprefix("."), depth + 1))
+    return ""
 
 
 class _Parser(ValueParser):
@@ -229,8 +265,8 @@ class _Parser(ValueParser):
             return []
         if required and not value:
             self.problem(f"{key} is empty: name at least one")
-        for dup in sorted({v for v in value if value.count(v) > 1}):
-            self.problem(f"{key} lists {dup!r} more than once")
+        for dup in sorted(name for name, n in Counter(value).items() if n > 1):
+            self.problem(f"{key} lists {short(dup)} more than once")
         return list(dict.fromkeys(value))
 
     def _table(self, key: str) -> dict[str, Any]:

@@ -4,6 +4,7 @@ of the study parser (:mod:`studies.definition`) that collects every problem it f
 
 from __future__ import annotations
 
+from collections import Counter
 from dataclasses import dataclass
 from difflib import get_close_matches
 from typing import Any
@@ -13,6 +14,7 @@ from studies.scenes.base import is_finite_number, short
 from studies.units import UNITS, canonical, compatible_units
 
 FACTOR_KEYS = {"levels", "units", "column", "base"}
+SHOWN_LEVEL_PROBLEMS = 3  # refused levels listed per factor; the rest are counted
 
 
 @dataclass(frozen=True)
@@ -107,14 +109,20 @@ class ValueParser:
             if not isinstance(levels, list) or not levels:
                 self.problem(f"factor {name} has no levels: give a non-empty list 'levels'")
                 continue
-            dups = sorted({repr(v) for v in levels if levels.count(v) > 1})
+            dups = duplicates(levels)
             if dups:
                 self.problem(f"factor {name} has duplicate levels: {', '.join(dups)}")
             if ok:
-                for v in levels:
-                    problem = param.check(v, units if param.kind == "number" else None)
-                    if problem:
-                        self.problem(f"factor {name}: {problem}")
+                refused = [
+                    p
+                    for v in levels
+                    if (p := param.check(v, units if param.kind == "number" else None))
+                ]
+                for problem in refused[:SHOWN_LEVEL_PROBLEMS]:
+                    self.problem(f"factor {name}: {problem}")
+                if len(refused) > SHOWN_LEVEL_PROBLEMS:
+                    more = len(refused) - SHOWN_LEVEL_PROBLEMS
+                    self.problem(f"factor {name}: {more} more of its levels are refused likewise")
             column = spec.get("column")
             if column is not None and not (is_finite_number(column) and isinstance(column, int)):
                 self.problem(
@@ -152,6 +160,13 @@ class ValueParser:
                 continue
             settings[name] = value
         return settings
+
+
+def duplicates(values: list[Any]) -> list[str]:
+    """The values that occur more than once (as ``repr``, sorted), counted in O(n): numbers,
+    strings and booleans only (anything else is refused by the value checks)."""
+    counted = Counter(v for v in values if isinstance(v, int | float | str))
+    return sorted(short(v) for v, n in counted.items() if n > 1)
 
 
 def suggest(name: str, known: Any) -> str:

@@ -25,7 +25,7 @@ from studies.reindex import read_record, run_folders
 REMOVING = ".removing"  # left by versions that deleted runs at once
 AGE = re.compile(r"^\s*(\d+(?:\.\d+)?)\s*([smhdw])\s*$")
 UNIT_S = {"s": 1, "m": 60, "h": 3600, "d": 86400, "w": 7 * 86400}
-MAX_AGE = dt.timedelta(days=100 * 365)
+MAX_AGE = dt.timedelta(days=1000 * 365)  # older runs than this cannot exist; datetime ends at 9999
 LOCK_WAIT_S = 0.5  # a listing may hold a run folder's lock for an instant
 STILLBORN_S = 60.0  # a run folder without run.json this old was left by a killed start
 
@@ -36,7 +36,11 @@ def parse_age(text: str) -> dt.timedelta:
     match = AGE.match(text)
     if not match:
         raise ValueError(f"--older-than {text!r}: write a number and s, m, h, d or w, e.g. 30d")
-    return dt.timedelta(seconds=min(float(match[1]) * UNIT_S[match[2]], MAX_AGE.total_seconds()))
+    seconds = float(match[1]) * UNIT_S[match[2]]
+    if seconds > MAX_AGE.total_seconds():
+        msg = f"--older-than {text.strip()} is more than {MAX_AGE.days // 365} years: give a shorter age"
+        raise ValueError(msg)
+    return dt.timedelta(seconds=seconds)
 
 
 def remove_run(outputs: Path, row: dict[str, Any], force: bool = False) -> Path | None:

@@ -10,6 +10,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from studies.text_safety import Markup, figure_target, md_escape
+
 
 def pct(value: float) -> str:
     return f"{value:.1f}" if np.isfinite(value) else "—"
@@ -24,8 +26,12 @@ def num(value: Any, digits: int = 4) -> str:
 
 
 def cell(value: Any) -> str:
+    """A table cell: a number formatted, report markup (:class:`Markup`) as it is, any other
+    text escaped (it may come from the user or a results file)."""
+    if isinstance(value, Markup):
+        return value
     text = num(value) if isinstance(value, float | np.floating) else str(value)
-    return text.replace("|", "\\|").replace("\n", " ")
+    return md_escape(text)
 
 
 def table(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:
@@ -35,18 +41,21 @@ def table(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:
     return "\n".join(lines)
 
 
-def label(name: str, units: str) -> str:
-    """``name [units]``; dimensionless ("1") and unknown units are left out."""
-    return f"{name} [{units}]" if units and units != "1" else name
+def label(name: str, units: str) -> Markup:
+    """``name [units]``; dimensionless ("1") and unknown units are left out (Markdown: both
+    escaped, the brackets not)."""
+    shown = md_escape(name)
+    return Markup(f"{shown} [{md_escape(units)}]") if units and units != "1" else shown
 
 
 def units_of(ds: xr.Dataset, name: str) -> str:
     return str(ds[name].attrs.get("units", "")) if name in ds.variables else ""
 
 
-def value_text(value: Any, units: str) -> str:
+def value_text(value: Any, units: str) -> Markup:
+    """A value and its units (Markdown, escaped)."""
     shown = num(value) if isinstance(value, int | float | np.number) else str(value)
-    return f"{shown} {units}".rstrip()
+    return md_escape(f"{shown} {units}".rstrip())
 
 
 def levels_of(an: xr.Dataset, term: str) -> dict[int, Any]:
@@ -60,20 +69,21 @@ def levels_of(an: xr.Dataset, term: str) -> dict[int, Any]:
     }
 
 
-def level_text(an: xr.Dataset, factor: str, level: int) -> str:
-    """1-based level number and the factor's value: ``2 (9 deg)``."""
+def level_text(an: xr.Dataset, factor: str, level: int) -> Markup:
+    """1-based level number and the factor's value: ``2 (9 deg)`` (Markdown, escaped)."""
     units = str(an["term_units"].sel(term=factor).values)
-    return f"{level + 1} ({value_text(levels_of(an, factor)[level], units)})"
+    return Markup(f"{level + 1} ({value_text(levels_of(an, factor)[level], units)})")
 
 
 def figure(name: str, caption: str, figures: set[str]) -> list[str]:
-    return [f"![{caption}]({name})", ""] if name in figures else []
+    """An image link to one of the run's figures (caption escaped, file name encoded)."""
+    return [f"![{md_escape(caption)}]({figure_target(name)})", ""] if name in figures else []
 
 
 def other_figures(lines: list[str], figures: set[str]) -> list[str]:
     """Links to the figures no section has shown (e.g. the scene's own figures)."""
     text = "\n".join(lines)
-    rest = sorted(f for f in figures if f"]({f})" not in text)
+    rest = sorted(f for f in figures if f"]({figure_target(f)})" not in text)
     if not rest:
         return []
     out = ["## Other figures", ""]

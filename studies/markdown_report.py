@@ -38,6 +38,7 @@ from studies.markdown_format import (
 )
 from studies.markdown_response import constant_section, optimum_levels, response_section
 from studies.statistics import sweep_runs
+from studies.text_safety import Markup, code_span, fence, md_escape
 
 REPORT_NAME = "report.md"
 CONFIRMATION_NAME = "confirmation.toml"
@@ -89,7 +90,7 @@ def _report(
         lines += [note, ""]
     status = json.loads(an.attrs.get("status_responses", "[]"))
     if status:
-        lines += [f"- {status_line(an, r)}" for r in status] + [""]
+        lines += [f"- {md_escape(status_line(an, r))}" for r in status] + [""]
     responses = [r for r in responses if taguchi.mean_name(ds, r) in analysed]
     if ds.attrs.get("design") == "sweep":
         lines += _sweep(ds, responses, figures)
@@ -124,9 +125,9 @@ def _report(
                 else "Add it to the study's other tables to run it."
             ),
             "",
-            "```toml",
+            f"{fence(toml)}toml",
             toml.rstrip(),
-            "```",
+            fence(toml),
             "",
         ]
     lines += other_figures(lines, figures)
@@ -138,8 +139,8 @@ def _header(ds: xr.Dataset, responses: list[str], analysed: list[str]) -> list[s
     title = a.get("title") or a.get("study_name") or "Study results"
     commit = str(a.get("git_commit", ""))[:10]
     rows = [
-        ("study", f"`{a['study_name']}`" if a.get("study_name") else "—"),
-        ("run", f"`{a['run_id']}`" if a.get("run_id") else "—"),
+        ("study", code_span(a["study_name"]) if a.get("study_name") else "—"),
+        ("run", code_span(a["run_id"]) if a.get("run_id") else "—"),
         ("design", f"{a.get('design', '?')}, {ds.sizes['run']} runs"),
         ("scene", a.get("scene", "—")),
         ("commit", (commit + (" (dirty)" if a.get("git_dirty") else "")) or "—"),
@@ -150,13 +151,13 @@ def _header(ds: xr.Dataset, responses: list[str], analysed: list[str]) -> list[s
         y = ds[r]
         sense = y.attrs.get("better")
         shown.append(
-            f"{r} ({label(str(y.attrs.get('long_name', r)), units_of(ds, r))}"
-            + (f", {sense} is better" if sense else "")
+            f"{md_escape(r)} ({label(str(y.attrs.get('long_name', r)), units_of(ds, r))}"
+            + (f", {md_escape(sense)} is better" if sense else "")
             + ("" if taguchi.mean_name(ds, r) in analysed else ", NaN in every run: not analysed")
             + ")"
         )
-    rows.append(("responses", "; ".join(shown)))
-    return [f"# {title}", "", table(["", ""], rows), ""]
+    rows.append(("responses", Markup("; ".join(shown))))
+    return [f"# {md_escape(title)}", "", table(["", ""], rows), ""]
 
 
 def _design(ds: xr.Dataset, an: xr.Dataset) -> list[str]:
@@ -171,7 +172,7 @@ def _design(ds: xr.Dataset, an: xr.Dataset) -> list[str]:
         )
         lines += [text, ""]
     else:
-        lines += [f"Orthogonal array {name}, {ds.sizes['run']} runs.", ""]
+        lines += [f"Orthogonal array {md_escape(name)}, {ds.sizes['run']} runs.", ""]
     rows = []
     pairs = taguchi.interaction_columns(ds)
     errors = json.loads(ds.attrs.get("error_columns", "[]"))
@@ -188,13 +189,14 @@ def _design(ds: xr.Dataset, an: xr.Dataset) -> list[str]:
                     f"{j + 1} → {j % len(values) + 1}" for j in range(len(values), col_levels)
                 )
                 role = f"factor, dummy level (column level → factor level: {dummy})"
-            shown = ", ".join(value_text(v, "") for v in values.values()) + (
-                f" {units}" if units else ""
+            shown = Markup(
+                ", ".join(value_text(v, "") for v in values.values())
+                + (f" {md_escape(units)}" if units else "")
             )
         elif entry in pairs:
-            role, shown = f"interaction {pairs[entry][0]} x {pairs[entry][1]}", ""
+            role, shown = f"interaction {pairs[entry][0]} x {pairs[entry][1]}", Markup()
         elif entry in errors:
-            role, shown = "error (empty column)", ""
+            role, shown = "error (empty column)", Markup()
         else:
             continue
         rows.append([col if col else "—", col_levels or "—", entry, role, shown])
@@ -259,7 +261,8 @@ def _tradeoff(
         ]
         rows.append([shown.get(m, m), str(r.sense.values), *cells])
     chosen = {f: int(an["chosen_level"].sel(term=f)) for f in factors}
-    rows.append(["**chosen level**", "", *[level_text(an, f, chosen[f]) for f in factors]])
+    chosen_row = [Markup("**chosen level**"), "", *[level_text(an, f, chosen[f]) for f in factors]]
+    rows.append(chosen_row)
     rows.append(
         [
             "decided by",
@@ -298,7 +301,7 @@ def _sweep(ds: xr.Dataset, responses: list[str], figures: set[str]) -> list[str]
             [value_text(part[f].values[i], ""), *[num(float(part[r].values[i])) for r in responses]]
             for i in range(part.sizes["run"])
         ]
-        lines += [f"### {f}", "", table(header, rows), ""]
+        lines += [f"### {md_escape(f)}", "", table(header, rows), ""]
     for r in responses:
         lines += figure(f"sweep_{r}.png", f"Sweep: {r}", figures)
     return lines

@@ -23,6 +23,7 @@ from studies.markdown_format import (
     value_text,
 )
 from studies.prediction import Prediction
+from studies.text_safety import md_escape
 
 
 def _shown(view: xr.Dataset, response: str) -> str:
@@ -72,7 +73,7 @@ def _anova_lines(view: xr.Dataset, an: xr.Dataset, name: str, units: str) -> lis
         else "Error from the dof the terms leave"
     )
     note = str(r.anova_note.values)
-    return [table(header, rows), "", f"{source}. {pooling} {note}".rstrip(), ""]
+    return [table(header, rows), "", md_escape(f"{source}. {pooling} {note}".rstrip()), ""]
 
 
 def _decomposition_lines(an: xr.Dataset, name: str) -> list[str]:
@@ -100,9 +101,9 @@ def response_section(
     r = an.sel(response=mean)
     units, sense = str(r.units.values), str(r.sense.values)
     lines = [
-        f"## {response}: {label(str(r.long_name.values), units)}",
+        f"## {md_escape(response)}: {label(str(r.long_name.values), units)}",
         "",
-        f"{sense.capitalize()} is better. k_i = mean at level i.",
+        f"{md_escape(sense.capitalize())} is better. k\\_i = mean at level i.",
         "",
         "### Range analysis",
         "",
@@ -145,7 +146,8 @@ def _interaction_lines(
         ua, ub = units_of(view, a), units_of(view, b)
         head = [f"{a} \\ {b}", *[value_text(vb[j], ub) for j in lb]]
         body = [[value_text(va[i_a], ua), *[num(float(means[i_a, j])) for j in lb]] for i_a in la]
-        lines += [f"{label(f'Mean {response}', units)} by level of {a} and {b}:", ""]
+        by = f"{label(f'Mean {response}', units)} by level of {md_escape(a)} and {md_escape(b)}:"
+        lines += [by, ""]
         lines += [table(head, body), ""]
         lines += figure(plots.interaction_png(response, a, b), f"{a} x {b}", figures)
     return lines
@@ -156,10 +158,12 @@ def constant_section(view: xr.Dataset, response: str, figures: set[str]) -> list
     units = str(y.attrs.get("units", ""))
     finite = y.values[np.isfinite(y.values)]
     value = value_text(float(finite[0]), units if units != "1" else "") if finite.size else "—"
+    long_name = str(y.attrs.get("long_name", response))
     return [
-        f"## {response}: {label(str(y.attrs.get('long_name', response)), units)}",
+        f"## {md_escape(response)}: {label(long_name, units)}",
         "",
-        f"Does not vary over the runs ({value} in every run with a value): nothing to analyse.",
+        f"Does not vary over the runs ({md_escape(value)} in every run with a value): "
+        + "nothing to analyse.",
         "",
         *figure(f"main_effects_{response}.png", f"Main effects on {response}", figures),
     ]
@@ -172,7 +176,10 @@ def _sn_lines(view: xr.Dataset, an: xr.Dataset, response: str, figures: set[str]
     lines = [
         "### Signal-to-noise ratio",
         "",
-        (f"S/N ({kind} is better) in dB over {n} observation(s) per run; larger S/N is better."),
+        (
+            f"S/N ({md_escape(kind)} is better) in dB over {n} observation(s) per run; larger "
+            "S/N is better."
+        ),
         "",
     ]
     if n == 1:
@@ -232,12 +239,13 @@ def _optimum_lines(view: xr.Dataset, an: xr.Dataset, name: str, response: str) -
         [f, p.levels[f] + 1, value_text(levels_of(an, f)[p.levels[f]], units_of(view, f))]
         for f in taguchi.factor_names(view)
     ]
-    units = f" {p.units}" if p.units and p.units != "1" else ""
+    units = f" {md_escape(p.units)}" if p.units and p.units != "1" else ""
     level = f"{100 * (1 - p.alpha):g} %"
     lines = ["### Predicted optimum", "", table(["factor", "level", "value"], rows), ""]
     lines.append(
-        f"Predicted {_shown(view, response)} at these levels: **{num(p.mean)}{units}** "
-        f"(grand mean {num(p.grand_mean)}{units}; model terms {', '.join(p.terms) or 'none'})."
+        f"Predicted {md_escape(_shown(view, response))} at these levels: **{num(p.mean)}{units}** "
+        f"(grand mean {num(p.grand_mean)}{units}; model terms "
+        f"{md_escape(', '.join(p.terms) or 'none')})."
     )
     if np.isfinite(p.half_width):
         lo, hi = p.interval

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -43,6 +44,7 @@ class Plan:
     settings: dict[str, Any]
     stages: tuple[str, ...]
     responses: tuple[str, ...]  # stored: the study's, then the scene's status responses
+    max_chunk: int = sys.maxsize  # design points per chunk that fit the memory (settings)
 
     @property
     def runs(self) -> int:
@@ -85,6 +87,9 @@ def _plan(definition: StudyDefinition | None, problems: list[str], source: str) 
         for s in scene.settings
     }
     asked, curves = list(definition.responses), list(definition.curves)
+    max_chunk, work_problem = settings_fit(scene, definition, settings, design.runs)
+    if work_problem:
+        raise StudyError(source, [work_problem])
     point_problems = scene.check_points(points, settings)
     point_problems += scene.request_problems(settings, asked, curves)
     if point_problems:
@@ -94,7 +99,40 @@ def _plan(definition: StudyDefinition | None, problems: list[str], source: str) 
     clashes = _name_clashes(definition, scene, design, stored)
     if clashes:
         raise StudyError(source, clashes)
-    return Plan(definition, scene, design, points, settings, tuple(stages), tuple(stored))
+    return Plan(
+        definition, scene, design, points, settings, tuple(stages), tuple(stored), max_chunk
+    )
+
+
+def settings_fit(
+    scene: Scene, definition: StudyDefinition, settings: dict[str, Any], runs: int
+) -> tuple[int, str]:
+    """The design points per chunk that fit this machine's memory at the study's settings,
+    and why not even one does ("" if it does), with the memory and time estimates."""
+    asked, curves = list(definition.responses), list(definition.curves)
+    work = scene.work_estimate(settings, asked, curves)
+    share = MEMORY_SHARE * available_memory()
+    if work.per_point <= 0.0:
+        return sys.maxsize, ""
+    if work.fixed + work.per_point <= share:
+        return max(1, int((share - work.fixed) / work.per_point)), ""
+    defaults = {
+        s.name: s.to_si(s.default) if s.kind == "number" else s.default for s in scene.settings
+    }
+    usual = scene.work_estimate(defaults, asked, curves)
+    ratio = (work.fixed + work.per_point) / (usual.fixed + usual.per_point)
+    seconds = scene.seconds_per_point * ratio * runs  # compute grows with the grids
+    changed = ", ".join(
+        f"{name} = {value:g}" if isinstance(value, float) else f"{name} = {value!r}"
+        for name, value in definition.settings.items()
+        if definition.settings[name] != scene.setting(name).default  # type: ignore[union-attr]
+    )
+    return 0, (
+        f"settings {changed or '(defaults)'} need about {(work.fixed + work.per_point) / 1e9:.3g} "
+        f"GB for a single design point (the scene's grids and tables) and about "
+        f"{duration(seconds)} to compute {runs} points; this machine has "
+        f"{available_memory() / 1e9:.3g} GB of memory available: use a coarser setting"
+    )
 
 
 def full_factorial_size_problem(
@@ -144,7 +182,7 @@ def max_points(text: str) -> int:
         value = float(text)
     except ValueError:
         value = math.nan
-    if not value >= 1:
+    if not 1 <= value < math.inf:
         msg = f"{MAX_POINTS_VARIABLE}={text!r} must be a number of design points, e.g. 5e7"
         raise ValueError(msg)
     return int(value)

@@ -14,6 +14,7 @@ Layout (dimension ``run`` = design point):
 
 from __future__ import annotations
 
+import errno
 import json
 from pathlib import Path
 from typing import Any, Final
@@ -190,10 +191,20 @@ def write_netcdf(ds: xr.Dataset, path: Path, atomic: bool = True) -> Path:
     }
     path.parent.mkdir(parents=True, exist_ok=True)
     target = path.with_name(path.name + ".writing") if atomic else path
-    ds.to_netcdf(target, engine="netcdf4", format="NETCDF4", encoding=encoding)
+    try:
+        ds.to_netcdf(target, engine="netcdf4", format="NETCDF4", encoding=encoding)
+    except RuntimeError as exc:  # the netCDF library's "HDF error" of a full disk
+        target.unlink(missing_ok=True)
+        raise netcdf_write_error(exc, path) from None
     if atomic:
         target.replace(path)
     return path
+
+
+def netcdf_write_error(exc: RuntimeError, path: Path) -> OSError:
+    """The netCDF library's write failure (it says "HDF error", not why) as an OSError
+    naming the file, with the likely cause."""
+    return OSError(errno.EIO, f"could not write netCDF ({exc}; is the disk full?)", str(path))
 
 
 def grid_order(ds: xr.Dataset) -> tuple[list[str], tuple[int, ...], np.ndarray]:

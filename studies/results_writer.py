@@ -10,8 +10,10 @@ Dataset as :func:`studies.results.build_dataset` on the same values (tested).
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import netCDF4
 import numpy as np
@@ -22,6 +24,7 @@ from studies.results import (
     curve_layout,
     global_attributes,
     layout,
+    netcdf_write_error,
     response_layout,
     small_chunk_cache,
     stored_values,
@@ -30,6 +33,7 @@ from studies.results import (
 from studies.scenes import SceneOutput
 
 PARTIAL_SUFFIX = ".partial"
+T = TypeVar("T")
 
 
 class ResultsWriter:
@@ -40,7 +44,14 @@ class ResultsWriter:
         self.partial = self.path.with_name(self.path.name + PARTIAL_SUFFIX)
         small_chunk_cache()
         write_netcdf(layout(plan, attrs), self.partial, atomic=False)
-        self.file = netCDF4.Dataset(self.partial, "r+")
+        self.file = self._netcdf(netCDF4.Dataset, self.partial, "r+")
+        try:
+            self._layout(plan, chunk_size)
+        except RuntimeError as exc:
+            self.abandon()
+            raise netcdf_write_error(exc, self.partial) from None
+
+    def _layout(self, plan: Plan, chunk_size: int) -> None:
         self.file.set_auto_maskandscale(False)
         run_chunk = max(1, min(chunk_size, plan.runs))
         self.dtypes: dict[str, type] = {}
@@ -72,8 +83,15 @@ class ResultsWriter:
         variable.setncatts(attrs)
         self.dtypes[name] = dtype
 
+    def width(self, curve: str) -> int:
+        """The number of curve-axis values of ``curve`` (its second dimension)."""
+        return int(self.file[curve].shape[1])
+
     def write(self, part: slice, out: SceneOutput) -> None:
         """Store one chunk's responses and curves (design points ``part``)."""
+        self._netcdf(self._write, part, out)
+
+    def _write(self, part: slice, out: SceneOutput) -> None:
         for name, values in out.scalars.items():
             if name in self.dtypes:
                 self.file[name][part] = stored_values(values, self.dtypes[name])
@@ -83,13 +101,23 @@ class ResultsWriter:
     def close(self, attrs: dict[str, Any]) -> Path:
         """Add the global ``attrs`` known only at the end (timings), finish the file and
         rename it into place; return its path."""
-        self.file.setncatts(global_attributes(attrs))
-        self.file.close()
+        self._netcdf(self.file.setncatts, global_attributes(attrs))
+        self._netcdf(self.file.close)
         self.partial.replace(self.path)
         return self.path
 
     def abandon(self) -> None:
-        """Close and delete the unfinished file (the run's checkpoints keep its chunks)."""
-        if self.file.isopen():
-            self.file.close()
-        self.partial.unlink(missing_ok=True)
+        """Close and delete the unfinished file (the run's checkpoints keep its chunks).
+        Never raises: it runs while another error (often a full disk) is being reported."""
+        with contextlib.suppress(Exception):
+            if self.file.isopen():
+                self.file.close()
+        with contextlib.suppress(OSError):
+            self.partial.unlink(missing_ok=True)
+
+    def _netcdf(self, call: Callable[..., T], *args: Any) -> T:
+        """``call(*args)``, the netCDF library's RuntimeError (a full disk) as an OSError."""
+        try:
+            return call(*args)
+        except RuntimeError as exc:
+            raise netcdf_write_error(exc, self.partial) from None

@@ -14,6 +14,7 @@ them; a task carries only its chunk's points (never the whole plan).
 
 from __future__ import annotations
 
+import threading
 import time
 from collections.abc import Callable, Iterator, Mapping
 from concurrent.futures import Executor, Future, as_completed
@@ -28,6 +29,8 @@ from studies.scenes import Scene, SceneOutput, get_scene
 
 DEFAULT_CHUNK_SIZE = 2048
 SCHEDULER_TIMEOUT_S = 5.0  # connecting to a --scheduler address; Dask's default is 30 s
+HANDSHAKE_GRACE_S = 2.0  # beyond it, an address that accepted but never answered is given up
+WORKERS_TIMEOUT_S = 30.0  # a scheduler with no worker: how long to wait for one to join
 
 
 @dataclass
@@ -167,7 +170,9 @@ def dask_client(scheduler: str) -> Any:
     """A client of a Dask cluster: ``scheduler`` is an address or ``local``.
 
     ``local`` starts a cluster of worker processes on this machine. Needs the ``cluster``
-    extra (``pip install -e '.[cluster]'``).
+    extra (``pip install -e '.[cluster]'``). An address is given up after
+    :data:`SCHEDULER_TIMEOUT_S` (:func:`_connect`), a scheduler without workers after
+    :data:`WORKERS_TIMEOUT_S`.
     """
     try:
         from dask.distributed import Client  # noqa: PLC0415  (optional dependency)
@@ -176,14 +181,42 @@ def dask_client(scheduler: str) -> Any:
         raise ValueError(msg) from None
     if scheduler == "local":
         return Client(dashboard_address=None)
+    client = _connect(Client, scheduler)
     try:
-        client = Client(scheduler, timeout=SCHEDULER_TIMEOUT_S)
-    except Exception as exc:  # noqa: BLE001  unreachable, malformed, or not a Dask scheduler
-        detail = str(exc).splitlines()[0] if str(exc) else "no detail"
+        client.wait_for_workers(1, timeout=WORKERS_TIMEOUT_S)
+    except (TimeoutError, OSError):
+        client.close()
         msg = (
-            f"--scheduler {scheduler}: could not connect to a Dask scheduler within "
-            f"{SCHEDULER_TIMEOUT_S:g} s ({type(exc).__name__}: {detail[:200]}); "
-            "check the address (e.g. tcp://host:8786) or use --scheduler local"
+            f"--scheduler {scheduler}: the scheduler has no workers (none joined within "
+            f"{WORKERS_TIMEOUT_S:g} s): start one with `dask worker {scheduler}`"
         )
         raise ValueError(msg) from None
     return client
+
+
+def _connect(client: Callable[..., Any], scheduler: str) -> Any:
+    """A Dask client of ``scheduler`` within ``SCHEDULER_TIMEOUT_S`` (ValueError otherwise),
+    even when the address accepts a connection and never answers (Dask's own timeout covers
+    the connection, not the handshake): the client is made in a thread given a deadline."""
+    result: dict[str, Any] = {}
+
+    def connect() -> None:
+        try:
+            result["client"] = client(scheduler, timeout=SCHEDULER_TIMEOUT_S)
+        except Exception as exc:  # noqa: BLE001  unreachable, malformed, or not a scheduler
+            result["error"] = exc
+
+    thread = threading.Thread(target=connect, daemon=True, name="dask-connect")
+    thread.start()
+    thread.join(SCHEDULER_TIMEOUT_S + HANDSHAKE_GRACE_S)
+    if "client" in result:
+        return result["client"]
+    exc = result.get("error")
+    detail = (str(exc).splitlines() or ["no detail"])[0] if exc else "no answer"
+    kind = type(exc).__name__ if exc else "timeout"
+    msg = (
+        f"--scheduler {scheduler}: could not connect to a Dask scheduler within "
+        f"{SCHEDULER_TIMEOUT_S:g} s ({kind}: {detail[:200]}); "
+        "check the address (e.g. tcp://host:8786) or use --scheduler local"
+    )
+    raise ValueError(msg)

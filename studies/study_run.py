@@ -13,22 +13,20 @@ registry updated after it (a registry that missed it catches up on sight).
 
 from __future__ import annotations
 
+import contextlib
 import difflib
-import json
 import os
 import shutil
 import sqlite3
-import zipfile
-import zlib
 from concurrent.futures import Executor
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-import numpy as np
 import xarray as xr
 
 from studies import provenance, registry, tracking
 from studies.analysis import ANALYSIS_NAME
+from studies.checkpoints import load_chunk, read_run_record, save_chunk
 from studies.definition import parse_study
 from studies.liveness import FolderLock, Heartbeat, lock_folder
 from studies.plan import Plan, plan_study
@@ -73,6 +71,7 @@ def run_plan(
 ) -> RunResult:
     """Run a validated plan in a new run folder under ``outputs`` (chunks on ``executor``)."""
     outputs = (outputs or tracking.default_outputs()).resolve()
+    chunk_size = min(chunk_size, plan.max_chunk)  # fine settings: fewer points per chunk
     d = plan.definition
     commit, dirty = provenance.git_state()
     code = provenance.code(type(plan.scene))
@@ -128,7 +127,7 @@ def resume_run(run_id: str, outputs: Path | None = None, progress: bool = True) 
     try:
         if not lock.holds(folder):
             raise KeyError(f"run {row['run_id']} was moved by another process: not resumed")
-        record = tracking.RunRecord(**json.loads((folder / "run.json").read_text("utf-8")))
+        record = read_run_record(folder / "run.json")
         record.folder = str(folder)  # where it was found (a copied tree records another)
         if record.status == "finished":
             raise ValueError(f"run {record.run_id} is already finished: nothing to resume")
@@ -149,14 +148,22 @@ def resume_run(run_id: str, outputs: Path | None = None, progress: bool = True) 
                 f"anew: python -m studies run {folder / 'study.toml'}"
             )
             raise ValueError(msg)
+        done = {
+            int(path.stem): path
+            for path in sorted((folder / CHECKPOINTS).glob("*.npz"))
+            if path.stem.isdigit()  # not a temporary file a kill left mid-write
+        }
+        count = -(-plan.runs // record.chunk_size) if record.chunk_size > 0 else 0
+        beyond = sorted(str(done[i]) for i in done if i >= count)
+        if record.chunk_size < 1 or beyond:
+            msg = (
+                f"run {record.run_id}: chunk size {record.chunk_size} gives {count} chunks, but "
+                f"{', '.join(beyond[:3]) or 'none'} lie beyond them: delete those and resume"
+            )
+            raise ValueError(msg)
     except BaseException:
         lock.release()
         raise
-    done = {
-        int(path.stem): path
-        for path in sorted((folder / CHECKPOINTS).glob("*.npz"))
-        if path.stem.isdigit()  # not a temporary file a kill left mid-write
-    }
     record.status, record.error = "running", ""
     try:
         return _execute(plan, outputs, record, progress, done)
@@ -188,15 +195,16 @@ def _execute(
         "created": record.started,
     }
     writer = None
+    before = set(folder.iterdir())
     try:
         heartbeat.start()
         writer = ResultsWriter(plan, folder / RESULTS_NAME, attrs, record.chunk_size)
         parts = list(chunks(plan.runs, record.chunk_size))
         for index in sorted(done):
-            writer.write(parts[index], _load_chunk(done[index]))
+            writer.write(parts[index], _load_chunk(done[index], parts[index], plan, writer))
 
         def finished(index: int, out: SceneOutput) -> None:
-            _save_chunk(folder, index, out)
+            _save_chunk(folder, index, parts[index], out)
             writer.write(parts[index], out)
 
         ev = evaluate(
@@ -217,6 +225,7 @@ def _execute(
         heartbeat.stop()
         if writer is not None:
             writer.abandon()
+        _remove_new_files(folder, before)
         record.status, record.finished, record.error = "failed", tracking.now(), repr(exc)
         try:
             record.write()
@@ -255,6 +264,19 @@ def _start(outputs: Path, record: tracking.RunRecord, fresh: bool) -> None:
         raise
 
 
+def _remove_new_files(folder: Path, before: set[Path]) -> None:
+    """Delete the files a failed attempt wrote into the run folder (results, analysis,
+    figures: possibly cut short by a full disk); the checkpoints and the record stay.
+    Never raises: it runs while another error is being reported."""
+    try:
+        written = [p for p in folder.iterdir() if p not in before and p.name != "run.json"]
+    except OSError:
+        return
+    for path in written:
+        with contextlib.suppress(OSError):
+            path.unlink()
+
+
 def _check_unchanged(study: Path, sha256: str) -> None:
     """Refuse to resume a run whose study file, or a file the study reads, changed since it
     started (its checkpoints would be mixed with points of another definition)."""
@@ -291,30 +313,11 @@ def _recorded_text(folder: Path) -> str:
     return record.read_text(encoding="utf-8") if record.exists() else ""
 
 
-def _save_chunk(folder: Path, index: int, out: SceneOutput) -> None:
-    path = folder / CHECKPOINTS / f"{index:06d}.npz"
-    path.parent.mkdir(exist_ok=True)
-    arrays = {f"scalar:{k}": v for k, v in out.scalars.items()}
-    arrays |= {f"curve:{k}": v for k, v in out.curves.items()}
-    tmp = path.with_suffix(".tmp.npz")
-    np.savez(tmp, **arrays)  # type: ignore[arg-type]
-    tmp.replace(path)  # a chunk file is either complete or absent
+def _save_chunk(folder: Path, index: int, part: slice, out: SceneOutput) -> None:
+    save_chunk(folder / CHECKPOINTS / f"{index:06d}.npz", part, out)
 
 
-class DamagedCheckpoint(OSError):
-    """A checkpoint chunk file that cannot be decoded (cut short, overwritten, bad disk)."""
-
-
-def _load_chunk(path: Path) -> SceneOutput:
-    """A checkpointed chunk (OSError if unreadable, :class:`DamagedCheckpoint` if damaged)."""
-    try:
-        with path.open("rb") as file, np.load(file) as data:  # file: closed even if damaged
-            scalars = {k.split(":", 1)[1]: data[k] for k in data.files if k.startswith("scalar:")}
-            curves = {k.split(":", 1)[1]: data[k] for k in data.files if k.startswith("curve:")}
-    except (ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error) as exc:
-        msg = (
-            f"checkpoint {path} is damaged ({type(exc).__name__}: {exc}); delete it and resume: "
-            "its design points are computed again"
-        )
-        raise DamagedCheckpoint(msg) from None
-    return SceneOutput(scalars, curves)
+def _load_chunk(path: Path, part: slice, plan: Plan, writer: ResultsWriter) -> SceneOutput:
+    """A checkpointed chunk, validated against the plan (see :mod:`studies.checkpoints`)."""
+    curves = {name: writer.width(name) for name in plan.definition.curves}
+    return load_chunk(path, part, plan.responses, curves)

@@ -20,6 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
+from studies.bounded_files import TABLE_FILE_BYTES, read_bounded_text
+
 DEFAULT_RTOL = 1e-7
 DEFAULT_ATOL = 0.0
 
@@ -36,7 +38,7 @@ DEFAULT = Tolerance()
 def read_tolerances(path: Path) -> dict[str, Tolerance]:
     """``[response] rtol = …, atol = …`` tables of a TOML file (ValueError on anything else)."""
     try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+        raw = tomllib.loads(read_bounded_text(path, "--tolerances", TABLE_FILE_BYTES))
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"{path}: not valid TOML ({exc})") from None
     out = {}

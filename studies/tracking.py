@@ -32,6 +32,7 @@ from pathlib import Path
 from typing import Any
 
 from studies import registry, trash
+from studies.bounded_files import TABLE_FILE_BYTES, InputFileError, read_bounded_bytes
 from studies.liveness import is_locked
 from studies.reindex import reconcile
 from studies.runner import DEFAULT_CHUNK_SIZE
@@ -164,9 +165,9 @@ def definition_hash(text: str, inputs: tuple[Path, ...] = ()) -> str:
     for path in inputs:
         digest.update(b"\0" + str(path).encode("utf-8") + b"\0")
         try:
-            digest.update(path.read_bytes())
-        except OSError as exc:  # planning reports the unreadable file; the key just differs
-            digest.update(f"unreadable: {exc.strerror}".encode())
+            digest.update(read_bounded_bytes(path, "input file", TABLE_FILE_BYTES))
+        except InputFileError as exc:  # planning reports the unreadable file; the key differs
+            digest.update(f"unreadable: {exc}".encode())
     return digest.hexdigest()
 
 

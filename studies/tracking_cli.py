@@ -195,9 +195,9 @@ def _regress(args: argparse.Namespace) -> int:
     from studies import regress
     from studies.compare import load_results
 
+    default, per_response = _tolerances(args)
     baseline_id, baseline = load_results(args.outputs, args.baseline)
     run_id, run = load_results(args.outputs, args.run_id)
-    default, per_response = _tolerances(args)
     checks = regress.check_results(run, baseline, per_response, default)
     print(f"{run_id} against baseline {baseline_id}:")
     print(regress.format_checks(checks))

@@ -3,7 +3,8 @@
 ``SCENES`` maps a scene name to the class implementing it: the built-in scenes (one folder
 each under ``studies/scenes/``) and those that installed packages register through the
 entry-point group ``engine_studies.scenes`` (name = scene name, value = ``module:Class``, a
-subclass of :class:`~studies.scenes.base.Scene`). :func:`get_scene` returns the (one, shared)
+subclass of :class:`~studies.scenes.base.Scene`), imported only when a scene that is not built in
+is asked for or the scenes are listed. :func:`get_scene` returns the (one, shared)
 instance. ``python -m studies scenes`` prints the documentation generated from the
 declarations.
 """
@@ -11,10 +12,20 @@ declarations.
 from __future__ import annotations
 
 import sys
+from collections.abc import Iterator, Mapping
 from functools import cache
-from importlib.metadata import entry_points
+from importlib.metadata import EntryPoint, entry_points
 
-from studies.scenes.base import Curve, CurveAxis, Parameter, Response, Scene, SceneOutput
+from studies.scenes.base import (
+    Curve,
+    CurveAxis,
+    Parameter,
+    Response,
+    Scene,
+    SceneOutput,
+    WorkEstimate,
+    short,
+)
 from studies.scenes.cam import CamScene
 from studies.scenes.crank import CrankScene
 from studies.scenes.luffing import LuffingScene
@@ -35,35 +46,91 @@ BUILT_IN: dict[str, type[Scene]] = {
 }
 
 
-def plugin_scenes() -> dict[str, type[Scene]]:
-    """The scenes installed packages register (entry-point group ``engine_studies.scenes``).
+class SceneRegistry(Mapping[str, type[Scene]]):
+    """Scene name → class: the built-in scenes at once, the plugins only when asked for.
 
-    A plugin that fails to load, is not a Scene, or reuses a built-in name is skipped with one
-    line on stderr: a broken third-party package must not take the built-in scenes down."""
-    found: dict[str, type[Scene]] = {}
+    Installed packages' entry points are imported the first time a name that is not built in
+    is looked up or the scenes are listed, never earlier: a plugin that is slow, broken or
+    hostile at import costs only the commands that need a scene of its own or the list of
+    them (:func:`load_plugins`)."""
+
+    def __init__(self) -> None:
+        self._plugins: dict[str, type[Scene]] | None = None
+
+    def plugins(self) -> dict[str, type[Scene]]:
+        """The plugin scenes (loaded on the first call)."""
+        if self._plugins is None:
+            self._plugins = load_plugins()
+        return self._plugins
+
+    def refresh(self) -> None:
+        """Forget the loaded plugins: the next lookup finds the installed ones again."""
+        self._plugins = None
+        get_scene.cache_clear()
+
+    def __getitem__(self, name: str) -> type[Scene]:
+        if name in BUILT_IN:
+            return BUILT_IN[name]
+        return self.plugins()[name]
+
+    def __contains__(self, name: object) -> bool:
+        return name in BUILT_IN or name in self.plugins()
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(BUILT_IN | self.plugins())
+
+    def __len__(self) -> int:
+        return len(BUILT_IN | self.plugins())
+
+
+def load_plugins() -> dict[str, type[Scene]]:
+    """Import the scenes installed packages register (entry-point group ``engine_studies.scenes``).
+
+    Each import is guarded: a plugin that fails to import (even by ``sys.exit`` or
+    ``KeyboardInterrupt``), is not a Scene, reuses a built-in name or registers a name another
+    package registers too is skipped with one line on stderr naming its package: a broken
+    third-party package must not take the engine down."""
+    by_name: dict[str, list[EntryPoint]] = {}
     for point in entry_points(group=ENTRY_POINTS):
+        same = by_name.setdefault(point.name, [])
+        if all(_origin(p) != _origin(point) for p in same):  # one package seen twice on the path
+            same.append(point)
+    found: dict[str, type[Scene]] = {}
+    for name, points in by_name.items():
+        if len(points) > 1:
+            both = " and ".join(sorted(_origin(p) for p in points))
+            _warn(f"scene {short(name)} is registered by {both}: neither is loaded (uninstall one)")
+            continue
+        (point,) = points
         try:
             loaded = point.load()
-        except Exception as exc:  # noqa: BLE001  (any import error of a third-party package)
-            _warn(f"scene plugin {point.value!r} did not load: {exc}")
+        except BaseException as exc:  # noqa: BLE001  (sys.exit, Ctrl-C, any error at import)
+            _warn(f"scene plugin {_origin(point)} did not load: {type(exc).__name__}: {exc}")
             continue
         if not (isinstance(loaded, type) and issubclass(loaded, Scene)):
-            _warn(f"scene plugin {point.value!r} is not a Scene subclass")
-        elif point.name in BUILT_IN or loaded.name != point.name:
+            _warn(f"scene plugin {_origin(point)} is not a Scene subclass: skipped")
+        elif name in BUILT_IN or loaded.name != name:
             _warn(
-                f"scene plugin {point.value!r} registers {point.name!r}, which is a built-in "
-                f"scene or not its class's name {loaded.name!r}: skipped"
+                f"scene plugin {_origin(point)} registers {short(name)}, which is a built-in "
+                f"scene or not its class's name {short(loaded.name)}: skipped"
             )
         else:
-            found[point.name] = loaded
+            found[name] = loaded
     return found
+
+
+def _origin(point: EntryPoint) -> str:
+    """The package and object an entry point names: ``package 'oscillator' (mod:Class)``."""
+    dist = getattr(point, "dist", None)
+    package = dist.name if dist is not None else "?"
+    return f"package {short(package)} ({point.value})"
 
 
 def _warn(message: str) -> None:
     sys.stderr.write(f"warning: {message}\n")
 
 
-SCENES: dict[str, type[Scene]] = BUILT_IN | plugin_scenes()
+SCENES = SceneRegistry()
 
 
 @cache
@@ -119,6 +186,7 @@ __all__ = [
     "Response",
     "Scene",
     "SceneOutput",
+    "WorkEstimate",
     "describe_scene",
     "get_scene",
 ]

@@ -165,6 +165,15 @@ class SceneOutput:
 
 
 @dataclass(frozen=True)
+class WorkEstimate:
+    """Memory a scene needs at a study's settings [bytes]: ``fixed`` once per chunk (shared
+    tables), ``per_point`` for each design point of a chunk (its grids and curves)."""
+
+    fixed: float = 0.0
+    per_point: float = 0.0
+
+
+@dataclass(frozen=True)
 class CurveAxis:
     """The shared angle axis of a scene's curves (name, units, values)."""
 
@@ -247,6 +256,14 @@ class Scene(ABC):
         """Responses or curves these settings cannot answer (SI settings); problems. None by
         default."""
         return []
+
+    def work_estimate(
+        self, settings: dict[str, Any], responses: list[str], curves: list[str]
+    ) -> WorkEstimate:
+        """Memory these settings (SI) make the scene use, from the settings alone (nothing
+        allocated): the engine refuses a study whose single design point would not fit and
+        bounds the chunk size by it. Nothing known by default."""
+        return WorkEstimate()
 
     def point_warnings(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
         """Design points that will run but give no value (e.g. a concave cam), with advice;

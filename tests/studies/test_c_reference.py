@@ -118,3 +118,25 @@ def test_a_cache_folder_that_is_a_link_is_refused(monkeypatch, tmp_path):
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     with pytest.raises(c_valve.UnsafeCacheFolder, match="is not a folder of this user"):
         c_valve.cache_folder()
+
+
+def test_a_library_another_user_owns_is_not_loaded(monkeypatch, tmp_path):
+    """Issue 25: a .so another user put in the private folder would run as this user."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    planted = c_valve.cache_folder() / "valve_c_0123456789abcdef.so"
+    planted.write_bytes(b"\x7fELF")
+    try:
+        os.chown(planted, os.getuid() + 1, -1)
+    except PermissionError:
+        pytest.skip("only root can give a file to another user")
+    with pytest.raises(c_valve.UnsafeCacheFolder, match="is not a file of this user"):
+        c_valve._check_owned(planted)
+
+
+def test_a_library_others_can_write_is_not_loaded(monkeypatch, tmp_path):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    planted = c_valve.cache_folder() / "valve_c_0123456789abcdef.so"
+    planted.write_bytes(b"\x7fELF")
+    planted.chmod(0o666)
+    with pytest.raises(c_valve.UnsafeCacheFolder, match=r"writable by other users \(mode 666\)"):
+        c_valve._check_owned(planted)

@@ -16,6 +16,7 @@ import math
 import os
 import re
 import tempfile
+import time
 from pathlib import Path
 from typing import Any
 
@@ -294,3 +295,73 @@ def test_check_answers_every_study_file_with_ok_or_readable_problems(
                 assert any(key in line for key in offending for line in problems), err
 
         property_()
+
+
+# --- hostile shapes: nesting, huge level lists, pathological settings (issue 25) -----------
+
+PATHOLOGICAL = st.sampled_from([1e-300, 5e-324, 1e-12, 1e-7, 1e300, 2**53 + 1, 0.0])
+
+
+@st.composite
+def hostile_shape(draw: st.DrawFn, scene_name: str) -> dict[str, Any]:
+    """A valid study with one hostile shape: a value nested deep at some key, a huge level
+    list (under the file cap), or a setting at a pathological magnitude."""
+    doc = draw(valid_document(scene_name))
+    kind = draw(st.sampled_from(["nest", "levels", "setting"]))
+    scene = get_scene(scene_name)
+    if kind == "nest":
+        depth = draw(st.integers(1, 60))
+        value: Any = draw(st.sampled_from([1.0, "x", True]))
+        for _ in range(depth):
+            value = [value] if draw(st.booleans()) else {"a": value}
+        table = draw(st.sampled_from(["factors", "parameters", "settings", "design", "top"]))
+        if table == "factors":
+            factor = draw(st.sampled_from(sorted(doc["factors"])))
+            doc["factors"][factor]["levels"] = value
+        elif table == "top":
+            doc["description"] = value
+        else:
+            target = doc.setdefault(table, {}) if table != "design" else {}
+            target["deep"] = value
+            if table == "design":
+                doc["design"] = {"type": doc["design"], "pool": value}
+    elif kind == "levels":
+        factor = draw(st.sampled_from(sorted(doc["factors"])))
+        count = draw(st.integers(1_000, 15_000))
+        repeat = draw(st.booleans())
+        doc["factors"][factor]["levels"] = [1.0 if repeat else 1.0 + i for i in range(count)]
+    else:
+        numbers = [s for s in scene.settings if s.kind == "number"]
+        if numbers:
+            doc["settings"] = {draw(st.sampled_from(numbers)).name: draw(PATHOLOGICAL)}
+    return doc
+
+
+@pytest.mark.parametrize("scene", SCENES)
+def test_check_answers_hostile_shapes_in_one_list_of_problems(
+    scene: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Deep nesting, huge level lists, pathological settings: OK or exit 2 with problem lines,
+    never a traceback (RecursionError, MemoryError, OverflowError before). The slowest
+    answer is printed, not asserted."""
+    monkeypatch.setenv("ENGINE_STUDIES_MAX_POINTS", str(MAX_POINTS))
+    slowest = [0.0]
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+
+        @settings(FUZZ, max_examples=min(FUZZ.max_examples, 40))
+        @given(doc=hostile_shape(scene))
+        def property_(doc: dict[str, Any]) -> None:
+            start = time.perf_counter()
+            code, out, err = check(toml_text(doc), folder)
+            slowest[0] = max(slowest[0], time.perf_counter() - start)
+            event(f"exit {code}")
+            assert "Traceback" not in err
+            assert code in (0, 2), err
+            if code == 0:
+                assert ": OK — scene " in out
+            else:
+                assert [line for line in err.splitlines() if line.startswith("  - ")], err
+
+        property_()
+    print(f"{scene}: slowest check of a hostile shape {slowest[0]:.3f} s")

@@ -12,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
+from studies.bounded_files import TABLE_FILE_BYTES, read_bounded_text
+
 SPLINE_DEGREE = 5  # quintic: lift, velocity, acceleration and jerk all come from the spline
 MIN_POINTS = SPLINE_DEGREE + 2
 
@@ -24,8 +26,9 @@ def read_lift_table(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"lift_table = {str(path)!r}: no such file")
+    rows = read_bounded_text(path, "lift_table", TABLE_FILE_BYTES).splitlines()
     try:
-        data = np.genfromtxt(path, delimiter=",", comments="#", dtype=float)
+        data = np.genfromtxt(rows, delimiter=",", comments="#", dtype=float)
     except ValueError as exc:
         raise ValueError(f"lift_table {path}: not a two-column numeric CSV ({exc})") from None
     data = np.atleast_2d(data)

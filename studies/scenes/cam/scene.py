@@ -21,6 +21,7 @@ from engine_kernels.cam import kinematics as cb
 from engine_kernels.cam import lift_laws, multi_segment
 from engine_kernels.cam import loads as cam_loads
 from studies.scenes.base import Scene, SceneOutput
+from studies.scenes.cam import work
 from studies.scenes.cam.lift_tables import read_lift_table, table_kinematics
 from studies.scenes.cam.parameters import (
     CAM_ANGLE,
@@ -113,6 +114,7 @@ _CURVE_SOURCE: dict[str, tuple[str, int, float]] = {
 class CamScene(Scene):
     name = "cam"
     seconds_per_point = 1e-3
+    work_estimate = staticmethod(work.work_estimate)  # type: ignore[assignment]
     description = "flat-faced tappet cam: lift law, curvature, lubrication, contact stress"
     parameters = PARAMETERS
     settings = SETTINGS

@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
+from studies.bounded_files import TABLE_FILE_BYTES, read_bounded_text
+
 CYCLE_DEG = 720.0
 FIRING_TDC_DEG = 360.0  # firing TDC on the scene's cycle grid
 MIN_ROWS = 4
@@ -28,8 +30,9 @@ def read_pressure_table(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     name = f"pressure_table = {str(path)!r}"
     if not str(path) or not path.is_file():
         raise ValueError(f"{name}: no such file (a CSV of crank angle [deg], pressure [MPa])")
+    rows = read_bounded_text(path, "pressure_table", TABLE_FILE_BYTES).splitlines()
     try:
-        data = np.genfromtxt(path, delimiter=",", comments="#", dtype=float)
+        data = np.genfromtxt(rows, delimiter=",", comments="#", dtype=float)
     except ValueError as exc:
         raise ValueError(f"{name}: not a two-column numeric CSV ({exc})") from None
     data = np.atleast_2d(data)

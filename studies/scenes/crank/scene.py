@@ -30,6 +30,7 @@ from engine_kernels.crank import kinematics as ck
 from engine_kernels.crank import multicylinder as cl
 from studies.scenes.base import Scene, SceneOutput
 from studies.scenes.checks import PointProblems
+from studies.scenes.crank import work
 from studies.scenes.crank.parameters import (
     CRANK_ANGLE,
     CURVES,
@@ -168,6 +169,7 @@ class CrankScene(Scene):
 
     name = "crank"
     seconds_per_point = 2e-3
+    work_estimate = staticmethod(work.work_estimate)  # type: ignore[assignment]
     description = (
         "slider-crank kinematics (exact and two-term), gas and inertia forces, torque, "
         "multi-cylinder torque harmonics, free forces and moments (SPEC §5)"

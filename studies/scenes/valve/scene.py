@@ -40,7 +40,7 @@ from studies.scenes.chain import (
 )
 from studies.scenes.chain_parameters import RESPONSES as ROCKER_RESPONSES
 from studies.scenes.chain_summaries import chain_status_summary
-from studies.scenes.valve import spring
+from studies.scenes.valve import spring, work
 from studies.scenes.valve.batches import (
     N_CURVES,
     N_OUT,
@@ -122,6 +122,7 @@ _CURVE_ROW = {
 class ValveScene(ChainScene):
     name = "valve"
     seconds_per_point = 1e-3
+    work_estimate = staticmethod(work.work_estimate)  # type: ignore[assignment]
     description = "valve-train dynamics through the rocker: jump, bounce, seating, jump speed"
     parameters = PARAMETERS
     settings = SETTINGS

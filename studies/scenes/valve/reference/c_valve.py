@@ -66,6 +66,18 @@ def cache_folder() -> Path:
     return folder
 
 
+def _check_owned(library: Path) -> None:
+    """Load only a regular file of this user that no one else may write: a library another
+    user put in the cache would run as this one."""
+    info = library.lstat()
+    if not stat.S_ISREG(info.st_mode) or info.st_uid != os.getuid():
+        msg = f"{library} is not a file of this user (uid {os.getuid()}): delete it to rebuild"
+        raise UnsafeCacheFolder(msg)
+    if info.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+        msg = f"{library} is writable by other users (mode {info.st_mode & 0o777:o}): delete it"
+        raise UnsafeCacheFolder(msg)
+
+
 def build(dtype: np.dtype) -> ctypes.CDLL:
     """Compile (or reuse) the C kernel with lanes of ``dtype`` (float64 or float32)."""
     compiler = os.environ.get("CC", "cc")
@@ -85,6 +97,7 @@ def build(dtype: np.dtype) -> ctypes.CDLL:
         if result.returncode != 0:
             raise CompileFailed(f"{compiler} failed on {SOURCE.name}: {result.stderr.strip()}")
         partial.replace(library)
+    _check_owned(library)
     lib = ctypes.CDLL(str(library))
     for name in ("valve_lanes", "valve_one_case"):
         getattr(lib, name).restype = None
