@@ -60,7 +60,9 @@ def test_a_scene_the_workers_lack_is_refused_before_any_chunk_runs(
     monkeypatch.syspath_prepend(str(PLUGIN))
     from oscillator_scene import OscillatorScene
 
-    monkeypatch.setitem(SCENES, "oscillator", OscillatorScene)  # registered here only
+    found = SCENES.plugins() | {"oscillator": OscillatorScene}  # registered here only
+    monkeypatch.setattr(SCENES, "plugins", lambda: found)
+    get_scene.cache_clear()
     try:
         assert run_on(address, tmp_path, OSCILLATOR) == ["2", "False"]  # nothing written
     finally:
