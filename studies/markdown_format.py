@@ -16,10 +16,13 @@ def pct(value: float) -> str:
 
 
 def num(value: Any, digits: int = 4) -> str:
+    """``digits`` significant figures; ``inf``/``-inf`` as such, NaN (no value) as —."""
     if isinstance(value, str):
         return value
-    if value is None or not np.isfinite(value):
+    if value is None or np.isnan(value):
         return "—"
+    if not np.isfinite(value):
+        return "inf" if value > 0 else "-inf"
     return f"{value:.{digits}g}"
 
 
@@ -63,7 +66,8 @@ def levels_of(an: xr.Dataset, term: str) -> dict[int, Any]:
 def level_text(an: xr.Dataset, factor: str, level: int) -> str:
     """1-based level number and the factor's value: ``2 (9 deg)``."""
     units = str(an["term_units"].sel(term=factor).values)
-    return f"{level + 1} ({value_text(levels_of(an, factor)[level], units)})"
+    shown = value_text(levels_of(an, factor)[level], units if units != "1" else "")
+    return f"{level + 1} ({shown})"
 
 
 def figure(name: str, caption: str, figures: set[str]) -> list[str]:

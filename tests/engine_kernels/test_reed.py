@@ -129,8 +129,9 @@ def test_reference_reed_first_frequency_and_resonant_harmonic():
     assert row[reed.OUT_BAND_MAX] == pytest.approx(75.0)
     assert row[reed.OUT_FIRST_MARGIN] == pytest.approx(f1 - 75.0)
     assert row[reed.OUT_FIRST_MARGIN_RATIO] == pytest.approx((f1 - 75.0) / f1)
-    # Lowest harmonic reaching f1: k = ⌈f1/75⌉ = 3, at n = 120 f1/3 rpm (≈ 8172 rpm).
-    assert row[reed.OUT_HARMONIC_ORDER] == 3
+    # Lowest harmonic reaching f1: k = ⌈f1/75⌉ = 3, engine order k e = 1.5 (e = 1/2), at
+    # n = 120 f1/3 rpm (≈ 8172 rpm).
+    assert row[reed.OUT_HARMONIC_ORDER] == 1.5
     assert row[reed.OUT_RESONANCE_SPEED] == pytest.approx(120 * f1 / 3 * RPM)
     # Higher modes scale as X_n²; static stiffness 3EI/l³ and mass ρ b h l by definition.
     ratios = modes[0, reed.MODE_FREQUENCY] / f1
