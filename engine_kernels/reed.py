@@ -240,7 +240,7 @@ def order_crossing(frequency, band_min, band_max, openings, max_order, margin, o
     out[CROSSING_SPEED] = math.nan
     nearest = math.inf
     clear = 1.0
-    harmonics = int(math.floor(max_order / openings * (1.0 + HARMONIC_SLACK)))
+    harmonics = math.floor(max_order / openings * (1.0 + HARMONIC_SLACK))
     for k in range(1, harmonics + 1):
         low, high = k * band_min, k * band_max
         if math.isnan(out[CROSSING_ORDER]) and low <= frequency <= high:

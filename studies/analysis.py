@@ -85,9 +85,7 @@ def presence(ds: xr.Dataset, responses: Sequence[str]) -> tuple[list[str], np.nd
     return present, any_value
 
 
-def analyzed(
-    ds: xr.Dataset, responses: Sequence[str]
-) -> tuple[xr.Dataset, list[str], np.ndarray]:
+def analyzed(ds: xr.Dataset, responses: Sequence[str]) -> tuple[xr.Dataset, list[str], np.ndarray]:
     """The results with run means and S/N ratios added, the variables to analyse (each
     response with a finite value, or its run mean when replicated, then its S/N ratio) and the
     runs with a value in some response (:func:`presence`)."""
@@ -164,7 +162,10 @@ def analyze(
         if taguchi.mean_name(view, r) != r and taguchi.mean_name(view, r) in analysed:
             out[taguchi.mean_name(view, r)] = view[taguchi.mean_name(view, r)]
     out = out.assign(counts)
-    out.attrs = attrs | {"analysed": json.dumps(analysed), "operating_factors": json.dumps(operating)}
+    out.attrs = attrs | {
+        "analysed": json.dumps(analysed),
+        "operating_factors": json.dumps(operating),
+    }
     return out
 
 

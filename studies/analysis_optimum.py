@@ -34,7 +34,9 @@ COMPUTED, PREDICTED = "computed", "predicted"
 
 
 def condition_labels(
-    conditions: Sequence[dict[str, int]], label: Mapping[str, Sequence[str]], units: Mapping[str, str]
+    conditions: Sequence[dict[str, int]],
+    label: Mapping[str, Sequence[str]],
+    units: Mapping[str, str],
 ) -> list[str]:
     """``engine_speed = 1200 rpm, max_pressure = 15 MPa`` per condition (``all design
     points`` when there is no operating factor)."""
@@ -108,9 +110,7 @@ def _computed(out: xr.Dataset, one: xr.Dataset, name: str, grid: Grid) -> GridOp
     return found
 
 
-def _predicted(
-    out: xr.Dataset, one: xr.Dataset, name: str, table: Any
-) -> prediction.Prediction:
+def _predicted(out: xr.Dataset, one: xr.Dataset, name: str, table: Any) -> prediction.Prediction:
     p = prediction.predict_optimum(one, name, table=table)
     at = {"response": name}
     _levels(out, name, p.levels)

@@ -43,7 +43,9 @@ def _with_units(text: str, units: str) -> str:
 def _k(row: xr.Dataset, i: int) -> str:
     """A level mean, * when runs at the level have no value (left out), † when some count at
     the best or worst value seen (see :func:`missing_notes`)."""
-    mark = ("*" if int(row.left_out.values[i]) else "") + ("†" if int(row.bounded.values[i]) else "")
+    mark = ("*" if int(row.left_out.values[i]) else "") + (
+        "†" if int(row.bounded.values[i]) else ""
+    )
     return _number(row.k.values[i]) + mark
 
 
@@ -81,9 +83,7 @@ def range_text(an: xr.Dataset, response: str) -> str:
         row = r.sel(term=t)
         names = _level_names(row)
         fu = str(row.term_units.values)
-        levels = (
-            f"{len(names)} levels" if wide else _with_units(", ".join(names), fu)
-        )
+        levels = f"{len(names)} levels" if wide else _with_units(", ".join(names), fu)
         rows.append(
             {
                 "factor": t,
@@ -96,7 +96,7 @@ def range_text(an: xr.Dataset, response: str) -> str:
         )
         if wide:
             present = np.flatnonzero(np.isfinite(row.k.values))
-            pairs = ", ".join(f"{names[i]}: {_k(row, i)}" for i in present)
+            pairs = ", ".join(f"{names[i]}: {_k(row, int(i))}" for i in present)
             long.append(
                 textwrap.fill(
                     f"k of {t} by level{_units_suffix(fu)}: {pairs}",

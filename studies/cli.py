@@ -94,7 +94,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--strict",
         action="store_true",
-        help=f"exit {EXIT_POINTS_NOT_RUN} when a design point gave no value for any response",
+        help=f"exit {EXIT_POINTS_NOT_RUN} when a design point gave no value for any response "
+        "or check warned about it (e.g. a concave cam)",
     )
     run.add_argument(
         "--force",
@@ -210,7 +211,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     plans = [plan_study(n) for n in names]
     commit, dirty = provenance.git_state()
     executor = dask_executor(args.scheduler) if args.scheduler else None
-    incomplete = 0
+    flagged = 0
     for plan in plans:
         key = tracking.definition_hash(plan.definition.text, plan.definition.input_files())
         earlier = (
@@ -223,7 +224,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
             )
             print(f"  {Path(earlier['folder']) / 'results.nc'}")
             continue
-        _warn(plan)
+        warned = _warn(plan) > 0
         result = run_plan(
             plan,
             args.outputs,
@@ -232,10 +233,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
             executor,
         )
         _report(result, args.mlflow)
-        incomplete += result.record.points_without_value > 0
-    if args.strict and incomplete:
+        flagged += warned or result.record.points_without_value > 0
+    if args.strict and flagged:
         print(
-            f"error (--strict): {incomplete} run(s) have design points that did not run",
+            f"error (--strict): {flagged} run(s) have design points that did not run or that "
+            "check warned about",
             file=sys.stderr,
         )
         return EXIT_POINTS_NOT_RUN
@@ -276,10 +278,13 @@ def _cmd_check(args: argparse.Namespace) -> int:
     return 0
 
 
-def _warn(plan: Plan) -> None:
-    """Print the design points that will run but give no value (the scene's advice)."""
-    for line in plan.scene.point_warnings(plan.points, plan.settings):
+def _warn(plan: Plan) -> int:
+    """Print the design points that will run but give no value or an infinite one (the
+    scene's advice); return how many warnings."""
+    lines = plan.scene.point_warnings(plan.points, plan.settings)
+    for line in lines:
         print(f"warning: {plan.definition.name}: {line}", file=sys.stderr)
+    return len(lines)
 
 
 def _cmd_list(_: argparse.Namespace) -> int:

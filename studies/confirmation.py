@@ -60,13 +60,13 @@ def refinement_values(ds: xr.Dataset, levels: Mapping[str, int]) -> dict[str, li
     values = confirmation_values(ds, levels)
     for f, level in levels.items():
         chosen = values[f][0]
-        if isinstance(chosen, str) or isinstance(chosen, bool):
+        if isinstance(chosen, str | bool):
             continue
         known = level_values(ds, f)
         ends = [known.get(level - 1, chosen), known.get(level + 1, chosen)]
         grid = np.linspace(min(ends), max(ends), REFINEMENT_LEVELS)
         if isinstance(chosen, int) or _whole(ds, f):
-            refined: list[Any] = sorted({int(round(v)) for v in grid})
+            refined: list[Any] = sorted({round(float(v)) for v in grid})
         else:
             refined = sorted({float(f"{v:.{SIGNIFICANT}g}") for v in grid} | {float(chosen)})
         values[f] = refined
@@ -101,8 +101,12 @@ def _study(ds: xr.Dataset, values: Mapping[str, list[Any]], kind: str, what: str
     factors = {}
     for f, shown in values.items():
         units = ds[f].attrs.get("units", "") if f in ds.coords else ""
-        role = {"role": "operating"} if f in operating_factors(ds) else {}
-        factors[f] = {"levels": shown} | ({"units": str(units)} if units else {}) | role
+        table: dict[str, Any] = {"levels": shown}
+        if units:
+            table["units"] = str(units)
+        if f in operating_factors(ds):
+            table["role"] = "operating"
+        factors[f] = table
     study["factors"] = factors
     run = ds.attrs.get("run_id", "")
     header = f"# {kind.capitalize()} of {name}{f' (run {run})' if run else ''}: {what}.\n"

@@ -75,8 +75,10 @@ def _levels_table(view: xr.Dataset, an: xr.Dataset, levels: dict[str, int]) -> l
     operating = _operating(an)
     if operating:
         lines += [
-            f"Operating conditions, not chosen: {', '.join(operating)} (every level is a case the "
-            "design must meet).",
+            (
+                f"Operating conditions, not chosen: {', '.join(operating)} (every level is a case "
+                "the design must meet)."
+            ),
             "",
         ]
     return lines
@@ -92,8 +94,13 @@ def _conditions(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, units: str) -> 
     """Per operating condition: the value at the chosen levels and (grid) the best run there."""
     labels = an["condition"].values
     if len(labels) > MAX_CONDITION_ROWS:
-        return [f"{len(labels)} operating conditions: per condition in `analysis.nc` "
-                "(`optimum_at`, `optimum_run`, `best_value`, `best_run`).", ""]  # fmt: skip
+        return [
+            (
+                f"{len(labels)} operating conditions: per condition in `analysis.nc` "
+                "(`optimum_at`, `optimum_run`, `best_value`, `best_run`)."
+            ),
+            "",
+        ]
     grid = computed(an)
     header = ["condition", "at these levels"] + (["best in this condition"] if grid else [])
     rows = []
@@ -137,16 +144,20 @@ def _computed(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, shown: str) -> li
     lines = [
         "### Best computed point",
         "",
-        "Every combination of the levels was computed: this is the best run, not a prediction "
-        "(no model, no interval).",
+        (
+            "Every combination of the levels was computed: this is the best run, not a "
+            "prediction (no model, no interval)."
+        ),
         "",
         *_levels_table(view, an, optimum_levels(an, name)),
     ]
     if an.sizes["condition"] == 1:
         run = int(r.optimum_run.values[0])
         lines += [
-            f"Best {shown}: **{num(float(r.optimum_value))}{units}** in {_run(run)} (grand mean "
-            f"{num(float(r.grand_mean))}{units}).",
+            (
+                f"Best {shown}: **{num(float(r.optimum_value))}{units}** in {_run(run)} (grand "
+                f"mean {num(float(r.grand_mean))}{units})."
+            ),
             "",
         ]
     else:
@@ -182,14 +193,16 @@ def _neighbours(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, units: str) -> 
     ]
     if edges:
         lines += [
-            f"The optimum lies at the edge of the grid in {', '.join(sorted(set(edges)))}: a "
-            "better value may lie beyond the levels studied.",
+            (
+                f"The optimum lies at the edge of the grid in {', '.join(sorted(set(edges)))}: a "
+                "better value may lie beyond the levels studied."
+            ),
             "",
         ]
     return lines
 
 
-def _rests_on(view: xr.Dataset, an: xr.Dataset, terms: list[str], levels: dict[str, int]) -> str:
+def _rests_on(view: xr.Dataset, terms: list[str], levels: dict[str, int]) -> str:
     parts = []
     for t in terms:
         if t not in levels:
@@ -214,7 +227,7 @@ def _predicted(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, shown: str) -> l
         + (" (mean over the operating conditions)" if an.sizes["condition"] > 1 else "")
         + f" — Taguchi's additive model: the grand mean {num(float(r.grand_mean))}{units} plus "
         "the effect of each model term at its level, each effect the mean of the runs at that "
-        f"level: {_rests_on(view, an, terms, levels) or 'no term'}."
+        f"level: {_rests_on(view, terms, levels) or 'no term'}."
     )
     half = float(r.half_width)
     if np.isfinite(half):
@@ -302,7 +315,11 @@ def tradeoff_section(
     chosen = {f: int(an["chosen_level"].sel(term=f)) for f in factors}
     rows.append(["**chosen level**", "", *[level_text(an, f, chosen[f]) for f in factors]])
     rows.append(
-        ["decided by", "", *[shown.get(str(v), str(v)) for v in an["decided_by"].sel(term=factors).values]]
+        [
+            "decided by",
+            "",
+            *[shown.get(str(v), str(v)) for v in an["decided_by"].sel(term=factors).values],
+        ]
     )
     rows.append(
         ["conflict", "", *["yes" if c else "no" for c in an["conflict"].sel(term=factors).values]]
@@ -332,4 +349,3 @@ def tradeoff_section(
         "",
     ]
     return lines, chosen
-

@@ -31,17 +31,16 @@ from studies.designs import orthogonal_array
 from studies.markdown_format import (
     figure,
     label,
-    level_text,
     levels_of,
     num,
     other_figures,
-    pct,
     table,
     units_of,
     value_text,
 )
 from studies.markdown_optimum import computed, optimum_levels, tradeoff_section
 from studies.markdown_response import constant_section, response_section
+from studies.missing import nothing_to_analyse
 from studies.statistics import sweep_runs
 
 REPORT_NAME = "report.md"
@@ -150,14 +149,16 @@ def _next_study(
         title = "## Refinement around the best point"
     else:
         toml = confirmation.confirmation_toml(view, levels)
-        intro = "The study below runs the chosen levels once" + (
-            " in every operating condition. " if confirmation.operating_factors(view) else ". "
-        ) + (
-            f"It is also written to `{CONFIRMATION_NAME}` in the run folder: run it with "
-            f"`python -m studies run <run folder>/{CONFIRMATION_NAME}` and compare the "
-            "result with the confirmation intervals above."
-            if written
-            else "Add it to the study's other tables to run it."
+        intro = (
+            "The study below runs the chosen levels once"
+            + (" in every operating condition. " if confirmation.operating_factors(view) else ". ")
+            + (
+                f"It is also written to `{CONFIRMATION_NAME}` in the run folder: run it with "
+                f"`python -m studies run <run folder>/{CONFIRMATION_NAME}` and compare the "
+                "result with the confirmation intervals above."
+                if written
+                else "Add it to the study's other tables to run it."
+            )
         )
         title = "## Confirmation run"
     return toml, [title, "", intro, "", "```toml", toml.rstrip(), "```", ""]
@@ -182,20 +183,15 @@ def _header(ds: xr.Dataset, responses: list[str], analysed: list[str]) -> list[s
         shown.append(
             f"{r} ({label(str(y.attrs.get('long_name', r)), units_of(ds, r))}"
             + (f", {sense} is better" if sense else "")
-            + ("" if taguchi.mean_name(ds, r) in analysed else f", {_no_value(y)}: not analysed")
+            + (
+                ""
+                if taguchi.mean_name(ds, r) in analysed
+                else f", {nothing_to_analyse(y)}: not analysed"
+            )
             + ")"
         )
     rows.append(("responses", "; ".join(shown)))
     return [f"# {title}", "", table(["", ""], rows), ""]
-
-
-def _no_value(y: xr.DataArray) -> str:
-    """Why a response has nothing to analyse: NaN, or ±inf, in every run with a value."""
-    values = np.asarray(y.values, dtype=float)
-    infinite = np.unique(values[np.isinf(values)])
-    if not infinite.size:
-        return "NaN in every run"
-    return f"{'±inf' if infinite.size > 1 else num(float(infinite[0]))} in every run with a value"
 
 
 def _design(ds: xr.Dataset, an: xr.Dataset) -> list[str]:

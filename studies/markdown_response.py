@@ -85,7 +85,7 @@ def _long_levels(view: xr.Dataset, an: xr.Dataset, name: str) -> list[str]:
         if present.size <= MAX_LEVEL_COLUMNS:
             continue
         values = levels_of(an, f)
-        rows = [[value_text(values[i], units_of(view, f)), _k(row, i)] for i in present]
+        rows = [[value_text(values[int(i)], units_of(view, f)), _k(row, int(i))] for i in present]
         lines += [f"Level means of {f}:", "", table([f, "k"], rows), ""]
     return lines
 

@@ -85,3 +85,14 @@ def fill(y: np.ndarray, ran: np.ndarray, meaning: str, sense: str) -> Filled:
 def per_level(mask: np.ndarray, codes: np.ndarray, nlevels: int) -> np.ndarray:
     """How many runs of ``mask`` fall at each level of a factor (O(N), ``bincount``)."""
     return np.bincount(codes[mask], minlength=nlevels)[:nlevels]
+
+
+def nothing_to_analyse(y: xr.DataArray) -> str:
+    """Why a response has nothing to analyse: ``NaN in every design point``, or ``inf`` (or
+    ``-inf``, ``±inf``) ``in every design point with a value``."""
+    values = np.asarray(y.values, dtype=float)
+    infinite = np.unique(values[np.isinf(values)])
+    if not infinite.size:
+        return "NaN in every design point"
+    shown = "±inf" if infinite.size > 1 else ("inf" if infinite[0] > 0 else "-inf")
+    return f"{shown} in every design point with a value"

@@ -14,7 +14,9 @@ from pathlib import Path
 
 import numpy as np
 import xarray as xr
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
 from studies import taguchi
 from studies.figure_style import LOG_DECADES, axis_label, map_scale, text_colour
@@ -25,7 +27,9 @@ DPI = 120
 TITLE_CHARS_PER_INCH = 11  # what fits at the default title size
 MAP_TEXT_CELLS = 150  # maps with at most this many cells show their values
 MAP_TICKS = 12  # level labels per map axis at most (every k-th level beyond)
+MAP_MAX_SIZE = (10.0, 7.0)  # inches: a map of many levels stays a readable page
 MARKER_LEVELS = 40  # from this many levels on, main effects are a line without markers
+MAX_TICKS = 6  # level values as ticks up to this many levels; beyond, plain ticks
 
 
 def _title(fig: Figure, text: str) -> None:
@@ -45,6 +49,9 @@ def main_effects_figure(an: xr.Dataset, response: str) -> Figure:
     The dashed line is the grand mean of the response. Factors without numeric values are
     plotted against their 1-based level number, named, as markers without lines; 40+ levels
     are drawn as a line without markers; pass/fail checks on a 0…1 share-passing axis.
+    A level mean resting on runs without a value (:mod:`studies.missing`) is drawn hollow in
+    red and labelled with how many of its runs were left out or counted at a bound; an
+    operating factor's axis says so (its levels are conditions, not choices).
     """
     r = an.sel(response=response)
     names = [str(t) for t in an["term"].values if int(an["is_factor"].sel(term=t))]
@@ -61,10 +68,14 @@ def main_effects_figure(an: xr.Dataset, response: str) -> Figure:
         marker = "o" if present.sum() < MARKER_LEVELS else None
         ax.plot(x, k[present], marker=marker, linestyle="-" if numeric else "none")
         ax.axhline(float(r.grand_mean), linestyle="--", color="0.5", label="grand mean")
+        _mark_incomplete(ax, an, row, x, present)
         unit = str(row.term_units.values)
-        ax.set_xlabel(_label(f, unit) if numeric else f)
+        operating = str(an["term_role"].sel(term=f).values) == "operating"
+        ax.set_xlabel((_label(f, unit) if numeric else f) + (" (operating)" if operating else ""))
         if not numeric:  # categorical: the level names at their (1-based) positions
             ax.set_xticks(x, [str(v) for v in row.level_label.values[present]], rotation=20)
+        else:
+            _level_ticks(ax, x)
     axes[0].set_ylabel(_label(response, units))
     axes[0].legend(loc="best", fontsize="small")
     k = r.k.values[np.isfinite(r.k.values)]
@@ -75,6 +86,32 @@ def main_effects_figure(an: xr.Dataset, response: str) -> Figure:
         axes[0].set_yscale("log")  # shared: level means over more than two decades
     _title(fig, f"Main effects on {response}: {r.long_name.values}")
     return fig
+
+
+def _mark_incomplete(
+    ax: Axes, an: xr.Dataset, row: xr.Dataset, x: np.ndarray, present: np.ndarray
+) -> None:
+    """Hollow red markers and counts at the levels whose mean rests on runs without a value."""
+    runs = an["level_runs"].sel(term=row.term).values[present]
+    left, bounded = row.left_out.values[present], row.bounded.values[present]
+    meaning = str(row.none_means.values)
+    for xi, ki, n, a, b in zip(x, row.k.values[present], runs, left, bounded, strict=True):
+        if not (a or b):
+            continue
+        ax.plot([xi], [ki], marker="o", mfc="white", mec="C3", ms=7, linestyle="none", zorder=3)
+        text = [f"{a}/{n} left out"] if a else []
+        text += [f"{b}/{n} at {'bound' if meaning == 'unknown' else meaning}"] if b else []
+        ax.annotate("\n".join(text), (xi, ki), xytext=(0, 6), textcoords="offset points",
+                    ha="center", fontsize="xx-small", color="C3")  # fmt: skip
+
+
+def _level_ticks(ax: Axes, x: np.ndarray) -> None:
+    """Ticks at the level values when they are few (labels %g, so 0 and 0.001 read as such),
+    else at most ``MAX_TICKS`` plain ticks: labels never run into each other."""
+    if x.size <= MAX_TICKS:
+        ax.set_xticks(x, [f"{v:g}" for v in x], rotation=30 if x.size > 4 else 0)
+    else:
+        ax.xaxis.set_major_locator(MaxNLocator(MAX_TICKS))
 
 
 def save_main_effects(an: xr.Dataset, responses: str | Sequence[str], folder: Path) -> list[Path]:
@@ -217,9 +254,13 @@ def map_figure(an: xr.Dataset, response: str) -> Figure | None:
     if nx < 2 or ny < 2:
         return None
     grid = r.map_mean.values[:ny, :nx]
+    if ny > nx:  # the factor with more levels along the wider side: a map, not a strip
+        fx, fy, labels_x, labels_y, nx, ny, grid = fy, fx, labels_y, labels_x, ny, nx, grid.T
     share = bool(int(r.pass_fail))
     norm, cmap = map_scale(grid, share)
-    fig = Figure(figsize=(max(5.2, 0.5 * nx + 2.6), max(4.0, 0.3 * ny + 2.2)), layout="constrained")
+    width = min(MAP_MAX_SIZE[0], max(5.2, 0.5 * nx + 2.6))
+    height = min(MAP_MAX_SIZE[1], max(4.0, 0.3 * ny + 2.2))
+    fig = Figure(figsize=(width, height), layout="constrained")
     ax = fig.subplots()
     mesh = ax.pcolormesh(
         np.arange(nx), np.arange(ny), grid, shading="nearest", cmap=cmap, norm=norm

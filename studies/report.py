@@ -18,6 +18,7 @@ import xarray as xr
 
 from studies import analysis, analysis_text, html_report, markdown_report, plots
 from studies.figure_layout import save_figures
+from studies.missing import nothing_to_analyse
 from studies.scenes import SCENES, get_scene
 
 
@@ -86,9 +87,10 @@ def not_run_line(an: xr.Dataset, before: str = "") -> str:
 
 
 def _no_value_note(y: xr.DataArray) -> str:
-    """A response that is NaN in every run is a result (no jump anywhere), not an error."""
+    """A response that is NaN (or ±inf) in every run is a result (no jump anywhere, a concave
+    cam everywhere), not an error."""
     meaning = y.attrs.get("long_name", y.name)
-    return f"{y.name} ({meaning}): NaN in every design point, so there is nothing to analyse."
+    return f"{y.name} ({meaning}): {nothing_to_analyse(y)}, so there is nothing to analyse."
 
 
 def _header(ds: xr.Dataset) -> str:

@@ -25,7 +25,8 @@ from studies.taguchi import ALPHA, anova_table
 class Optimum(Protocol):
     """What the trade-off reads of a response's own optimum (a prediction or a grid point)."""
 
-    levels: dict[str, int]
+    @property
+    def levels(self) -> dict[str, int]: ...
 
     @property
     def mean(self) -> float: ...

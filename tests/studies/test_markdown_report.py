@@ -272,4 +272,4 @@ def test_response_nan_in_every_run_is_reported_not_fatal(design: str, tmp_path: 
     assert all(r in text for r in analysed)
     assert not any("jump_start" in f.name for f in files)
     report = (tmp_path / "report.md").read_text(encoding="utf-8")
-    assert "NaN in every run: not analysed" in report
+    assert "NaN in every design point: not analysed" in report

@@ -35,7 +35,7 @@ def campbell_figure(ds: xr.Dataset) -> Figure | None:
     modes = [m for m in MODES if f"{m}_frequency" in ds.data_vars]
     crossings = _crossings(ds, modes)
     highest_order = max([_max_order(ds), *(k for k, _, _ in crossings)])
-    orders = events * np.arange(1, int(round(highest_order / events)) + 1)
+    orders = events * np.arange(1, round(highest_order / events) + 1)
     top = 1.25 * speed_hi
     fig = Figure(figsize=(7.0, 4.6), layout="constrained")
     ax = fig.subplots()
