@@ -250,7 +250,10 @@ def _frame(
     }
     out = xr.Dataset(data, coords=coords)
     conditions = prediction.conditions(base)
-    shown = {str(t): [str(v) for v in row] for t, row in zip(terms, label, strict=True)}
+    shown = {
+        str(t): [f"{v:g}" if np.isfinite(v) else str(text) for v, text in zip(*pair, strict=True)]
+        for t, pair in zip(terms, zip(value, label, strict=True), strict=True)
+    }
     term_units = dict(zip(terms, units, strict=True))
     analysis_optimum.optimum_frame(
         out, analysis_optimum.condition_labels(conditions, shown, term_units)

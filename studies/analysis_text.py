@@ -25,6 +25,11 @@ MAX_LEVEL_COLUMNS = 12  # level means as table columns up to this many levels
 WIDTH = 100  # characters per line of wrapped text
 
 
+def wrap(text: str) -> str:
+    """Prose of analysis.txt wrapped to ``WIDTH`` characters (tables are not wrapped)."""
+    return textwrap.fill(text, WIDTH, subsequent_indent="  ")
+
+
 def _number(value: float) -> str:
     """4 significant figures; ``inf``/``-inf`` as such, NaN as —."""
     if np.isnan(value):
@@ -185,13 +190,13 @@ def format_tables(an: xr.Dataset, response: str) -> str:
     )
     ss_unit = f" (SS in ({units})^2)" if units not in ("", "1") else ""
     lines = [
-        (
+        wrap(
             f"Range analysis of {response} ({r.long_name.values}){_units_suffix(units)}; "
             f"{r.sense.values} is better; k_i = mean at level i (levels numbered from 1 here, "
             "from 0 in results.nc)"
         ),
         range_text(an, response),
-        *(textwrap.fill(n, WIDTH, subsequent_indent="  ") for n in missing_notes(an, response)),
+        *(wrap(n) for n in missing_notes(an, response)),
         "",
         f"ANOVA of {response}{ss_unit}",
         anova_text,
@@ -200,7 +205,7 @@ def format_tables(an: xr.Dataset, response: str) -> str:
     if pooled.any():
         note = f"{pooled_note()} {note}".strip()
     if note:
-        lines.append(f"Note: {note}")
+        lines.append(wrap(f"Note: {note}"))
     if "first_order" in an and np.isfinite(r.first_order.values).any():
         lines += ["", decomposition_text(an, response)]
     return "\n".join(lines)
@@ -230,12 +235,12 @@ def decomposition_text(an: xr.Dataset, response: str) -> str:
     table = frame.to_string(formatters=dict.fromkeys(frame.columns, _number), na_rep="")
     return "\n".join(
         [
-            (
+            wrap(
                 f"Variance decomposition of {response} over the full factorial (exact; S1 and "
                 "ST are the first-order and total Sobol indices over the grid)"
             ),
             table,
-            NO_NOISE,
+            wrap(NO_NOISE),
         ]
     )
 

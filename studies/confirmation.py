@@ -13,7 +13,7 @@ import json
 import math
 import re
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from typing import Any
 
 import numpy as np
@@ -55,12 +55,15 @@ def confirmation_toml(ds: xr.Dataset, levels: Mapping[str, int]) -> str:
     return _study(ds, confirmation_values(ds, levels), "confirmation", what)
 
 
-def refinement_values(ds: xr.Dataset, levels: Mapping[str, int]) -> dict[str, list[Any]]:
-    """Factor → the levels of the refinement grid (see the module docstring)."""
+def refinement_values(
+    ds: xr.Dataset, levels: Mapping[str, int], hold: Collection[str] = ()
+) -> dict[str, list[Any]]:
+    """Factor → the levels of the refinement grid (see the module docstring); factors in
+    ``hold`` (e.g. without any effect) stay at their chosen level."""
     values = confirmation_values(ds, levels)
     for f, level in levels.items():
         chosen = values[f][0]
-        if isinstance(chosen, str | bool):
+        if isinstance(chosen, str | bool) or f in hold:
             continue
         known = level_values(ds, f)
         ends = [known.get(level - 1, chosen), known.get(level + 1, chosen)]
@@ -80,10 +83,10 @@ def _whole(ds: xr.Dataset, factor: str) -> bool:
     return bool(written) and all(isinstance(v, int) for v in written)
 
 
-def refinement_toml(ds: xr.Dataset, levels: Mapping[str, int]) -> str:
+def refinement_toml(ds: xr.Dataset, levels: Mapping[str, int], hold: Collection[str] = ()) -> str:
     """A finer full factorial around the chosen levels ("" when no numeric control factor
     has a neighbouring level to refine towards)."""
-    values = refinement_values(ds, levels)
+    values = refinement_values(ds, levels, hold)
     if all(len(values[f]) < 2 for f in levels):
         return ""
     what = "a finer grid between the neighbours of the best computed point"

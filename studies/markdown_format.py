@@ -48,8 +48,9 @@ def units_of(ds: xr.Dataset, name: str) -> str:
 
 
 def value_text(value: Any, units: str) -> str:
+    """A value and its units (none for a dimensionless "1")."""
     shown = num(value) if isinstance(value, int | float | np.number) else str(value)
-    return f"{shown} {units}".rstrip()
+    return f"{shown} {units if units != '1' else ''}".rstrip()
 
 
 def levels_of(an: xr.Dataset, term: str) -> dict[int, Any]:

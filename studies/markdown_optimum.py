@@ -101,8 +101,9 @@ def _conditions(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, units: str) -> 
             ),
             "",
         ]
-    grid = computed(an)
-    header = ["condition", "at these levels"] + (["best in this condition"] if grid else [])
+    grid = computed(an) and bool(_control(an))
+    header = ["condition", "at these levels" if _control(an) else "value"]
+    header += ["best in this condition"] if grid else []
     rows = []
     for i, condition in enumerate(labels):
         run = int(r.optimum_run.values[i])
@@ -141,6 +142,11 @@ def optimum_section(view: xr.Dataset, an: xr.Dataset, name: str, shown: str) -> 
 def _computed(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, shown: str) -> list[str]:
     units = _units(r)
     name = str(r.response.values)
+    if not _control(an):
+        lines = ["### Over the operating conditions", ""]
+        lines += ["Every factor is an operating condition: there are no levels to choose.", ""]
+        lines += [_over_conditions(an, r, units, "Computed"), ""]
+        return lines + _conditions(view, an, r, units)
     lines = [
         "### Best computed point",
         "",

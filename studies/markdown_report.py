@@ -137,14 +137,15 @@ def _next_study(
     text and the report's section on it."""
     written = bool(ds.attrs.get("study_toml"))
     if computed(an):
-        toml = confirmation.refinement_toml(view, levels)
+        flat = [f for f in levels if not (an["R"].sel(term=f).values > 0).any()]
+        toml = confirmation.refinement_toml(view, levels, flat)
         if not toml:
             return "", []
         intro = (
             "Every combination was computed, so there is nothing to confirm. The study below "
             "is a finer grid around the chosen levels (5 levels between the neighbours of each "
-            "numeric control factor; operating conditions at all their levels)"
-            + (f", also written to `{REFINEMENT_NAME}`." if written else ".")
+            "numeric control factor that has an effect; operating conditions at all their "
+            "levels)" + (f", also written to `{REFINEMENT_NAME}`." if written else ".")
         )
         title = "## Refinement around the best point"
     else:

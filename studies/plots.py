@@ -19,7 +19,7 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
 from studies import taguchi
-from studies.figure_style import LOG_DECADES, axis_label, map_scale, text_colour
+from studies.figure_style import LOG_DECADES, axis_label, map_scale, pretty_units, text_colour
 from studies.statistics import sweep_runs
 
 PANEL_SIZE = (3.0, 3.0)  # inches per factor panel
@@ -30,6 +30,7 @@ MAP_TICKS = 12  # level labels per map axis at most (every k-th level beyond)
 MAP_MAX_SIZE = (10.0, 7.0)  # inches: a map of many levels stays a readable page
 MARKER_LEVELS = 40  # from this many levels on, main effects are a line without markers
 MAX_TICKS = 6  # level values as ticks up to this many levels; beyond, plain ticks
+MAX_PANELS_PER_ROW = 3  # main-effect panels per row (more factors wrap to further rows)
 
 
 def _title(fig: Figure, text: str) -> None:
@@ -56,8 +57,13 @@ def main_effects_figure(an: xr.Dataset, response: str) -> Figure:
     r = an.sel(response=response)
     names = [str(t) for t in an["term"].values if int(an["is_factor"].sel(term=t))]
     units = str(r.units.values)
-    fig = Figure(figsize=(PANEL_SIZE[0] * len(names), PANEL_SIZE[1]), layout="constrained")
-    axes = fig.subplots(1, len(names), sharey=True, squeeze=False)[0]
+    columns = min(len(names), MAX_PANELS_PER_ROW)
+    rows = -(-len(names) // columns)
+    fig = Figure(figsize=(PANEL_SIZE[0] * columns, PANEL_SIZE[1] * rows), layout="constrained")
+    grid = fig.subplots(rows, columns, sharey=True, squeeze=False)
+    for spare in grid.ravel()[len(names) :]:
+        spare.set_axis_off()
+    axes = grid.ravel()[: len(names)]
     for ax, f in zip(axes, names, strict=True):
         row = r.sel(term=f)
         k = row.k.values
@@ -73,15 +79,18 @@ def main_effects_figure(an: xr.Dataset, response: str) -> Figure:
         operating = str(an["term_role"].sel(term=f).values) == "operating"
         ax.set_xlabel((_label(f, unit) if numeric else f) + (" (operating)" if operating else ""))
         if not numeric:  # categorical: the level names at their (1-based) positions
-            ax.set_xticks(x, [str(v) for v in row.level_label.values[present]], rotation=20)
+            labels = [str(v) for v in row.level_label.values[present]]
+            ax.set_xticks(x, labels, rotation=30, ha="right")
         else:
             _level_ticks(ax, x)
-    axes[0].set_ylabel(_label(response, units))
+    for first in grid[:, 0]:
+        first.set_ylabel(_label(response, units))
     axes[0].legend(loc="best", fontsize="small")
     k = r.k.values[np.isfinite(r.k.values)]
     if int(r.pass_fail):  # a pass/fail check: its level means are shares passing
         axes[0].set_ylim(-0.03, 1.03)
-        axes[0].set_ylabel(f"{response}: share passing")
+        for first in grid[:, 0]:
+            first.set_ylabel(f"{response}: share passing")
     elif k.size and k.min() > 0 and k.max() > LOG_DECADES * k.min():
         axes[0].set_yscale("log")  # shared: level means over more than two decades
     _title(fig, f"Main effects on {response}: {r.long_name.values}")
@@ -194,7 +203,7 @@ def interaction_figure(an: xr.Dataset, response: str, a: str, b: str) -> Figure:
     for j in np.flatnonzero(cols):
         labels_b = an["level_label"].sel(term=b).values
         shown = f"{values_b[j]:g}" if np.isfinite(values_b[j]) else str(labels_b[j])
-        label = f"{b} = {shown} {units_b}".rstrip()
+        label = f"{b} = {shown} {pretty_units(units_b) if units_b != '1' else ''}".rstrip()
         ax.plot(x, means[rows, j], marker="o", label=label)
     ax.set_xlabel(_label(a, units_a) if numeric else a)
     if not numeric:  # categorical: the level names at their (1-based) positions

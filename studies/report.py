@@ -59,8 +59,12 @@ def write_analysis(
         figures += plots.save_interaction_plots(an, analysed, folder)
         figures += plots.save_maps(an, varying, folder)
     status = json.loads(an.attrs.get("status_responses", "[]"))
-    body += [analysis_text.status_line(an, r) for r in status]
-    body += [_no_value_note(ds[r]) for r in scalar if r not in analysed and r not in status]
+    body += [analysis_text.wrap(analysis_text.status_line(an, r)) for r in status]
+    body += [
+        analysis_text.wrap(_no_value_note(ds[r]))
+        for r in scalar
+        if r not in analysed and r not in status
+    ]
     scene_name = str(ds.attrs.get("scene", ""))
     if scene_name in SCENES:  # a plugin scene that is not installed here: generic outputs only
         scene = get_scene(scene_name)

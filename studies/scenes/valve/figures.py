@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter
 
 from studies.figure_layout import (
     Layout,
@@ -98,6 +99,7 @@ def error_vs_cost_figure(ds: xr.Dataset) -> Figure | None:
                         elinewidth=0.8, capsize=2)  # fmt: skip
             ax.set_xscale("log")
             ax.set_yscale("log")
+            ax.xaxis.set_minor_formatter(NullFormatter())
             steps = ds["angle_step"].values[runs]
             points += list(zip(cost, error, steps, strict=True))
         for cx, ey, step in apart_labels(points):

@@ -15,6 +15,7 @@ import itertools
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter
 
 from studies.figure_layout import (
     apart_labels,
@@ -78,6 +79,7 @@ def ladder_figure(ds: xr.Dataset) -> Figure | None:
             )
         ax.set_xscale("log")
         ax.set_yscale("log")
+        ax.xaxis.set_minor_formatter(NullFormatter())  # a narrow decade: no crowded minor labels
         ax.grid(alpha=0.3, which="both")
         units = ds[name].attrs.get("units", "")
         ax.set_title(name, fontsize="small")
