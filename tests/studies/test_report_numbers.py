@@ -54,7 +54,8 @@ def test_pooled_shares_are_not_counted_twice(tmp_path: Path) -> None:
     assert abs(sum(float(v) for v in shares.values()) - total) <= 0.05 * len(shares)
     assert "counted inside the error row" in anova
     text = (tmp_path / "analysis.txt").read_text(encoding="utf-8")
-    assert "(pooled)" in text and "counted inside the error row" in text
+    assert "(pooled)" in text
+    assert "counted inside the error row" in text
 
 
 def test_a_range_of_zero_has_no_best_level(tmp_path: Path) -> None:
