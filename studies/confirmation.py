@@ -52,7 +52,7 @@ def confirmation_toml(ds: xr.Dataset, levels: Mapping[str, int]) -> str:
     Without the original text, only the ``[factors]`` tables are written.
     """
     what = "every control factor at its chosen level"
-    return _study(ds, confirmation_values(ds, levels), "confirmation", what)
+    return _study(ds, confirmation_values(ds, levels), "confirmation", "Confirmation run", what)
 
 
 def refinement_values(
@@ -90,16 +90,18 @@ def refinement_toml(ds: xr.Dataset, levels: Mapping[str, int], hold: Collection[
     if all(len(values[f]) < 2 for f in levels):
         return ""
     what = "a finer grid between the neighbours of the best computed point"
-    return _study(ds, values, "refinement", what)
+    return _study(ds, values, "refinement", "Refinement", what)
 
 
-def _study(ds: xr.Dataset, values: Mapping[str, list[Any]], kind: str, what: str) -> str:
+def _study(
+    ds: xr.Dataset, values: Mapping[str, list[Any]], kind: str, title: str, what: str
+) -> str:
     original = tomllib.loads(ds.attrs["study_toml"]) if ds.attrs.get("study_toml") else {}
     study = {k: v for k, v in original.items() if k not in ("design", "factors")}
     name = str(original.get("name", ds.attrs.get("study_name", "study")))
     if original:
         study["name"] = f"{name}_{kind}"
-        study["description"] = f"{kind.capitalize()} of {name}: {what}"
+        study["description"] = f"{title} of {name}: {what}"
         study["design"] = {"type": "full_factorial"}
     factors = {}
     for f, shown in values.items():
@@ -112,7 +114,7 @@ def _study(ds: xr.Dataset, values: Mapping[str, list[Any]], kind: str, what: str
         factors[f] = table
     study["factors"] = factors
     run = ds.attrs.get("run_id", "")
-    header = f"# {kind.capitalize()} of {name}{f' (run {run})' if run else ''}: {what}.\n"
+    header = f"# {title} of {name}{f' (run {run})' if run else ''}: {what}.\n"
     return header + _toml(study)
 
 

@@ -153,7 +153,7 @@ def test_margins_inside_and_below_the_band():
     inside, below = out
     assert inside[reed.OUT_FIRST_FREQUENCY] == pytest.approx(40.0)
     assert inside[reed.OUT_FIRST_MARGIN] == pytest.approx(-30.0)  # 30 Hz from the 10 Hz edge
-    assert inside[reed.OUT_HARMONIC_ORDER] == 1
+    assert inside[reed.OUT_HARMONIC_ORDER] == 0.5  # the event frequency: engine order e = 1/2
     assert inside[reed.OUT_RESONANCE_SPEED] == pytest.approx(120 * 40.0 * RPM)
     assert below[reed.OUT_FIRST_MARGIN] == pytest.approx(5.0)
     assert math.isnan(below[reed.OUT_HARMONIC_ORDER])
