@@ -14,8 +14,8 @@ differs by round-off, so its trajectory comes from the lane kernel itself.
 Cost per case is a wall-clock timing: the integrator (or the tolerance ladder) runs copies of
 the design point, at least ``COST_CASES`` (two lane blocks so both cores work) and enough that
 the fixed cost of a call (measured as a call with one case: dispatch, thread start, tables)
-is at most ``MAX_OVERHEAD`` of a run; the median of ``COST_REPEATS`` further runs is divided
-by the number of cases, and their interquartile range (IQR) is stored beside it
+is at most ``MAX_OVERHEAD`` of a run; the median of ``COST_REPEATS`` runs at that size is
+divided by the number of cases, and their interquartile range (IQR) is stored beside it
 (``cost_per_case_iqr``): a difference smaller than the spreads is noise. On a loaded machine
 that fixed cost was 10–24 ms, 100× the kernel's time for 64 lane cases. It varies from run to
 run and machine to machine; compare within one run.
@@ -116,7 +116,7 @@ def timing_per_case(
 
     The fixed cost of a call is the median time of ``repeats`` calls with one case; the copies
     start at ``COST_CASES`` and double until it is at most ``max_overhead`` of one run (at
-    most ``MAX_COST_CASES`` copies), then ``repeats`` further runs are timed.
+    most ``MAX_COST_CASES`` copies); that run and ``repeats`` − 1 more are the timings.
     """
     single = np.ascontiguousarray(row[None, :])
     fixed = float(np.median([_seconds(run, single) for _ in range(repeats)]))
@@ -127,7 +127,7 @@ def timing_per_case(
         if fixed <= max_overhead * elapsed or cases >= MAX_COST_CASES:
             break
         cases *= 2
-    times = np.array([_seconds(run, rows) for _ in range(repeats)]) / cases
+    times = np.array([elapsed] + [_seconds(run, rows) for _ in range(repeats - 1)]) / cases
     low, high = np.percentile(times, [25.0, 75.0])
     return float(np.median(times)), float(high - low)
 
