@@ -68,7 +68,7 @@ def test_poly345_study_is_warned_at_check_and_strict_fails(
     runs = report[start : report.index("\n## ", start + 1)]
     assert "max_contact_stress [MPa]" in runs  # the column stays in the runs table
     assert runs.count("| inf |") == 9
-    text = (folder / "analysis.txt").read_text(encoding="utf-8")
+    text = " ".join((folder / "analysis.txt").read_text(encoding="utf-8").split())
     assert "max_contact_stress" in text
     assert "inf in every design point with a value, so there is nothing to analyse" in text
     assert "NaN" not in text
