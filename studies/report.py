@@ -5,7 +5,8 @@ everything else renders it. Orthogonal-array and full-factorial runs get range a
 ANOVA per response (interaction columns as terms), main-effect, S/N and interaction plots, and
 for full factorials the variance decomposition and a map over the strongest factor pair;
 sweeps get a table and a response-vs-factor plot per swept factor. ``report.md``
-(:mod:`studies.markdown_report`) adds S/N ratios, the predicted optimum and the confirmation run;
+(:mod:`studies.markdown_report`) adds S/N ratios, the optimum and the confirmation (arrays) or
+refinement (full factorials) study;
 ``report.html`` (:mod:`studies.html_report`) is the same report as one self-contained page.
 """
 
