@@ -10,6 +10,10 @@ four-stroke, 1 for a two-stroke), i.e. n/120 Hz for a four-stroke at n rpm; the 
 [k f_min, k f_max]; the lowest harmonic that reaches f_1 is k = ⌈f_1/f_max⌉ (when
 k f_min ≤ f_1), at engine speed ω = 2π f_1/(k e).
 
+Orders are reported as **engine orders** o = k·e, multiples of the crankshaft frequency as in
+the crank scene's torque harmonics (SPEC §5, §6): the 3rd harmonic of a four-stroke's event
+frequency is engine order 1.5, and order o meets frequency f at n = 60 f/o rpm.
+
 Reference: Blevins, *Formulas for Dynamics, Acoustics and Vibration* (2016), Table 4.2
 (clamped–free beam); SPEC §6.
 """
@@ -71,6 +75,8 @@ OUTPUTS = (
     "mass",
 )
 OUTPUT_UNITS = ("Hz", "Hz", "Hz", "Hz", "-", "-", "rad/s", "N/m", "kg")
+HARMONIC_SLACK = 1e-9
+"""Relative slack when counting the harmonics k with k·e ≤ max_order (0.5·3 must count as 1.5)."""
 
 # Rows of modes_out[n, N_MODE_OUT, n_modes].
 MODE_FREQUENCY = 0
@@ -81,7 +87,7 @@ MODE_OUTPUTS = ("frequency", "margin", "margin_ratio")
 MODE_OUTPUT_UNITS = ("Hz", "Hz", "-")
 
 # order_crossing columns
-CROSSING_ORDER = 0  # lowest engine order whose band holds f [-]
+CROSSING_ORDER = 0  # lowest engine order k·e whose band holds f [-]
 CROSSING_SPEED = 1  # engine speed of that crossing [rad/s]
 ORDER_MARGIN = 2  # signed margin to the nearest order band [Hz]
 ORDER_CLEAR = 3  # 1: outside every order band widened by the margin
@@ -214,18 +220,19 @@ def band_margin(frequency, band_min, band_max):
 def order_crossing(frequency, band_min, band_max, openings, max_order, margin, out):
     """Engine orders against one natural frequency (SPEC §6, the intake pulse's harmonics).
 
-    The order-k excitation covers [k f_min, k f_max] over the speed range; it crosses f at the
-    engine speed ω = 2π f/(k e). Writes into ``out``: the lowest order k ≤ ``max_order`` whose
-    band holds f (NaN if none), its crossing speed [rad/s] (NaN if none), the signed margin
-    [Hz]: outside every band the distance to the nearest one (> 0), else the depth into the
-    crossing order's band to its nearest edge (< 0); and 1 if f lies outside every band widened
-    by ``margin`` (k f_min (1 − m) … k f_max (1 + m)), else 0.
+    Harmonic k of the event frequency is engine order o = k·e; its excitation covers
+    [k f_min, k f_max] over the speed range and crosses f at the engine speed ω = 2π f/(k e).
+    Writes into ``out``: the lowest engine order o ≤ ``max_order`` whose band holds f (NaN if
+    none), its crossing speed [rad/s] (NaN if none), the signed margin [Hz]: outside every band
+    the distance to the nearest one (> 0), else the depth into the crossing order's band to its
+    nearest edge (< 0); and 1 if f lies outside every band widened by ``margin``
+    (k f_min (1 − m) … k f_max (1 + m)), else 0.
 
     frequency: float  f [Hz].
-    band_min : float  f_min = ω_min e/(2π), the first-order band's lower edge [Hz].
+    band_min : float  f_min = ω_min e/(2π), the first harmonic's band, lower edge [Hz].
     band_max : float  f_max [Hz].
     openings : float  Excitation events (reed openings) per crank revolution e [-].
-    max_order: int    Highest engine order checked.
+    max_order: float  Highest engine order checked (harmonics k with k·e ≤ max_order) [-].
     margin   : float  Relative margin m of the resonance-free check [-].
     out      : float[4]
     """
@@ -233,10 +240,11 @@ def order_crossing(frequency, band_min, band_max, openings, max_order, margin, o
     out[CROSSING_SPEED] = math.nan
     nearest = math.inf
     clear = 1.0
-    for k in range(1, max_order + 1):
+    harmonics = math.floor(max_order / openings * (1.0 + HARMONIC_SLACK))
+    for k in range(1, harmonics + 1):
         low, high = k * band_min, k * band_max
         if math.isnan(out[CROSSING_ORDER]) and low <= frequency <= high:
-            out[CROSSING_ORDER] = k
+            out[CROSSING_ORDER] = k * openings
             out[CROSSING_SPEED] = 2.0 * math.pi * frequency / (k * openings)
             nearest = band_margin(frequency, low, high)
         elif math.isnan(out[CROSSING_ORDER]):
@@ -253,10 +261,10 @@ def order_batch(frequencies, params, max_order, margin, out):
 
     frequencies: float[n, q]     Natural frequencies of modes 1…q [Hz].
     params     : float[n, N_PARAMS]
-    max_order  : int             Highest engine order checked.
+    max_order  : float           Highest engine order checked [-].
     margin     : float           Relative margin of the resonance-free check [-].
-    out        : float[n, q, 4]  Columns CROSSING_ORDER, CROSSING_SPEED [rad/s], ORDER_MARGIN
-                                 [Hz], ORDER_CLEAR.
+    out        : float[n, q, 4]  Columns CROSSING_ORDER (engine order), CROSSING_SPEED [rad/s],
+                                 ORDER_MARGIN [Hz], ORDER_CLEAR.
     Reference: SPEC §6.
     """
     for i in prange(frequencies.shape[0]):
@@ -274,9 +282,10 @@ def reed_batch(params, out, modes_out, shapes_out):
     """Natural frequencies, band margins, resonant harmonic and mode shapes of every case.
 
     params    : float[n, N_PARAMS]        Case parameters (columns of this module).
-    out       : float[n, N_OUT]           Scalars, columns OUT_* (names OUTPUTS); harmonic order
-                                          and resonance speed are NaN when no harmonic band
-                                          reaches f_1 (f_1 below k f_min).
+    out       : float[n, N_OUT]           Scalars, columns OUT_* (names OUTPUTS); the harmonic
+                                          order is the engine order k·e of the lowest harmonic
+                                          reaching f_1; it and the resonance speed are NaN when
+                                          no harmonic band reaches f_1 (f_1 below k f_min).
     modes_out : float[n, N_MODE_OUT, q]   Frequency, margin [Hz] and margin/frequency of modes
                                           1…q (q may be 0).
     shapes_out: float[n, s, g]            Mode shapes 1…s on ξ_j = j/(g − 1), normalised to a
@@ -304,7 +313,7 @@ def reed_batch(params, out, modes_out, shapes_out):
         out[i, OUT_BAND_MAX] = band_max
         out[i, OUT_FIRST_MARGIN] = margin
         out[i, OUT_FIRST_MARGIN_RATIO] = margin / f1
-        out[i, OUT_HARMONIC_ORDER] = order if reachable else math.nan
+        out[i, OUT_HARMONIC_ORDER] = order * openings if reachable else math.nan
         out[i, OUT_RESONANCE_SPEED] = (
             2.0 * math.pi * f1 / (order * openings) if reachable else math.nan
         )

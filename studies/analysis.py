@@ -11,13 +11,16 @@ columns), ``level`` (0-based), ``source`` (the ANOVA rows: terms, ``error``, ``t
 ``interaction`` (assigned factor pairs of an orthogonal array), ``pair`` (every factor pair of
 a full factorial) and ``level_a`` × ``level_b`` for two-way tables of means.
 
-* range analysis: ``k``, ``R``, ``rank``, ``best_level`` (over the terms), ``grand_mean``
-  (``pass_fail`` marks 0/1 checks, whose means are shares passing);
+* range analysis: ``k``, ``R``, ``rank``, ``best_level`` (over the terms; -1 for operating
+  factors, interaction columns and a range of 0), ``grand_mean`` (``pass_fail`` marks 0/1
+  checks, whose means are shares passing);
+* runs without a finite value (:mod:`studies.missing`): ``none_means`` (response), per level
+  ``left_out`` (runs the analysis leaves out) and ``bounded`` (runs counted at the best or worst
+  value seen, ``best_bound`` / ``worst_bound``) on (response, term, level);
 * ANOVA: ``SS``, ``dof``, ``MS``, ``F``, ``P``, ``contribution`` [%], ``pooled`` on
   (response, source), ``anova_note``;
-* predicted optimum: ``optimum_level`` (per term; -1 for interaction columns), ``predicted``,
-  ``half_width``, ``confirmation_half_width``, ``n_eff``, ``error_ms``, ``error_dof``,
-  ``model_terms``;
+* the optimum of the control factors (:mod:`studies.analysis_optimum`): the best computed
+  point of a full factorial or the additive prediction of an array, per operating condition;
 * interactions of arrays: ``interaction_SS`` … and ``interaction_mean`` (response,
   interaction, level_a, level_b);
 * full factorials (complete, the computer-experiment view): ``main_SS``, ``pair_SS``,
@@ -26,7 +29,11 @@ a full factorial) and ``level_a`` × ``level_b`` for two-way tables of means.
 * status codes and bit masks (counted, never averaged): ``<response>_count`` on
   ``<response>_flag`` (the CF flag meanings), the names in the attribute ``status_responses``;
 * several responses: the trade-off (``chosen_level``, ``decided_by``, ``conflict`` per term,
-  ``compromise`` and ``compromise_half_width`` per response).
+  ``compromise``, ``compromise_worst``, ``compromise_half_width`` per response and
+  ``compromise_at`` per condition).
+
+Coordinates ``term_role`` ("control", "operating" or "column") and ``condition`` (the labels of
+the operating conditions); attributes ``operating_factors`` and ``optimum_basis``.
 
 Variables that hold a response's values carry its units in the ``units`` variable (per
 response); the ANOVA SS are in units².
@@ -42,9 +49,10 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from studies import prediction, taguchi, tradeoff
-from studies.results import NOT_EVALUATED, PASS_FAIL, grid_order, is_status, write_netcdf
-from studies.sensitivity import decompose
+from studies import analysis_optimum, missing, prediction, taguchi
+from studies.analysis_factorial import factorial, factorial_frame, grid_of
+from studies.grid_optimum import Grid
+from studies.results import NOT_EVALUATED, PASS_FAIL, is_status, write_netcdf
 from studies.statistics import (
     SENSES,
     anova,
@@ -61,31 +69,32 @@ SOURCE_COLUMNS = ("SS", "dof", "MS", "F", "P", "contribution")
 INTERACTION_COLUMNS = ("SS", "dof", "F", "P", "contribution")
 
 
-def presence(ds: xr.Dataset, responses: Sequence[str]) -> tuple[list[str], int]:
-    """The responses with a value in some run, and the number of runs with no value in any
-    response (NaN, or -1 "not evaluated" for flags and status codes): points that did not run.
-    Reads each response once."""
+def presence(ds: xr.Dataset, responses: Sequence[str]) -> tuple[list[str], np.ndarray]:
+    """The responses with a finite value in some run, and the runs with a value (finite or
+    ±inf; for flags and status codes anything but -1 "not evaluated") in some response: the
+    others did not run. Reads each response once."""
     present, any_value = [], np.zeros(ds.sizes["run"], dtype=bool)
     for r in responses:
         values = ds[r].values
-        has = values != NOT_EVALUATED if values.dtype.kind == "i" else np.isfinite(values)
-        has = has.reshape(values.shape[0], -1).any(axis=1)
-        if has.any():
+        integer = values.dtype.kind == "i"
+        has = values != NOT_EVALUATED if integer else ~np.isnan(values)
+        finite = has if integer else np.isfinite(values)
+        if finite.any():
             present.append(r)
-        any_value |= has
-    return present, int((~any_value).sum())
+        any_value |= has.reshape(values.shape[0], -1).any(axis=1)
+    return present, any_value
 
 
-def analyzed(ds: xr.Dataset, responses: Sequence[str]) -> tuple[xr.Dataset, list[str], int]:
+def analyzed(ds: xr.Dataset, responses: Sequence[str]) -> tuple[xr.Dataset, list[str], np.ndarray]:
     """The results with run means and S/N ratios added, the variables to analyse (each
     response with a finite value, or its run mean when replicated, then its S/N ratio) and the
-    number of runs without any value."""
-    present, without = presence(ds, responses)
+    runs with a value in some response (:func:`presence`)."""
+    present, ran = presence(ds, responses)
     present = [r for r in present if not is_status(ds[r])]
     view = taguchi.with_sn(taguchi.with_means(ds, present), taguchi.sn_responses(ds, present))
     names = [taguchi.mean_name(view, r) for r in present]
     names += [taguchi.sn_name(r) for r in present if taguchi.sn_name(r) in view]
-    return view, names, without
+    return view, names, ran
 
 
 def analyze(
@@ -108,45 +117,55 @@ def analyze(
     counts = {f"{r}_count": status_counts(ds[r]) for r in status}
     attrs["status_responses"] = json.dumps(status)
     if design == "sweep":  # tables and plots of the runs themselves: nothing to estimate
-        present, without = presence(ds, names)
+        present, ran = presence(ds, names)
         present = [r for r in present if r not in status]
-        attrs |= {"points": ds.sizes["run"], "points_without_value": without}
+        attrs |= {"points": ds.sizes["run"], "points_without_value": int((~ran).sum())}
         return xr.Dataset(counts, attrs=attrs | {"analysed": json.dumps(present)})
-    view, analysed, without = analyzed(ds, names)
-    attrs |= {"points": ds.sizes["run"], "points_without_value": without}
+    view, analysed, ran = analyzed(ds, names)
+    attrs |= {"points": ds.sizes["run"], "points_without_value": int((~ran).sum())}
     terms = taguchi.model_terms(view)
+    operating = prediction.operating_factors(view)
     # The level codes once in memory, then one response at a time: a 10⁷-run result is never
     # held whole.
     base = view.drop_vars(list(view.data_vars))
     base = base.assign_coords(
         {f"{t}_level": base[f"{t}_level"].variable.copy(deep=False).load() for t in terms}
     )  # the level codes stay in memory (4 B per run and term); factor values are read on use
-    out = _frame(base, view, analysed, terms)
-    grid = _grid(base) if design == "full_factorial" else None
-    if grid is not None:
-        _factorial_frame(out, grid)
-    tables, optima = {}, {}
+    out = _frame(base, view, analysed, terms, operating)
+    order = grid_of(base) if design == "full_factorial" else None
+    grid = None if order is None else Grid(*order, operating)
+    if order is not None:
+        factorial_frame(out, order)
+    attrs["optimum_basis"] = analysis_optimum.COMPUTED if grid else analysis_optimum.PREDICTED
+    tables, optima, replaced = {}, {}, {}
     for name in analysed:
-        # a bare Variable: no coordinates to compare (and load) on assignment; view stays lazy
-        one = base.assign({name: view[name].variable.copy(deep=False).load()})
+        variable, changed = _filled(out, base, view[name], ran, name, terms)
+        one = base.assign({name: variable})
+        if changed:
+            replaced[name] = variable
         out["varies"].loc[name] = int(taguchi.varies(one, name))
         tables[name] = anova(one, name, factors=terms, pool=pool)
-        _range(out, one, name, terms)
+        _range(out, one, name, terms, operating)
         _anova(out, tables[name], name)
-        optima[name] = _optimum(out, one, name, tables[name])
+        found = analysis_optimum.optimum(out, one, name, tables[name], grid)
+        if found is not None:
+            optima[name] = found
         _interactions(out, one, name, tables[name])
-        if grid is not None:
-            _factorial(out, one, name, grid)
+        if order is not None:
+            factorial(out, one, name, order)
     sn = {taguchi.sn_name(r) for r in names}
-    optimised = [n for n in analysed if n not in sn and int(out["varies"].loc[n])]
+    optimised = [n for n in analysed if n not in sn and int(out["varies"].loc[n]) and n in optima]
     if len(optimised) > 1:
-        lazy = base.assign({n: view[n].variable for n in optimised})
-        _tradeoff(out, lazy, optimised, tables, optima)
+        lazy = base.assign({n: replaced.get(n, view[n].variable) for n in optimised})
+        analysis_optimum.trade(out, lazy, optimised, tables, optima, grid)
     for r in names:  # run means of replicated responses, for the renderers' run tables
         if taguchi.mean_name(view, r) != r and taguchi.mean_name(view, r) in analysed:
             out[taguchi.mean_name(view, r)] = view[taguchi.mean_name(view, r)]
     out = out.assign(counts)
-    out.attrs = attrs | {"analysed": json.dumps(analysed)}
+    out.attrs = attrs | {
+        "analysed": json.dumps(analysed),
+        "operating_factors": json.dumps(operating),
+    }
     return out
 
 
@@ -156,7 +175,9 @@ def write_analysis_nc(an: xr.Dataset, folder: Path) -> Path:
 
 
 # --- the frame ------------------------------------------------------------------------------
-def _frame(base: xr.Dataset, view: xr.Dataset, names: list[str], terms: list[str]) -> xr.Dataset:
+def _frame(
+    base: xr.Dataset, view: xr.Dataset, names: list[str], terms: list[str], operating: list[str]
+) -> xr.Dataset:
     nlevels = max(int(base[f"{t}_level"].max()) + 1 for t in terms) if terms else 1
     pairs = list(taguchi.interaction_pairs(view))
     sources = [*terms, "error", "total"]
@@ -195,6 +216,11 @@ def _frame(base: xr.Dataset, view: xr.Dataset, names: list[str], terms: list[str
         **{c: full(rs) for c in SOURCE_COLUMNS},
         "pooled": full(rs, 0, np.int8),
         "anova_note": ("response", np.full(len(names), "", dtype=object)),
+        "none_means": ("response", [missing.none_means(view[n]) for n in names]),
+        "left_out": full(("response", "term", "level"), 0, np.int32),
+        "bounded": full(("response", "term", "level"), 0, np.int32),
+        "best_bound": full(("response",)),
+        "worst_bound": full(("response",)),
         "optimum_level": full(rt, -1, np.int32),
         "model_terms": ("response", np.full(len(names), "", dtype=object)),
         **{
@@ -217,10 +243,36 @@ def _frame(base: xr.Dataset, view: xr.Dataset, names: list[str], terms: list[str
         "level_label": (("term", "level"), label),
         "term_units": ("term", units),
         "is_factor": ("term", [int(t in taguchi.factor_names(view)) for t in terms]),
+        "term_role": ("term", [_role(view, t, operating) for t in terms]),
+        "level_runs": (("term", "level"), _level_runs(base, terms, nlevels)),
         "interaction_a": ("interaction", [a for a, _ in pairs]),
         "interaction_b": ("interaction", [b for _, b in pairs]),
     }
-    return xr.Dataset(data, coords=coords)
+    out = xr.Dataset(data, coords=coords)
+    conditions = prediction.conditions(base)
+    shown = {
+        str(t): [f"{v:g}" if np.isfinite(v) else str(text) for v, text in zip(*pair, strict=True)]
+        for t, pair in zip(terms, zip(value, label, strict=True), strict=True)
+    }
+    term_units = dict(zip(terms, units, strict=True))
+    analysis_optimum.optimum_frame(
+        out, analysis_optimum.condition_labels(conditions, shown, term_units)
+    )
+    return out
+
+
+def _level_runs(base: xr.Dataset, terms: list[str], nlevels: int) -> np.ndarray:
+    """Runs at each level of each term (O(N), ``bincount``)."""
+    return np.array(
+        [np.bincount(base[f"{t}_level"].values, minlength=nlevels)[:nlevels] for t in terms],
+        dtype=np.int64,
+    ).reshape(len(terms), nlevels)
+
+
+def _role(view: xr.Dataset, term: str, operating: list[str]) -> str:
+    if term not in taguchi.factor_names(view):
+        return "column"
+    return "operating" if term in operating else "control"
 
 
 def _level_values(
@@ -242,14 +294,45 @@ def _level_values(
 
 
 # --- per response ---------------------------------------------------------------------------
-def _range(out: xr.Dataset, view: xr.Dataset, name: str, terms: list[str]) -> None:
+def _filled(
+    out: xr.Dataset, base: xr.Dataset, y: xr.DataArray, ran: np.ndarray, name: str, terms: list[str]
+) -> tuple[xr.Variable, bool]:
+    """The values the analysis uses (runs without a finite value resolved by
+    :mod:`studies.missing`), with the per-level counts of what was done written into ``out``.
+    A bare Variable (no coordinates to compare and load on assignment; the view stays lazy),
+    and whether any value was resolved."""
+    variable = y.variable.copy(deep=False).load()
+    values = variable.values.astype(float)
+    if np.isfinite(values).all():
+        return variable, False
+    sense = str(y.attrs.get("better", "smaller"))
+    filled = missing.fill(values, ran, missing.none_means(y), sense)
+    i = out.indexes["response"].get_loc(name)
+    nlevels = out.sizes["level"]
+    for j, t in enumerate(terms):
+        codes = base[f"{t}_level"].values
+        out["left_out"].values[i, j] = missing.per_level(filled.left_out, codes, nlevels)
+        out["bounded"].values[i, j] = missing.per_level(filled.bounded, codes, nlevels)
+    out["best_bound"].values[i], out["worst_bound"].values[i] = (
+        filled.best_bound,
+        filled.worst_bound,
+    )
+    return xr.Variable(variable.dims, filled.values, variable.attrs), True
+
+
+def _range(
+    out: xr.Dataset, view: xr.Dataset, name: str, terms: list[str], operating: list[str]
+) -> None:
     ra = range_analysis(view, name, terms)
     at = {"response": name}
     out["k"].loc[at] = np.pad(
         ra.k.values, ((0, 0), (0, out.sizes["level"] - ra.sizes["level"])), constant_values=np.nan
     )
-    for v in ("R", "rank", "best_level"):
+    for v in ("R", "rank"):
         out[v].loc[at] = ra[v].values
+    chosen = [t not in operating and t in taguchi.factor_names(view) for t in terms]
+    best = np.where(np.asarray(chosen) & (ra["R"].values > 0), ra["best_level"].values, -1)
+    out["best_level"].loc[at] = best
     y = view[name].values.astype(float)
     out["grand_mean"].loc[at] = float(np.mean(y[np.isfinite(y)]))
 
@@ -260,24 +343,6 @@ def _anova(out: xr.Dataset, table: Any, name: str) -> None:
         out[c].loc[at] = table[c].to_numpy(dtype=float)
     out["pooled"].loc[at] = table["pooled"].to_numpy(dtype=np.int8)
     out["anova_note"].loc[at] = table.attrs["note"]
-
-
-def _optimum(out: xr.Dataset, view: xr.Dataset, name: str, table: Any) -> prediction.Prediction:
-    p = prediction.predict_optimum(view, name, table=table)
-    at = {"response": name}
-    levels = [p.levels.get(t, -1) for t in out["term"].values]
-    out["optimum_level"].loc[at] = levels
-    out["model_terms"].loc[at] = ",".join(p.terms)
-    for v, value in (
-        ("predicted", p.mean),
-        ("half_width", p.half_width),
-        ("confirmation_half_width", p.confirmation_half_width),
-        ("n_eff", p.n_eff),
-        ("error_ms", p.error_ms),
-        ("error_dof", p.error_dof),
-    ):
-        out[v].loc[at] = value
-    return p
 
 
 def _interactions(out: xr.Dataset, view: xr.Dataset, name: str, table: Any) -> None:
@@ -293,96 +358,3 @@ def _interactions(out: xr.Dataset, view: xr.Dataset, name: str, table: Any) -> N
         la, lb = means[f"{a}_level"].values, means[f"{b}_level"].values
         block = out["interaction_mean"].values[out.indexes["response"].get_loc(name), i]
         block[np.ix_(la, lb)] = means.values
-
-
-# --- full factorial: the computer-experiment view -------------------------------------------
-def _grid(base: xr.Dataset) -> tuple[list[str], tuple[int, ...], np.ndarray] | None:
-    """Factors, level counts and grid order of a complete full factorial (None otherwise)."""
-    try:
-        return grid_order(base)
-    except ValueError:
-        return None
-
-
-def _factorial_frame(out: xr.Dataset, grid: tuple[list[str], tuple[int, ...], np.ndarray]) -> None:
-    """The full-factorial variables (NaN until a response fills them) and their coordinates."""
-    factors, counts, _ = grid
-    nr, nf, most = out.sizes["response"], len(factors), max(counts)
-    pairs = [f"{a} x {b}" for i, a in enumerate(factors) for b in factors[i + 1 :]]
-    out.update(
-        {
-            "main_SS": (("response", "factor"), np.full((nr, nf), np.nan)),
-            "first_order": (("response", "factor"), np.full((nr, nf), np.nan)),
-            "total_effect": (("response", "factor"), np.full((nr, nf), np.nan)),
-            "pair_SS": (("response", "pair"), np.full((nr, len(pairs)), np.nan)),
-            "remainder_SS": ("response", np.full(nr, np.nan)),
-            "total_SS": ("response", np.full(nr, np.nan)),
-            "map_x": ("response", np.full(nr, "", dtype=object)),
-            "map_y": ("response", np.full(nr, "", dtype=object)),
-            "map_mean": (
-                ("response", "map_level_y", "map_level_x"),
-                np.full((nr, most, most), np.nan),
-            ),
-        }
-    )
-    out.coords["factor"] = factors
-    out.coords["pair"] = pairs
-
-
-def _factorial(
-    out: xr.Dataset,
-    one: xr.Dataset,
-    name: str,
-    grid: tuple[list[str], tuple[int, ...], np.ndarray],
-) -> None:
-    """Main, two-factor and remainder SS and Sobol indices of a response that is finite in
-    every run of a complete full factorial (otherwise the grid has holes: left NaN)."""
-    factors, counts, order = grid
-    y = one[name].values.astype(float)[order]
-    if not np.isfinite(y).all():
-        return
-    i = out.indexes["response"].get_loc(name)
-    values = y.reshape(counts)
-    dec = decompose(values, tuple(factors))
-    out["main_SS"].values[i], out["pair_SS"].values[i] = dec.main, dec.pair
-    out["first_order"].values[i], out["total_effect"].values[i] = dec.first_order, dec.total_effect
-    out["remainder_SS"].values[i], out["total_SS"].values[i] = dec.remainder, dec.total
-    if len(factors) >= 2:
-        a, b = np.argsort(-dec.total_effect, kind="stable")[:2]
-        x, yy = sorted((int(a), int(b)))
-        mean = values.mean(axis=tuple(k for k in range(len(factors)) if k not in (x, yy)))
-        out["map_x"].values[i], out["map_y"].values[i] = factors[x], factors[yy]
-        out["map_mean"].values[i, : counts[yy], : counts[x]] = mean.T
-
-
-# --- several responses ----------------------------------------------------------------------
-def _tradeoff(
-    out: xr.Dataset,
-    view: xr.Dataset,
-    names: list[str],
-    tables: dict[str, Any],
-    optima: dict[str, prediction.Prediction],
-) -> None:
-    result = tradeoff.tradeoff(
-        view, names, tables={n: tables[n] for n in names}, optima={n: optima[n] for n in names}
-    )
-    terms = list(out["term"].values)
-    table = result.table
-    out["chosen_level"] = ("term", np.array([result.levels.get(t, -1) for t in terms], np.int32))
-    out["decided_by"] = (
-        "term",
-        np.array(
-            [str(table.loc[t, "decided by"]) if t in table.index else "" for t in terms], object
-        ),
-    )
-    out["conflict"] = (
-        "term",
-        np.array([int(bool(table.loc[t, "conflict"])) if t in table.index else 0 for t in terms]),
-    )
-    compromise = np.full(out.sizes["response"], np.nan)
-    half = np.full(out.sizes["response"], np.nan)
-    for n, row in result.predictions.iterrows():
-        i = out.indexes["response"].get_loc(n)
-        compromise[i], half[i] = row["compromise"], row["half width"]
-    out["compromise"] = ("response", compromise)
-    out["compromise_half_width"] = ("response", half)

@@ -122,7 +122,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--strict",
         action="store_true",
-        help=f"exit {EXIT_POINTS_NOT_RUN} when a design point gave no value for any response",
+        help=f"exit {EXIT_POINTS_NOT_RUN} when a design point gave no value for any response "
+        "or check warned about it (e.g. a concave cam)",
     )
     run.add_argument(
         "--force",
@@ -262,7 +263,7 @@ def _run_plans(args: argparse.Namespace, plans: list[Plan], executor: Executor |
     from studies.runner import DEFAULT_CHUNK_SIZE
     from studies.study_run import run_plan
 
-    incomplete = 0
+    flagged = 0
     for plan in plans:
         key = tracking.definition_hash(plan.definition.text, plan.definition.input_files())
         code = provenance.code_hash(provenance.code(type(plan.scene)))
@@ -276,7 +277,7 @@ def _run_plans(args: argparse.Namespace, plans: list[Plan], executor: Executor |
             print(f"  {Path(earlier['folder']) / 'results.nc'}")
             _track(args, Path(earlier["folder"]), earlier["run_id"])
             continue
-        _warn(plan)
+        warned = _warn(plan) > 0
         result = run_plan(
             plan,
             args.outputs,
@@ -286,10 +287,11 @@ def _run_plans(args: argparse.Namespace, plans: list[Plan], executor: Executor |
         )
         _report(result)
         _track(args, result.folder, result.record.run_id)
-        incomplete += result.record.points_without_value > 0
-    if args.strict and incomplete:
+        flagged += warned or result.record.points_without_value > 0
+    if args.strict and flagged:
         print(
-            f"error (--strict): {incomplete} run(s) have design points that did not run",
+            f"error (--strict): {flagged} run(s) have design points that did not run or that "
+            "check warned about",
             file=sys.stderr,
         )
         return EXIT_POINTS_NOT_RUN
@@ -355,10 +357,13 @@ def _cmd_check(args: argparse.Namespace) -> int:
     return 0
 
 
-def _warn(plan: Plan) -> None:
-    """Print the design points that will run but give no value (the scene's advice)."""
-    for line in plan.scene.point_warnings(plan.points, plan.settings):
+def _warn(plan: Plan) -> int:
+    """Print the design points that will run but give no value or an infinite one (the
+    scene's advice); return how many warnings."""
+    lines = plan.scene.point_warnings(plan.points, plan.settings)
+    for line in lines:
         print(f"warning: {plan.definition.name}: {line}", file=sys.stderr)
+    return len(lines)
 
 
 def _cmd_list(_: argparse.Namespace) -> int:

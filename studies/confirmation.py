@@ -1,5 +1,11 @@
-"""The confirmation run of a Taguchi study: the chosen levels as a ready-to-run study file
-(a full factorial of one point) built from the run's own study text."""
+"""What to run next, as a ready-to-run study file built from the run's own study text.
+
+* The confirmation run of an orthogonal array: the chosen control levels (a full factorial of
+  one point per operating condition: operating factors keep all their levels).
+* The refinement of a full factorial, whose best point was computed and needs no confirmation:
+  a finer grid around it, ``REFINEMENT_LEVELS`` levels of each numeric control factor between
+  its neighbouring levels (from the chosen level to its one neighbour at the edge of the grid),
+  text levels at the chosen one, operating factors at all their levels."""
 
 from __future__ import annotations
 
@@ -7,43 +13,109 @@ import json
 import math
 import re
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from typing import Any
 
+import numpy as np
 import xarray as xr
 
 from studies.taguchi import factor_names, level_values, plain
 
 _BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
+REFINEMENT_LEVELS = 5
+SIGNIFICANT = 6  # digits of a refined level
 
 
-def confirmation_values(ds: xr.Dataset, levels: Mapping[str, int]) -> dict[str, Any]:
-    """Factor → its physical value at the chosen level (plain Python types)."""
-    return {f: level_values(ds, f)[int(levels[f])] for f in factor_names(ds)}
+def operating_factors(ds: xr.Dataset) -> list[str]:
+    return list(json.loads(ds.attrs.get("operating_factors", "[]")))
+
+
+def confirmation_values(ds: xr.Dataset, levels: Mapping[str, int]) -> dict[str, list[Any]]:
+    """Factor → its physical values: the chosen level of a control factor, every level of an
+    operating one (plain Python types)."""
+    return {
+        f: [level_values(ds, f)[int(levels[f])]] if f in levels else _all(ds, f)
+        for f in factor_names(ds)
+    }
+
+
+def _all(ds: xr.Dataset, factor: str) -> list[Any]:
+    values = level_values(ds, factor)
+    return [values[i] for i in sorted(values)]
 
 
 def confirmation_toml(ds: xr.Dataset, levels: Mapping[str, int]) -> str:
-    """A study file that runs the chosen levels once: the original study (attribute
-    ``study_toml``) with ``design = "full_factorial"`` and one level per factor.
+    """A study file that runs the chosen levels once (in every operating condition): the
+    original study (attribute ``study_toml``) with ``design = "full_factorial"`` and one level
+    per control factor.
 
     Without the original text, only the ``[factors]`` tables are written.
     """
+    what = "every control factor at its chosen level"
+    return _study(ds, confirmation_values(ds, levels), "confirmation", "Confirmation run", what)
+
+
+def refinement_values(
+    ds: xr.Dataset, levels: Mapping[str, int], hold: Collection[str] = ()
+) -> dict[str, list[Any]]:
+    """Factor → the levels of the refinement grid (see the module docstring); factors in
+    ``hold`` (e.g. without any effect) stay at their chosen level."""
     values = confirmation_values(ds, levels)
+    for f, level in levels.items():
+        chosen = values[f][0]
+        if isinstance(chosen, str | bool) or f in hold:
+            continue
+        known = level_values(ds, f)
+        ends = [known.get(level - 1, chosen), known.get(level + 1, chosen)]
+        grid = np.linspace(min(ends), max(ends), REFINEMENT_LEVELS)
+        if isinstance(chosen, int) or _whole(ds, f):
+            refined: list[Any] = sorted({round(float(v)) for v in grid})
+        else:
+            refined = sorted({float(f"{v:.{SIGNIFICANT}g}") for v in grid} | {float(chosen)})
+        values[f] = refined
+    return values
+
+
+def _whole(ds: xr.Dataset, factor: str) -> bool:
+    """Whether the study file wrote the factor's levels as whole numbers (a count)."""
+    original = tomllib.loads(ds.attrs["study_toml"]) if ds.attrs.get("study_toml") else {}
+    written = original.get("factors", {}).get(factor, {}).get("levels", [])
+    return bool(written) and all(isinstance(v, int) for v in written)
+
+
+def refinement_toml(ds: xr.Dataset, levels: Mapping[str, int], hold: Collection[str] = ()) -> str:
+    """A finer full factorial around the chosen levels ("" when no numeric control factor
+    has a neighbouring level to refine towards)."""
+    values = refinement_values(ds, levels, hold)
+    if all(len(values[f]) < 2 for f in levels):
+        return ""
+    what = "a finer grid between the neighbours of the best computed point"
+    return _study(ds, values, "refinement", "Refinement", what)
+
+
+def _study(
+    ds: xr.Dataset, values: Mapping[str, list[Any]], kind: str, title: str, what: str
+) -> str:
     original = tomllib.loads(ds.attrs["study_toml"]) if ds.attrs.get("study_toml") else {}
     study = {k: v for k, v in original.items() if k not in ("design", "factors")}
     name = str(original.get("name", ds.attrs.get("study_name", "study")))
     if original:
-        study["name"] = f"{name}_confirmation"
-        study["description"] = f"Confirmation run of {name}: every factor at its chosen level"
+        study["name"] = f"{name}_{kind}"
+        study["description"] = f"{title} of {name}: {what}"
         study["design"] = {"type": "full_factorial"}
     factors = {}
-    for f, value in values.items():
+    for f, shown in values.items():
         units = ds[f].attrs.get("units", "") if f in ds.coords else ""
-        factors[f] = {"levels": [value]} | ({"units": str(units)} if units else {})
+        table: dict[str, Any] = {"levels": shown}
+        if units:
+            table["units"] = str(units)
+        if f in operating_factors(ds):
+            table["role"] = "operating"
+        factors[f] = table
     study["factors"] = factors
     run = ds.attrs.get("run_id", "")
-    shown = " ".join(f"{name}{f' (run {run})' if run else ''}".splitlines())  # one comment line
-    header = f"# Confirmation run of {shown}: the chosen levels.\n"
+    source = " ".join(f"{name}{f' (run {run})' if run else ''}".splitlines())  # one comment line
+    header = f"# {title} of {source}: {what}.\n"
     return header + _toml(study)
 
 

@@ -20,18 +20,27 @@ File layout (see ``studies/catalog/*.toml`` and the README)::
     pool = ["B"]                     # factors pooled into the ANOVA error (optional; default:
                                      # the smallest factor only when the error has no dof)
 
+    [sense]                          # optional: which direction is better, per response
+    max_jerk = "smaller"             # (default: the scene's declaration)
+
+    [none_means]                     # optional: what a design point without a value means,
+    max_jerk = "worst"               # "best" | "worst" | "unknown" (default: the scene's)
+
     [settings]
     angle_step = 0.1                 # accuracy settings of the scene, in its units
 
     [parameters]                     # fixed values, in the scene's units ...
     base_radius = 20.5
-    cam_width = { value = 2.0, units = "cm" }   # ... or with explicit units
+    cam_width = { value = 0.02, units = "m" }   # ... or with explicit units
 
     [factors.seg2_width]
     levels = [7, 9, 11]
     units = "deg"                    # optional, defaults to the scene's units (deg = degree)
     column = 1                       # optional orthogonal-array column (1-based)
     base = 9                         # optional base level of a sweep (default: middle level)
+    role = "control"                 # optional: "control" (a design choice, the default) or
+                                     # "operating" (a condition such as engine speed that the
+                                     # design must meet at every level: never chosen as "best")
 """
 
 from __future__ import annotations
@@ -46,7 +55,7 @@ from typing import Any
 from studies.bounded_files import STUDY_FILE_BYTES, UTF8_BOM, InputFileError, read_bounded_text
 from studies.definition_values import Factor, ValueParser, suggest
 from studies.scenes import SCENES, Scene, get_scene
-from studies.scenes.base import short
+from studies.scenes.base import NONE_MEANINGS, short
 
 CATALOG = Path(__file__).parent / "catalog"
 TOP_LEVEL_KEYS = {
@@ -60,6 +69,7 @@ TOP_LEVEL_KEYS = {
     "parameters",
     "factors",
     "sense",
+    "none_means",
 }
 DESIGN_KEYS = {"type", "error_columns", "interactions", "pool"}
 NAME_PATTERN = re.compile(r"[A-Za-z0-9_-]+")  # whole names only: used with fullmatch
@@ -98,6 +108,7 @@ class StudyDefinition:
     source: str = "<string>"
     interactions: tuple[tuple[str, str], ...] = ()
     pool: tuple[str, ...] | None = None
+    none_means: dict[str, str] = field(default_factory=dict)
 
     def input_files(self) -> tuple[Path, ...]:
         """The files the study reads (its text parameters, e.g. ``lift_table``), in order."""
@@ -211,9 +222,11 @@ class _Parser(ValueParser):
         factors_raw = self._table("factors")
         settings_raw = self._table("settings")
         sense = self._table("sense")
+        none_means = self._table("none_means")
         if scene is None:
             return None, self.problems
         self._check_responses(scene, responses, curves, sense)
+        self._check_none_means(responses, none_means)
         parameters = self._parameters(scene, params)
         factors = self._factors(scene, factors_raw, design)
         for f in factors:
@@ -240,6 +253,7 @@ class _Parser(ValueParser):
             source=self.source,
             interactions=tuple(interactions),
             pool=pool,
+            none_means=dict(none_means),
         )
         return definition, self.problems
 
@@ -357,3 +371,14 @@ class _Parser(ValueParser):
                 self.problem(f"[sense] names {r!r}, which is not in responses")
             if s not in ("smaller", "larger"):
                 self.problem(f"[sense] {r} = {short(s)} must be 'smaller' or 'larger'")
+
+    def _check_none_means(self, responses: list[str], none_means: dict[str, Any]) -> None:
+        for r, meaning in none_means.items():
+            if r not in responses:
+                self.problem(f"[none_means] names {r!r}, which is not in responses")
+            if meaning not in NONE_MEANINGS:
+                allowed = ", ".join(repr(m) for m in NONE_MEANINGS)
+                self.problem(
+                    f"[none_means] {r} = {short(meaning)} must be one of {allowed} (what a design "
+                    "point without a value means for the analysis)"
+                )

@@ -13,19 +13,24 @@ from studies.scenes import Scene
 from studies.scenes.base import is_finite_number, short
 from studies.units import UNITS, canonical, compatible_units
 
-FACTOR_KEYS = {"levels", "units", "column", "base"}
+FACTOR_KEYS = {"levels", "units", "column", "base", "role"}
 SHOWN_LEVEL_PROBLEMS = 3  # refused levels listed per factor; the rest are counted
+ROLES = ("control", "operating")
+"""A control factor is a design choice (its best level is chosen); an operating factor is a
+condition the design must meet at every level (engine speed, load): never "chosen"."""
 
 
 @dataclass(frozen=True)
 class Factor:
-    """A varied parameter: its levels in ``units``, optional array column and sweep base."""
+    """A varied parameter: its levels in ``units``, optional array column and sweep base, and
+    its role (``ROLES``: a design choice, or an operating condition the design must meet)."""
 
     name: str
     levels: tuple[Any, ...]
     units: str
     column: int | None = None
     base: Any = None
+    role: str = "control"
 
 
 class ValueParser:
@@ -141,7 +146,15 @@ class ValueParser:
                 base = None
             if column is not None and design in ("full_factorial", "sweep"):
                 self.problem(f"factor {name}: 'column' only applies to orthogonal-array designs")
-            factors.append(Factor(name, tuple(levels), canonical(str(units)), column, base))
+            role = spec.get("role", "control")
+            if role not in ROLES:
+                self.problem(
+                    f"factor {name}: role = {short(role)} must be one of "
+                    f"{', '.join(repr(r) for r in ROLES)} (a design choice, or a condition such as "
+                    "engine speed that the design must meet at every level)"
+                )
+                role = "control"
+            factors.append(Factor(name, tuple(levels), canonical(str(units)), column, base, role))
         return factors
 
     def _settings(self, scene: Scene, raw: dict[str, Any]) -> dict[str, Any]:

@@ -11,13 +11,14 @@ from __future__ import annotations
 import json
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import xarray as xr
 from matplotlib import colormaps
 from matplotlib.figure import Figure
 
-from studies.figure_style import axis_label
+from studies.figure_style import axis_label, pretty_units
 
 DPI = 120
 PANEL = (3.6, 2.8)  # inches per panel
@@ -42,10 +43,11 @@ def value_text(ds: xr.Dataset, factor: str, level: int) -> str:
 
 
 def shown_value(ds: xr.Dataset, factor: str, value: object) -> str:
-    """A factor's value as a person reads it: a number with its units, or a level's name."""
-    units = ds[factor].attrs.get("units", "")
+    """A factor's value as a person reads it: a number with its units (printed as in axis
+    labels: m/s²), or a level's name."""
+    units = str(ds[factor].attrs.get("units", ""))
     shown = f"{value:g}" if isinstance(value, (int, float, np.number)) else str(value)
-    return f"{shown} {units}" if units not in ("", "1") else shown
+    return f"{shown} {pretty_units(units)}" if units not in ("", "1") else shown
 
 
 def runs_where(ds: xr.Dataset, where: dict[str, int]) -> np.ndarray:
@@ -56,9 +58,16 @@ def runs_where(ds: xr.Dataset, where: dict[str, int]) -> np.ndarray:
 
 
 class Layout:
-    """Panels (row × column factor levels) and held factors for a figure."""
+    """Panels (row × column factor levels) and held factors for a figure. ``names``: what a
+    level means where its value would mislead, e.g. ``{("tolerance", 0.0): "fixed step"}``."""
 
-    def __init__(self, ds: xr.Dataset, used: Sequence[str]) -> None:
+    def __init__(
+        self,
+        ds: xr.Dataset,
+        used: Sequence[str],
+        names: dict[tuple[str, object], str] | None = None,
+    ) -> None:
+        self.names = names or {}
         others = [f for f in design_factors(ds) if f not in used]
         self.row = others[0] if len(others) > 1 else None
         self.col = others[1] if len(others) > 1 else others[0] if others else None
@@ -87,21 +96,18 @@ class Layout:
                 yield i, j, where
 
     def title(self, where: dict[str, int]) -> str:
-        shown = [
-            f"{f} = {value_text(self.ds, f, lv)}"
-            for f, lv in where.items()
-            if f in (self.row, self.col)
-        ]
+        shown = [self.level(f, lv) for f, lv in where.items() if f in (self.row, self.col)]
         return ", ".join(shown)
+
+    def level(self, factor: str, level: int) -> str:
+        """``factor = value units``, or the level's name from ``names``."""
+        named = self.names.get((factor, raw_value(self.ds, factor, level).item()))
+        return named or f"{factor} = {value_text(self.ds, factor, level)}"
 
     def held_note(self) -> str:
         if not self.held:
             return ""
-        return (
-            " (held: "
-            + ", ".join(f"{f} = {value_text(self.ds, f, lv)}" for f, lv in self.held.items())
-            + ")"
-        )
+        return " (held: " + ", ".join(self.level(f, lv) for f, lv in self.held.items()) + ")"
 
 
 def line_levels(ds: xr.Dataset, factor: str | None) -> list[tuple[str, dict[str, int]]]:
@@ -148,7 +154,7 @@ def run_colours(n: int) -> list[tuple[float, float, float, float]]:
     return [cmap(i / max(n - 1, 1)) for i in range(n)]
 
 
-def apart_labels(points: list[tuple[float, float, float]], box: tuple[float, float] = (0.14, 0.07)):
+def apart_labels(points: list[tuple[float, float, Any]], box: tuple[float, float] = (0.14, 0.07)):
     """The points (x, y, label) whose labels do not overlap on log axes: a label is kept only
     if no kept one lies within ``box`` (fractions of the panel's log10 span in x and y; a
     label is wider than it is tall)."""

@@ -18,10 +18,13 @@ def pct(value: float) -> str:
 
 
 def num(value: Any, digits: int = 4) -> str:
+    """``digits`` significant figures; ``inf``/``-inf`` as such, NaN (no value) as —."""
     if isinstance(value, str):
         return value
-    if value is None or not np.isfinite(value):
+    if value is None or np.isnan(value):
         return "—"
+    if not np.isfinite(value):
+        return "inf" if value > 0 else "-inf"
     return f"{value:.{digits}g}"
 
 
@@ -53,9 +56,9 @@ def units_of(ds: xr.Dataset, name: str) -> str:
 
 
 def value_text(value: Any, units: str) -> Markup:
-    """A value and its units (Markdown, escaped)."""
+    """A value and its units, none for a dimensionless "1" (Markdown, escaped)."""
     shown = num(value) if isinstance(value, int | float | np.number) else str(value)
-    return md_escape(f"{shown} {units}".rstrip())
+    return md_escape(f"{shown} {units if units != '1' else ''}".rstrip())
 
 
 def levels_of(an: xr.Dataset, term: str) -> dict[int, Any]:
@@ -72,7 +75,8 @@ def levels_of(an: xr.Dataset, term: str) -> dict[int, Any]:
 def level_text(an: xr.Dataset, factor: str, level: int) -> Markup:
     """1-based level number and the factor's value: ``2 (9 deg)`` (Markdown, escaped)."""
     units = str(an["term_units"].sel(term=factor).values)
-    return Markup(f"{level + 1} ({value_text(levels_of(an, factor)[level], units)})")
+    shown = value_text(levels_of(an, factor)[level], units if units != "1" else "")
+    return Markup(f"{level + 1} ({shown})")
 
 
 def figure(name: str, caption: str, figures: set[str]) -> list[str]:

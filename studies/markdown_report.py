@@ -1,12 +1,15 @@
 """``report.md``: a run's analysis as Markdown that can be pasted into a design review.
 
 Sections: the study and run; the design (array, column assignment with dummy levels,
-interaction and error columns); the runs; per response the range analysis, the ANOVA (pooling
-always stated), interaction effects, the variance decomposition of a full factorial, S/N
-ratios and the predicted optimum with its confidence interval; a trade-off summary when there
-are several responses; the confirmation run as a study file (also written to
-``confirmation.toml`` when the study text is known). Figures are linked by file name, only
-those that were written. Sweeps get their tables and figures.
+interaction and error columns, each factor's role: control or operating condition); the runs;
+per response the range analysis, the ANOVA (pooling always stated), interaction effects, the
+variance decomposition of a full factorial, S/N ratios and the optimum (a full factorial's best
+computed point with its neighbours, an array's predicted optimum with its confidence interval;
+per operating condition); a trade-off summary when there are several responses; for an array
+the confirmation run as a study file (``confirmation.toml``), for a full factorial a finer grid
+around the best point (``refinement.toml``), both written when the study text is known.
+Figures are linked by file name, only those that were written. Sweeps get their tables and
+figures.
 
 A renderer: every number comes from the results or from the analysis Dataset
 (:func:`studies.analysis.analyze`); nothing here computes a statistic.
@@ -19,6 +22,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import xarray as xr
 
 from studies import confirmation, taguchi
@@ -27,21 +31,22 @@ from studies.designs import orthogonal_array
 from studies.markdown_format import (
     figure,
     label,
-    level_text,
     levels_of,
     num,
     other_figures,
-    pct,
     table,
     units_of,
     value_text,
 )
-from studies.markdown_response import constant_section, optimum_levels, response_section
+from studies.markdown_optimum import computed, optimum_levels, tradeoff_section
+from studies.markdown_response import constant_section, response_section
+from studies.missing import nothing_to_analyse
 from studies.statistics import sweep_runs
 from studies.text_safety import Markup, code_span, fence, md_escape
 
 REPORT_NAME = "report.md"
 CONFIRMATION_NAME = "confirmation.toml"
+REFINEMENT_NAME = "refinement.toml"
 MAX_RUN_ROWS = 100  # runs listed in full; larger designs point to results.nc
 
 
@@ -52,18 +57,18 @@ def write_report(
     responses: Sequence[str],
     figures: Sequence[Path] = (),
 ) -> list[Path]:
-    """Write ``report.md`` (and ``confirmation.toml`` for array and factorial runs with the
-    study text) into ``folder``; return the paths, report first. ``an`` is the analysis of
-    ``ds`` (:func:`studies.analysis.analyze`)."""
+    """Write ``report.md`` (and, with the study text, ``confirmation.toml`` for an array or
+    ``refinement.toml`` for a full factorial) into ``folder``; return the paths, report first.
+    ``an`` is the analysis of ``ds`` (:func:`studies.analysis.analyze`)."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
-    text, confirmation = _report(ds, an, list(responses), {Path(f).name for f in figures})
+    text, study = _report(ds, an, list(responses), {Path(f).name for f in figures})
     path = folder / REPORT_NAME
     path.write_text(text, encoding="utf-8")
     paths = [path]
-    if confirmation and ds.attrs.get("study_toml"):
-        paths.append(folder / CONFIRMATION_NAME)
-        paths[-1].write_text(confirmation, encoding="utf-8")
+    if study and ds.attrs.get("study_toml"):
+        paths.append(folder / (REFINEMENT_NAME if computed(an) else CONFIRMATION_NAME))
+        paths[-1].write_text(study, encoding="utf-8")
     return paths
 
 
@@ -91,6 +96,7 @@ def _report(
     status = json.loads(an.attrs.get("status_responses", "[]"))
     if status:
         lines += [f"- {md_escape(status_line(an, r))}" for r in status] + [""]
+    listed = [r for r in responses if r not in status and _has_value(ds, r)]
     responses = [r for r in responses if taguchi.mean_name(ds, r) in analysed]
     if ds.attrs.get("design") == "sweep":
         lines += _sweep(ds, responses, figures)
@@ -98,7 +104,7 @@ def _report(
         return "\n".join(lines).rstrip() + "\n", ""
     view = ds.assign({n: an[n] for n in an.data_vars if "run" in an[n].dims})
     lines += _design(view, an)
-    lines += _runs(view, an, responses)
+    lines += _runs(view, an, listed)
     optimised = []
     for r in responses:
         name = taguchi.mean_name(view, r)
@@ -107,31 +113,57 @@ def _report(
             optimised.append(name)
         else:
             lines += constant_section(view, r, figures)
+    optimised = [n for n in optimised if np.isfinite(float(an["optimum_value"].sel(response=n)))]
     levels = optimum_levels(an, optimised[0]) if optimised else {}
     if len(optimised) > 1:
-        section, levels = _tradeoff(an, view, optimised)
+        section, levels = tradeoff_section(an, view, optimised)
         lines += section
-    toml = confirmation.confirmation_toml(view, levels) if levels else ""
-    if toml:
-        lines += [
-            "## Confirmation run",
-            "",
-            "The study below runs the chosen levels once (a full factorial of one point). "
+    toml, section = _next_study(ds, view, an, levels) if optimised else ("", [])
+    lines += section
+    lines += other_figures(lines, figures)
+    return "\n".join(lines).rstrip() + "\n", toml
+
+
+def _has_value(ds: xr.Dataset, response: str) -> bool:
+    """Whether ``response`` has a value (finite or ±inf) in some run: a column of the runs
+    table even when the analysis has nothing to analyse (inf in every run)."""
+    values = ds[response].values
+    return bool((~np.isnan(values)).any()) if values.dtype.kind == "f" else True
+
+
+def _next_study(
+    ds: xr.Dataset, view: xr.Dataset, an: xr.Dataset, levels: dict[str, int]
+) -> tuple[str, list[str]]:
+    """The confirmation run of an array, or the refinement grid of a full factorial: the study
+    text and the report's section on it."""
+    written = bool(ds.attrs.get("study_toml"))
+    if computed(an):
+        flat = [f for f in levels if not (an["R"].sel(term=f).values > 0).any()]
+        toml = confirmation.refinement_toml(view, levels, flat)
+        if not toml:
+            return "", []
+        intro = (
+            "Every combination was computed, so there is nothing to confirm. The study below "
+            "is a finer grid around the chosen levels (5 levels between the neighbours of each "
+            "numeric control factor that has an effect; operating conditions at all their "
+            "levels)" + (f", also written to `{REFINEMENT_NAME}`." if written else ".")
+        )
+        title = "## Refinement around the best point"
+    else:
+        toml = confirmation.confirmation_toml(view, levels)
+        intro = (
+            "The study below runs the chosen levels once"
+            + (" in every operating condition. " if confirmation.operating_factors(view) else ". ")
             + (
                 f"It is also written to `{CONFIRMATION_NAME}` in the run folder: run it with "
                 f"`python -m studies run <run folder>/{CONFIRMATION_NAME}` and compare the "
                 "result with the confirmation intervals above."
-                if ds.attrs.get("study_toml")
+                if written
                 else "Add it to the study's other tables to run it."
-            ),
-            "",
-            f"{fence(toml)}toml",
-            toml.rstrip(),
-            fence(toml),
-            "",
-        ]
-    lines += other_figures(lines, figures)
-    return "\n".join(lines).rstrip() + "\n", toml
+            )
+        )
+        title = "## Confirmation run"
+    return toml, [title, "", intro, "", f"{fence(toml)}toml", toml.rstrip(), fence(toml), ""]
 
 
 def _header(ds: xr.Dataset, responses: list[str], analysed: list[str]) -> list[str]:
@@ -153,7 +185,11 @@ def _header(ds: xr.Dataset, responses: list[str], analysed: list[str]) -> list[s
         shown.append(
             f"{md_escape(r)} ({label(str(y.attrs.get('long_name', r)), units_of(ds, r))}"
             + (f", {md_escape(sense)} is better" if sense else "")
-            + ("" if taguchi.mean_name(ds, r) in analysed else ", NaN in every run: not analysed")
+            + (
+                ""
+                if taguchi.mean_name(ds, r) in analysed
+                else f", {nothing_to_analyse(y)}: not analysed"
+            )
             + ")"
         )
     rows.append(("responses", Markup("; ".join(shown))))
@@ -183,15 +219,16 @@ def _design(ds: xr.Dataset, an: xr.Dataset) -> list[str]:
         if entry in factors:
             values = levels_of(an, entry)
             units = units_of(ds, entry)
-            role = "factor"
+            operating = str(an["term_role"].sel(term=entry).values) == "operating"
+            role = "operating condition" if operating else "factor"
             if col_levels and len(values) < col_levels:
                 dummy = ", ".join(
                     f"{j + 1} → {j % len(values) + 1}" for j in range(len(values), col_levels)
                 )
-                role = f"factor, dummy level (column level → factor level: {dummy})"
+                role = f"{role}, dummy level (column level → factor level: {dummy})"
             shown = Markup(
                 ", ".join(value_text(v, "") for v in values.values())
-                + (f" {md_escape(units)}" if units else "")
+                + (f" {md_escape(units)}" if units and units != "1" else "")
             )
         elif entry in pairs:
             role, shown = f"interaction {pairs[entry][0]} x {pairs[entry][1]}", Markup()
@@ -234,62 +271,6 @@ def _runs(view: xr.Dataset, an: xr.Dataset, responses: list[str]) -> list[str]:
         else []
     )
     return [*lines, table(header, rows), "", *note]
-
-
-def _tradeoff(
-    an: xr.Dataset, view: xr.Dataset, names: list[str]
-) -> tuple[list[str], dict[str, int]]:
-    shown = {taguchi.mean_name(view, r): r for r in json.loads(an.attrs["responses"])}
-    factors = taguchi.factor_names(view)
-    lines = [
-        "## Trade-off summary",
-        "",
-        (
-            "Best level of each factor for each response, with the factor's contribution to that "
-            "response's variation. Where the responses disagree, the chosen level is the best one "
-            "for the response the factor contributes most to."
-        ),
-        "",
-    ]
-    header = ["response", "better", *factors]
-    rows = []
-    for m in names:
-        r = an.sel(response=m)
-        cells = [
-            f"{int(r.optimum_level.sel(term=f)) + 1} ({pct(float(r.contribution.sel(source=f)))} %)"
-            for f in factors
-        ]
-        rows.append([shown.get(m, m), str(r.sense.values), *cells])
-    chosen = {f: int(an["chosen_level"].sel(term=f)) for f in factors}
-    chosen_row = [Markup("**chosen level**"), "", *[level_text(an, f, chosen[f]) for f in factors]]
-    rows.append(chosen_row)
-    rows.append(
-        [
-            "decided by",
-            "",
-            *[shown.get(str(v), str(v)) for v in an["decided_by"].sel(term=factors).values],
-        ]
-    )
-    rows.append(
-        ["conflict", "", *["yes" if c else "no" for c in an["conflict"].sel(term=factors).values]]
-    )
-    lines += [table(header, rows), ""]
-    rows = []
-    for m in names:
-        r = an.sel(response=m)
-        units = str(r.units.values)
-        rows.append(
-            [shown.get(m, m), str(r.sense.values), num(float(r.predicted)),
-             num(float(r.compromise)), num(float(r.compromise_half_width)),
-             units if units != "1" else ""]
-        )  # fmt: skip
-    lines += [
-        "Predicted mean of each response at its own optimum and at the chosen levels:",
-        "",
-        table(["response", "better", "own optimum", "chosen levels", "± (CI)", "units"], rows),
-        "",
-    ]
-    return lines, chosen
 
 
 def _sweep(ds: xr.Dataset, responses: list[str], figures: set[str]) -> list[str]:

@@ -1,5 +1,6 @@
-"""The report's section for one response: range analysis, ANOVA, variance decomposition,
-interactions, S/N and the predicted optimum, all read from the analysis Dataset."""
+"""The report's section for one response: range analysis (levels resting on runs without a
+value marked), ANOVA, variance decomposition, interactions, S/N and the optimum
+(:mod:`studies.markdown_optimum`), all read from the analysis Dataset."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import numpy as np
 import xarray as xr
 
 from studies import plots, taguchi
-from studies.analysis_text import NO_NOISE, decomposition_frame
+from studies.analysis_text import NO_NOISE, decomposition_frame, missing_notes, pooled_note
 from studies.markdown_format import (
     figure,
     label,
@@ -22,7 +23,7 @@ from studies.markdown_format import (
     units_of,
     value_text,
 )
-from studies.prediction import Prediction
+from studies.markdown_optimum import optimum_section, sn_optimum_line
 from studies.text_safety import md_escape
 
 
@@ -32,10 +33,33 @@ def _shown(view: xr.Dataset, response: str) -> str:
     return f"{response} (mean over replicates)" if replicated else response
 
 
+MAX_LEVEL_COLUMNS = 12  # level means as columns up to this many levels; more: one row each
+
+
+def _best(an: xr.Dataset, row: xr.Dataset, f: str) -> str:
+    if str(an["term_role"].sel(term=f).values) == "operating":
+        return "— (operating condition)"
+    best = int(row.best_level)
+    return level_text(an, f, best) if best >= 0 else "— (R = 0: all levels equal)"
+
+
+def _k(row: xr.Dataset, i: int) -> str:
+    """A level mean, marked * when runs at that level have no value (left out) and † when some
+    count at a bound (see the notes under the table)."""
+    mark = "*" if int(row.left_out.values[i]) else ""
+    mark += "†" if int(row.bounded.values[i]) else ""
+    return num(float(row.k.values[i])) + mark
+
+
 def _range_rows(view: xr.Dataset, an: xr.Dataset, name: str) -> tuple[list[str], list[list[Any]]]:
     r = an.sel(response=name)
     factors = taguchi.factor_names(view)
     nlevels = int(np.isfinite(r.k.sel(term=factors).values).any(axis=0).sum())
+    if nlevels > MAX_LEVEL_COLUMNS:
+        header = ["factor", "levels", "R", "rank", "best level"]
+        rows = [[f, nlevels, num(float(r.sel(term=f).R)), int(r.sel(term=f)["rank"]),
+                 _best(an, r.sel(term=f), f)] for f in factors]  # fmt: skip
+        return header, rows
     header = ["factor", *[f"k{i + 1}" for i in range(nlevels)], "R", "rank", "best level"]
     rows = []
     for f in factors:
@@ -43,13 +67,28 @@ def _range_rows(view: xr.Dataset, an: xr.Dataset, name: str) -> tuple[list[str],
         rows.append(
             [
                 f,
-                *[num(float(k)) for k in row.k.values[:nlevels]],
+                *[_k(row, i) for i in range(nlevels)],
                 num(float(row.R)),
                 int(row["rank"]),
-                level_text(an, f, int(row.best_level)),
+                _best(an, row, f),
             ]
         )
     return header, rows
+
+
+def _long_levels(view: xr.Dataset, an: xr.Dataset, name: str) -> list[str]:
+    """The level means of factors with more levels than fit as columns, one row per level."""
+    r = an.sel(response=name)
+    lines = []
+    for f in taguchi.factor_names(view):
+        row = r.sel(term=f)
+        present = np.flatnonzero(np.isfinite(row.k.values))
+        if present.size <= MAX_LEVEL_COLUMNS:
+            continue
+        values = levels_of(an, f)
+        rows = [[value_text(values[int(i)], units_of(view, f)), _k(row, int(i))] for i in present]
+        lines += [f"Level means of {md_escape(f)}:", "", table([f, "k"], rows), ""]
+    return lines
 
 
 def _anova_lines(view: xr.Dataset, an: xr.Dataset, name: str, units: str) -> list[str]:
@@ -64,6 +103,9 @@ def _anova_lines(view: xr.Dataset, an: xr.Dataset, name: str, units: str) -> lis
     ]  # fmt: skip
     squared = f"{units}²" if units.isalpha() else f"({units})²"
     header = ["source", label("SS", squared if units != "1" else ""), "dof", "MS", "F", "P", "%"]
+    for row, pooled in zip(rows, r.pooled.values, strict=True):
+        if pooled:  # its share is inside the error row: shown in parentheses, not counted twice
+            row[-1] = f"({row[-1]})"
     pooled = [str(t) for t, p in zip(an["source"].values, r.pooled.values, strict=True) if p]
     pooling = f"Pooled into error: {', '.join(pooled)}." if pooled else "No term pooled into error."
     errors = json.loads(view.attrs.get("error_columns", "[]"))
@@ -73,7 +115,8 @@ def _anova_lines(view: xr.Dataset, an: xr.Dataset, name: str, units: str) -> lis
         else "Error from the dof the terms leave"
     )
     note = str(r.anova_note.values)
-    return [table(header, rows), "", md_escape(f"{source}. {pooling} {note}".rstrip()), ""]
+    share = f" {pooled_note()}" if pooled else ""
+    return [table(header, rows), "", md_escape(f"{source}. {pooling}{share} {note}".rstrip()), ""]
 
 
 def _decomposition_lines(an: xr.Dataset, name: str) -> list[str]:
@@ -110,6 +153,9 @@ def response_section(
     ]
     header, rows = _range_rows(view, an, mean)
     lines += [table(header, rows), ""]
+    notes = missing_notes(an, mean)
+    lines += [*map(md_escape, notes), ""] if notes else []
+    lines += _long_levels(view, an, mean)
     lines += figure(f"main_effects_{response}.png", f"Main effects on {response}", figures)
     lines += ["### ANOVA", "", *_anova_lines(view, an, mean, units)]
     lines += _decomposition_lines(an, mean)
@@ -119,7 +165,7 @@ def response_section(
     sn = taguchi.sn_name(response)
     if sn in an["response"].values:
         lines += _sn_lines(view, an, response, figures)
-    lines += _optimum_lines(view, an, mean, response)
+    lines += optimum_section(view, an, mean, _shown(view, response))
     return lines
 
 
@@ -186,97 +232,7 @@ def _sn_lines(view: xr.Dataset, an: xr.Dataset, response: str, figures: set[str]
         lines[-2] += " With one observation per run the S/N is a log transform of the response."
     header, rows = _range_rows(view, an, sn)
     lines += [table(header, rows), ""]
-    p = stored_prediction(an, sn)
-    lines += [
-        f"Predicted S/N at its best levels: {num(p.mean)} dB"
-        + (
-            f" ± {num(p.half_width)} dB ({100 * (1 - p.alpha):g} % confidence)."
-            if np.isfinite(p.half_width)
-            else "."
-        ),
-        "",
-    ]
+    best = sn_optimum_line(an, sn)
+    lines += [best, ""] if best else []
     lines += figure(plots.sn_png(response), f"S/N ratio of {response}", figures)
     return lines
-
-
-def optimum_levels(an: xr.Dataset, name: str) -> dict[str, int]:
-    r = an.sel(response=name)
-    return {
-        str(t): int(level)
-        for t, level, factor in zip(
-            an["term"].values, r.optimum_level.values, an["is_factor"].values, strict=True
-        )
-        if factor
-    }
-
-
-def stored_prediction(an: xr.Dataset, name: str) -> Prediction:
-    """The predicted optimum of ``name`` as the analysis Dataset holds it."""
-    r = an.sel(response=name)
-    terms = str(r.model_terms.values)
-    return Prediction(
-        response=name,
-        units=str(r.units.values),
-        sense=str(r.sense.values),
-        levels=optimum_levels(an, name),
-        terms=tuple(terms.split(",")) if terms else (),
-        mean=float(r.predicted),
-        grand_mean=float(r.grand_mean),
-        n_eff=float(r.n_eff),
-        error_ms=float(r.error_ms),
-        error_dof=int(r.error_dof),
-        alpha=float(an.attrs["alpha"]),
-        half_width=float(r.half_width),
-        confirmation_runs=int(an.attrs["confirmation_runs"]),
-        confirmation_half_width=float(r.confirmation_half_width),
-    )
-
-
-def _optimum_lines(view: xr.Dataset, an: xr.Dataset, name: str, response: str) -> list[str]:
-    p = stored_prediction(an, name)
-    rows = [
-        [f, p.levels[f] + 1, value_text(levels_of(an, f)[p.levels[f]], units_of(view, f))]
-        for f in taguchi.factor_names(view)
-    ]
-    units = f" {md_escape(p.units)}" if p.units and p.units != "1" else ""
-    level = f"{100 * (1 - p.alpha):g} %"
-    lines = ["### Predicted optimum", "", table(["factor", "level", "value"], rows), ""]
-    lines.append(
-        f"Predicted {md_escape(_shown(view, response))} at these levels: **{num(p.mean)}{units}** "
-        f"(grand mean {num(p.grand_mean)}{units}; model terms "
-        f"{md_escape(', '.join(p.terms) or 'none')})."
-    )
-    if np.isfinite(p.half_width):
-        lo, hi = p.interval
-        clo, chi = p.confirmation_interval
-        lines.append(
-            f"{level} confidence interval of the mean: {num(lo)} … {num(hi)}{units} "
-            f"(± {num(p.half_width)}; n_eff = {num(p.n_eff)}, V_e = {num(p.error_ms)} with "
-            f"{p.error_dof} dof). A confirmation run should fall in {num(clo)} … "
-            f"{num(chi)}{units} (± {num(p.confirmation_half_width)}, "
-            f"{p.confirmation_runs} run)."
-        )
-    else:
-        lines.append("No interval: the error term has no degrees of freedom.")
-    if _shown(view, response) != response:
-        lines.append(
-            "Replicated responses are analysed as run means: the interval of a confirmation run "
-            "is for the mean of as many replicates."
-        )
-    lines += _observed(view, p, units)
-    return [*lines, ""]
-
-
-def _observed(view: xr.Dataset, p: Prediction, units: str) -> list[str]:
-    """The run that already holds the predicted combination (every one does in a full
-    factorial), as a check on the additive model."""
-    hit = np.ones(view.sizes["run"], dtype=bool)
-    for f, level in p.levels.items():
-        hit &= view[f"{f}_level"].values == level
-    runs = np.flatnonzero(hit)
-    if runs.size == 0:
-        return []
-    y = view[p.response].values[runs]
-    shown = ", ".join(f"{num(float(v))}{units} (run {i + 1})" for i, v in zip(runs, y, strict=True))
-    return [f"Observed at these levels: {shown}. The prediction is the additive model's."]

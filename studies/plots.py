@@ -14,10 +14,12 @@ from pathlib import Path
 
 import numpy as np
 import xarray as xr
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
 from studies import taguchi
-from studies.figure_style import LOG_DECADES, axis_label, map_scale, text_colour
+from studies.figure_style import LOG_DECADES, axis_label, map_scale, pretty_units, text_colour
 from studies.statistics import sweep_runs
 
 PANEL_SIZE = (3.0, 3.0)  # inches per factor panel
@@ -25,7 +27,10 @@ DPI = 120
 TITLE_CHARS_PER_INCH = 11  # what fits at the default title size
 MAP_TEXT_CELLS = 150  # maps with at most this many cells show their values
 MAP_TICKS = 12  # level labels per map axis at most (every k-th level beyond)
+MAP_MAX_SIZE = (10.0, 7.0)  # inches: a map of many levels stays a readable page
 MARKER_LEVELS = 40  # from this many levels on, main effects are a line without markers
+MAX_TICKS = 6  # level values as ticks up to this many levels; beyond, plain ticks
+MAX_PANELS_PER_ROW = 3  # main-effect panels per row (more factors wrap to further rows)
 
 
 def _title(fig: Figure, text: str) -> None:
@@ -45,12 +50,20 @@ def main_effects_figure(an: xr.Dataset, response: str) -> Figure:
     The dashed line is the grand mean of the response. Factors without numeric values are
     plotted against their 1-based level number, named, as markers without lines; 40+ levels
     are drawn as a line without markers; pass/fail checks on a 0…1 share-passing axis.
+    A level mean resting on runs without a value (:mod:`studies.missing`) is drawn hollow in
+    red and labelled with how many of its runs were left out or counted at a bound; an
+    operating factor's axis says so (its levels are conditions, not choices).
     """
     r = an.sel(response=response)
     names = [str(t) for t in an["term"].values if int(an["is_factor"].sel(term=t))]
     units = str(r.units.values)
-    fig = Figure(figsize=(PANEL_SIZE[0] * len(names), PANEL_SIZE[1]), layout="constrained")
-    axes = fig.subplots(1, len(names), sharey=True, squeeze=False)[0]
+    columns = min(len(names), MAX_PANELS_PER_ROW)
+    rows = -(-len(names) // columns)
+    fig = Figure(figsize=(PANEL_SIZE[0] * columns, PANEL_SIZE[1] * rows), layout="constrained")
+    grid = fig.subplots(rows, columns, sharey=True, squeeze=False)
+    for spare in grid.ravel()[len(names) :]:
+        spare.set_axis_off()
+    axes = grid.ravel()[: len(names)]
     for ax, f in zip(axes, names, strict=True):
         row = r.sel(term=f)
         k = row.k.values
@@ -61,20 +74,53 @@ def main_effects_figure(an: xr.Dataset, response: str) -> Figure:
         marker = "o" if present.sum() < MARKER_LEVELS else None
         ax.plot(x, k[present], marker=marker, linestyle="-" if numeric else "none")
         ax.axhline(float(r.grand_mean), linestyle="--", color="0.5", label="grand mean")
+        _mark_incomplete(ax, an, row, x, present)
         unit = str(row.term_units.values)
-        ax.set_xlabel(_label(f, unit) if numeric else f)
+        operating = str(an["term_role"].sel(term=f).values) == "operating"
+        ax.set_xlabel((_label(f, unit) if numeric else f) + (" (operating)" if operating else ""))
         if not numeric:  # categorical: the level names at their (1-based) positions
-            ax.set_xticks(x, [str(v) for v in row.level_label.values[present]], rotation=20)
-    axes[0].set_ylabel(_label(response, units))
+            labels = [str(v) for v in row.level_label.values[present]]
+            ax.set_xticks(x, labels, rotation=30, ha="right")
+        else:
+            _level_ticks(ax, x)
+    for first in grid[:, 0]:
+        first.set_ylabel(_label(response, units))
     axes[0].legend(loc="best", fontsize="small")
     k = r.k.values[np.isfinite(r.k.values)]
     if int(r.pass_fail):  # a pass/fail check: its level means are shares passing
         axes[0].set_ylim(-0.03, 1.03)
-        axes[0].set_ylabel(f"{response}: share passing")
+        for first in grid[:, 0]:
+            first.set_ylabel(f"{response}: share passing")
     elif k.size and k.min() > 0 and k.max() > LOG_DECADES * k.min():
         axes[0].set_yscale("log")  # shared: level means over more than two decades
     _title(fig, f"Main effects on {response}: {r.long_name.values}")
     return fig
+
+
+def _mark_incomplete(
+    ax: Axes, an: xr.Dataset, row: xr.Dataset, x: np.ndarray, present: np.ndarray
+) -> None:
+    """Hollow red markers and counts at the levels whose mean rests on runs without a value."""
+    runs = an["level_runs"].sel(term=row.term).values[present]
+    left, bounded = row.left_out.values[present], row.bounded.values[present]
+    meaning = str(row.none_means.values)
+    for xi, ki, n, a, b in zip(x, row.k.values[present], runs, left, bounded, strict=True):
+        if not (a or b):
+            continue
+        ax.plot([xi], [ki], marker="o", mfc="white", mec="C3", ms=7, linestyle="none", zorder=3)
+        text = [f"{a}/{n} left out"] if a else []
+        text += [f"{b}/{n} at {'bound' if meaning == 'unknown' else meaning}"] if b else []
+        ax.annotate("\n".join(text), (xi, ki), xytext=(0, 6), textcoords="offset points",
+                    ha="center", fontsize="xx-small", color="C3")  # fmt: skip
+
+
+def _level_ticks(ax: Axes, x: np.ndarray) -> None:
+    """Ticks at the level values when they are few (labels %g, so 0 and 0.001 read as such),
+    else at most ``MAX_TICKS`` plain ticks: labels never run into each other."""
+    if x.size <= MAX_TICKS:
+        ax.set_xticks(x, [f"{v:g}" for v in x], rotation=30 if x.size > 4 else 0)
+    else:
+        ax.xaxis.set_major_locator(MaxNLocator(MAX_TICKS))
 
 
 def save_main_effects(an: xr.Dataset, responses: str | Sequence[str], folder: Path) -> list[Path]:
@@ -157,7 +203,7 @@ def interaction_figure(an: xr.Dataset, response: str, a: str, b: str) -> Figure:
     for j in np.flatnonzero(cols):
         labels_b = an["level_label"].sel(term=b).values
         shown = f"{values_b[j]:g}" if np.isfinite(values_b[j]) else str(labels_b[j])
-        label = f"{b} = {shown} {units_b}".rstrip()
+        label = f"{b} = {shown} {pretty_units(units_b) if units_b != '1' else ''}".rstrip()
         ax.plot(x, means[rows, j], marker="o", label=label)
     ax.set_xlabel(_label(a, units_a) if numeric else a)
     if not numeric:  # categorical: the level names at their (1-based) positions
@@ -217,9 +263,13 @@ def map_figure(an: xr.Dataset, response: str) -> Figure | None:
     if nx < 2 or ny < 2:
         return None
     grid = r.map_mean.values[:ny, :nx]
+    if ny > nx:  # the factor with more levels along the wider side: a map, not a strip
+        fx, fy, labels_x, labels_y, nx, ny, grid = fy, fx, labels_y, labels_x, ny, nx, grid.T
     share = bool(int(r.pass_fail))
     norm, cmap = map_scale(grid, share)
-    fig = Figure(figsize=(max(5.2, 0.5 * nx + 2.6), max(4.0, 0.3 * ny + 2.2)), layout="constrained")
+    width = min(MAP_MAX_SIZE[0], max(5.2, 0.5 * nx + 2.6))
+    height = min(MAP_MAX_SIZE[1], max(4.0, 0.3 * ny + 2.2))
+    fig = Figure(figsize=(width, height), layout="constrained")
     ax = fig.subplots()
     mesh = ax.pcolormesh(
         np.arange(nx), np.arange(ny), grid, shading="nearest", cmap=cmap, norm=norm

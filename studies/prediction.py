@@ -10,11 +10,18 @@ T̄ the grand mean. Confidence interval of that mean and of the mean of r confir
 with Taguchi's effective number of replications n_eff = N / (1 + Σ_t dof_t), V_e and ν_e the
 error mean square and dof of the ANOVA. F(1 - α; 1, ν) = t(1 - α/2; ν)², so these are t
 intervals; for a balanced array they equal the OLS confidence interval of the fitted mean.
+
+Only **control** factors are chosen. **Operating** factors (attribute ``operating_factors``:
+speed, load) are conditions: the prediction is made in every condition (each combination of
+their levels) and ``mean`` is the mean over the conditions, ``worst`` the worst of them. The
+additive model is Taguchi's tool for an orthogonal array, where the optimum was usually not run;
+a full factorial computed every combination (:mod:`studies.grid_optimum`).
 """
 
 from __future__ import annotations
 
 import itertools
+import json
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -54,6 +61,15 @@ class Prediction:
     half_width: float
     confirmation_runs: int
     confirmation_half_width: float
+    conditions: tuple[dict[str, int], ...] = ({},)
+    at: tuple[float, ...] = ()
+
+    @property
+    def worst(self) -> float:
+        """The worst predicted value over the operating conditions."""
+        if not self.at:
+            return self.mean
+        return max(self.at) if self.sense == "smaller" else min(self.at)
 
     @property
     def interval(self) -> tuple[float, float]:
@@ -119,10 +135,20 @@ class _Model:
         effects = [self.means[t][self.level_of(t, levels)] - self.grand for t in self.terms]
         return self.grand + float(np.sum(effects))
 
+    def over(self, levels: Mapping[str, int], conditions: Sequence[dict[str, int]]) -> list[float]:
+        """The predicted value in each condition at the control ``levels``."""
+        return [self.value({**levels, **c}) for c in conditions]
+
     def prediction(
-        self, levels: Mapping[str, int], sense: str, alpha: float, runs: int
+        self,
+        levels: Mapping[str, int],
+        sense: str,
+        alpha: float,
+        runs: int,
+        conditions: Sequence[dict[str, int]] = ({},),
     ) -> Prediction:
         ms_e, dof_e = number(self.table, "error", "MS"), int(number(self.table, "error", "dof"))
+        at = self.over(levels, conditions)
         half = confirm = np.nan
         if dof_e > 0 and np.isfinite(ms_e):
             f = float(stats.f.ppf(1.0 - alpha, 1, dof_e))
@@ -134,7 +160,7 @@ class _Model:
             sense=sense,
             levels={f: int(v) for f, v in levels.items()},
             terms=self.terms,
-            mean=self.value(levels),
+            mean=float(np.mean(at)),
             grand_mean=self.grand,
             n_eff=float(self.n_eff),
             error_ms=ms_e,
@@ -143,7 +169,28 @@ class _Model:
             half_width=half,
             confirmation_runs=runs,
             confirmation_half_width=confirm,
+            conditions=tuple(dict(c) for c in conditions),
+            at=tuple(at),
         )
+
+
+def operating_factors(ds: xr.Dataset) -> list[str]:
+    """The factors that are operating conditions (attribute ``operating_factors``)."""
+    return list(json.loads(ds.attrs.get("operating_factors", "[]")))
+
+
+def control_factors(ds: xr.Dataset) -> list[str]:
+    """The factors whose levels are chosen (every factor that is not an operating one)."""
+    operating = set(operating_factors(ds))
+    return [f for f in factor_names(ds) if f not in operating]
+
+
+def conditions(ds: xr.Dataset) -> list[dict[str, int]]:
+    """Every combination of the operating factors' levels (last factor fastest); one empty
+    condition when there is no operating factor."""
+    names = operating_factors(ds)
+    counts = [range(int(ds[f"{f}_level"].max()) + 1) for f in names]
+    return [dict(zip(names, combo, strict=True)) for combo in itertools.product(*counts)]
 
 
 def predict(
@@ -156,19 +203,21 @@ def predict(
     confirmation_runs: int = 1,
     table: pd.DataFrame | None = None,
 ) -> Prediction:
-    """Predicted mean of ``response`` at ``levels`` (factor → 0-based level) with intervals.
+    """Predicted mean of ``response`` at ``levels`` (control factor → 0-based level) with
+    intervals, in every operating condition (operating factors given in ``levels`` are held).
 
     ``terms`` are the model terms (factors, interaction columns); by default those the ANOVA
     keeps (not pooled, see :func:`anova_table`). ``pool`` is passed to the ANOVA; ``table`` is
     that ANOVA when the caller has it already.
     """
     model = _Model(ds, response, pool, terms, table)
-    missing = sorted({f for f in factor_names(ds) if f not in levels})
+    missing = sorted({f for f in control_factors(ds) if f not in levels})
     if missing:
         msg = f"levels missing for factor(s) {missing}"
         raise ValueError(msg)
+    held = [c for c in conditions(ds) if all(levels.get(f, v) == v for f, v in c.items())]
     sense = str(ds[response].attrs.get("better", "smaller"))
-    return model.prediction(levels, sense, alpha, confirmation_runs)
+    return model.prediction(levels, sense, alpha, confirmation_runs, held)
 
 
 def predict_optimum(
@@ -181,12 +230,14 @@ def predict_optimum(
     confirmation_runs: int = 1,
     table: pd.DataFrame | None = None,
 ) -> Prediction:
-    """The best level combination of ``response`` and its predicted mean with intervals.
+    """The best control-level combination of ``response`` and its predicted mean with
+    intervals (the mean over the operating conditions; each condition in ``at``).
 
-    Each factor takes the level with the best mean, as in range analysis (``sense``: "smaller"
-    or "larger", default the response's ``better`` attribute; ties go to the lower level);
-    factors linked by an interaction term take the best combination of the additive model,
-    searched over all their level combinations.
+    Each control factor takes the level with the best mean, as in range analysis (``sense``:
+    "smaller" or "larger", default the response's ``better`` attribute; ties go to the lower
+    level); control factors linked by an interaction term take the combination of the additive
+    model that is best on average over the operating conditions, searched over all their level
+    combinations. Operating factors are never chosen.
     """
     chosen = sense or str(ds[response].attrs.get("better", "smaller"))
     if chosen not in SENSES:
@@ -194,7 +245,8 @@ def predict_optimum(
         raise ValueError(msg)
     sign = 1.0 if chosen == "smaller" else -1.0
     model = _Model(ds, response, pool, terms, table)
-    factors = factor_names(ds)
+    factors = control_factors(ds)
+    each = conditions(ds)
     levels = {}
     for f in factors:
         scores = sign * model.level_means(f)
@@ -205,8 +257,8 @@ def predict_optimum(
         counts = [range(int(ds[f"{f}_level"].max()) + 1) for f in linked]
         for combo in itertools.product(*counts):
             trial = levels | dict(zip(linked, combo, strict=True))
-            score = sign * model.value(trial)
+            score = sign * float(np.mean(model.over(trial, each)))
             if score < best:
                 best, best_levels = score, trial
         levels = best_levels
-    return model.prediction(levels, chosen, alpha, confirmation_runs)
+    return model.prediction(levels, chosen, alpha, confirmation_runs, each)

@@ -5,7 +5,8 @@ everything else renders it. Orthogonal-array and full-factorial runs get range a
 ANOVA per response (interaction columns as terms), main-effect, S/N and interaction plots, and
 for full factorials the variance decomposition and a map over the strongest factor pair;
 sweeps get a table and a response-vs-factor plot per swept factor. ``report.md``
-(:mod:`studies.markdown_report`) adds S/N ratios, the predicted optimum and the confirmation run;
+(:mod:`studies.markdown_report`) adds S/N ratios, the optimum and the confirmation (arrays) or
+refinement (full factorials) study;
 ``report.html`` (:mod:`studies.html_report`) is the same report as one self-contained page.
 """
 
@@ -18,6 +19,7 @@ import xarray as xr
 
 from studies import analysis, analysis_text, html_report, markdown_report, plots
 from studies.figure_layout import save_figures
+from studies.missing import nothing_to_analyse
 from studies.scenes import SCENES, get_scene
 
 
@@ -58,8 +60,12 @@ def write_analysis(
         figures += plots.save_interaction_plots(an, analysed, folder)
         figures += plots.save_maps(an, varying, folder)
     status = json.loads(an.attrs.get("status_responses", "[]"))
-    body += [analysis_text.status_line(an, r) for r in status]
-    body += [_no_value_note(ds[r]) for r in scalar if r not in analysed and r not in status]
+    body += [analysis_text.wrap(analysis_text.status_line(an, r)) for r in status]
+    body += [
+        analysis_text.wrap(_no_value_note(ds[r]))
+        for r in scalar
+        if r not in analysed and r not in status
+    ]
     scene_name = str(ds.attrs.get("scene", ""))
     if scene_name in SCENES:  # a plugin scene that is not installed here: generic outputs only
         scene = get_scene(scene_name)
@@ -86,9 +92,10 @@ def not_run_line(an: xr.Dataset, before: str = "") -> str:
 
 
 def _no_value_note(y: xr.DataArray) -> str:
-    """A response that is NaN in every run is a result (no jump anywhere), not an error."""
+    """A response that is NaN (or ±inf) in every run is a result (no jump anywhere, a concave
+    cam everywhere), not an error."""
     meaning = y.attrs.get("long_name", y.name)
-    return f"{y.name} ({meaning}): NaN in every design point, so there is nothing to analyse."
+    return f"{y.name} ({meaning}): {nothing_to_analyse(y)}, so there is nothing to analyse."
 
 
 def _header(ds: xr.Dataset) -> str:

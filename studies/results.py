@@ -75,7 +75,7 @@ def layout(plan: Plan, attrs: dict[str, Any]) -> xr.Dataset:
         coords[f.name] = (
             "run",
             plan.factor_values(f.name),
-            {"units": f.units, "long_name": long_name},
+            {"units": f.units, "long_name": long_name, "role": f.role},
         )
         coords[f"{f.name}_level"] = (
             "run",
@@ -111,6 +111,7 @@ def layout(plan: Plan, attrs: dict[str, Any]) -> xr.Dataset:
         "scene": d.scene,
         "design": design.name,
         "factors": json.dumps([f.name for f in d.factors]),
+        "operating_factors": json.dumps([f.name for f in d.factors if f.role == "operating"]),
         "error_columns": json.dumps(list(design.error_columns)),
         "interaction_columns": json.dumps({k: list(v) for k, v in design.interactions.items()}),
         **({} if d.pool is None else {"pool": json.dumps(list(d.pool))}),
@@ -140,6 +141,7 @@ def response_layout(plan: Plan, name: str) -> tuple[tuple[str, ...], type, dict[
         "units": r.units,
         "long_name": r.long_name,
         "better": plan.definition.sense.get(name, r.sense),
+        "none_means": plan.definition.none_means.get(name, r.none_means),
     }
     if r.bits:
         masks = {

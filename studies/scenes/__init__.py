@@ -162,7 +162,8 @@ def describe_scene(scene: Scene) -> str:
     for r in scene.responses:
         lines.append(
             f"    {r.name:<34} {r.units:<9} {r.long_name}  "
-            f"[needs {', '.join(r.needs)}; {r.sense} is better]"
+            f"[needs {', '.join(r.needs)}; {r.sense} is better"
+            + (f"; no value counts as {r.none_means}]" if r.none_means != "unknown" else "]")
         )
     if scene.curves:
         axis = scene.curve_axis

@@ -125,6 +125,9 @@ class Parameter:
         return to_si(float(value), units or self.units)
 
 
+NONE_MEANINGS = ("best", "worst", "unknown")
+
+
 @dataclass(frozen=True)
 class Response:
     """A scalar result per design point, in ``units``; ``needs`` lists the stages it uses.
@@ -134,6 +137,9 @@ class Response:
     A status code has the meaning of each value 0, 1, … in ``codes``, a status bit mask the
     meaning of each bit 1, 2, 4, … in ``bits`` (CF flag words: lower case, no spaces); both are
     stored as integers with CF flag attributes and counted, never averaged.
+    ``none_means`` says what a design point without a value (NaN: e.g. no resonance crossing
+    in the range) means for the analysis (``NONE_MEANINGS``): "best" or "worst" (it counts
+    as the best or worst value seen, a bound), or "unknown" (left out, counted per level).
     """
 
     name: str
@@ -144,6 +150,7 @@ class Response:
     flag: bool = False
     codes: tuple[str, ...] = ()
     bits: tuple[str, ...] = ()
+    none_means: str = "unknown"
 
 
 @dataclass(frozen=True)

@@ -129,8 +129,9 @@ def test_reference_reed_first_frequency_and_resonant_harmonic():
     assert row[reed.OUT_BAND_MAX] == pytest.approx(75.0)
     assert row[reed.OUT_FIRST_MARGIN] == pytest.approx(f1 - 75.0)
     assert row[reed.OUT_FIRST_MARGIN_RATIO] == pytest.approx((f1 - 75.0) / f1)
-    # Lowest harmonic reaching f1: k = ⌈f1/75⌉ = 3, at n = 120 f1/3 rpm (≈ 8172 rpm).
-    assert row[reed.OUT_HARMONIC_ORDER] == 3
+    # Lowest harmonic reaching f1: k = ⌈f1/75⌉ = 3, engine order k e = 1.5 (e = 1/2), at
+    # n = 120 f1/3 rpm (≈ 8172 rpm).
+    assert row[reed.OUT_HARMONIC_ORDER] == 1.5
     assert row[reed.OUT_RESONANCE_SPEED] == pytest.approx(120 * f1 / 3 * RPM)
     # Higher modes scale as X_n²; static stiffness 3EI/l³ and mass ρ b h l by definition.
     ratios = modes[0, reed.MODE_FREQUENCY] / f1
@@ -152,7 +153,7 @@ def test_margins_inside_and_below_the_band():
     inside, below = out
     assert inside[reed.OUT_FIRST_FREQUENCY] == pytest.approx(40.0)
     assert inside[reed.OUT_FIRST_MARGIN] == pytest.approx(-30.0)  # 30 Hz from the 10 Hz edge
-    assert inside[reed.OUT_HARMONIC_ORDER] == 1
+    assert inside[reed.OUT_HARMONIC_ORDER] == 0.5  # the event frequency: engine order e = 1/2
     assert inside[reed.OUT_RESONANCE_SPEED] == pytest.approx(120 * 40.0 * RPM)
     assert below[reed.OUT_FIRST_MARGIN] == pytest.approx(5.0)
     assert math.isnan(below[reed.OUT_HARMONIC_ORDER])

@@ -28,7 +28,8 @@ def test_readme_example_runs_to_the_end(tmp_path: Path) -> None:
     assert main(["run", str(study), "--outputs", str(outputs)]) == 0
     (results,) = outputs.glob("my_cam/*/results.nc")
     with xr.open_dataset(results) as ds:
-        assert ds.sizes["run"] == 6  # 3 base radii x 2 lifts
+        assert ds.sizes["run"] == 12  # 3 base radii x 2 lifts x 2 cam speeds
+        assert ds["cam_speed"].attrs["role"] == "operating"
         for response in ("max_contact_stress", "min_radius_of_curvature", "max_jerk"):
             assert ds[response].notnull().all()
         assert ds["acceleration"].dims == ("run", "cam_angle")

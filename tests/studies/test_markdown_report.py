@@ -238,7 +238,10 @@ def test_full_factorial_report_shows_the_observed_run_and_no_sn(tmp_path: Path) 
     assert not [f for f in files if f.name.startswith("sn_")]  # one deterministic run each
     text = (tmp_path / "report.md").read_text(encoding="utf-8")
     tables_are_well_formed(text)
-    assert "Observed at these levels: 2 MPa (run 1)" in text
+    # The best computed point, not a model prediction: run 1 holds y = 2 MPa (the grid's min).
+    assert "Best y: **2 MPa** in run 1" in text
+    assert "confidence interval" not in text
+    assert "## Confirmation run" not in text
     assert "### Signal-to-noise ratio" not in text
     assert "Does not vary over the runs (7 N in every run with a value)" in text
     assert "## Trade-off summary" not in text  # only one response varies
@@ -269,4 +272,4 @@ def test_response_nan_in_every_run_is_reported_not_fatal(design: str, tmp_path: 
     assert all(r in text for r in analysed)
     assert not any("jump_start" in f.name for f in files)
     report = (tmp_path / "report.md").read_text(encoding="utf-8")
-    assert "NaN in every run: not analysed" in report
+    assert "NaN in every design point: not analysed" in report

@@ -172,19 +172,21 @@ def reference_orders(cycle: str, thickness: float = 0.3) -> dict[str, float]:
 
 @pytest.mark.parametrize(("cycle", "events"), [("four_stroke", 0.5), ("two_stroke", 1.0)])
 def test_reference_reed_crosses_the_order_the_closed_form_says(cycle: str, events: float) -> None:
-    # Closed form: order k meets f₁ at n = 60 f₁/(k e) rpm (four-stroke e = 1/2: 120 f₁/k).
-    # 1200–9000 rpm holds k = 3 only (four-stroke: 24 516, 12 258, 8172, 6129 … rpm; orders 1
-    # and 2 are above the range) and k = 2 for a two-stroke (12 258, 6129 rpm).
+    # Closed form: harmonic k of the event frequency is engine order o = k e (multiples of the
+    # crankshaft frequency) and meets f₁ at n = 60 f₁/o rpm. 1200–9000 rpm holds k = 3 only for
+    # a four-stroke (e = 1/2: 24 516, 12 258, 8172, 6129 … rpm; engine order 1.5) and k = 2 for
+    # a two-stroke (e = 1: 12 258, 6129 rpm; engine order 2). Default max_order = 3.
     f1 = f1_closed_form(35e-3, 0.3e-3, *MATERIALS["spring_steel"])
     got = reference_orders(cycle)
-    speeds = {k: 60 * f1 / (k * events) for k in range(1, 7)}
+    speeds = {k: 60 * f1 / (k * events) for k in range(1, round(3 / events) + 1)}
     inside = [k for k, n in speeds.items() if 1200 <= n <= 9000]
     assert got["events_per_revolution"] == events
-    assert got["first_crossing_order"] == inside[0] == (3 if cycle == "four_stroke" else 2)
+    assert inside[0] == (3 if cycle == "four_stroke" else 2)
+    assert got["first_crossing_order"] == inside[0] * events == (1.5 if events == 0.5 else 2)
     assert got["first_crossing_speed"] == pytest.approx(speeds[inside[0]], rel=1e-9)
     if cycle == "four_stroke":
         assert got["first_crossing_speed"] == pytest.approx(8172, rel=1e-3)
-        assert all(speeds[k] > 9000 for k in (1, 2))  # orders 1 and 2 do not cross
+        assert all(speeds[k] > 9000 for k in (1, 2))  # orders 0.5 and 1 do not cross
     # Depth into the crossing order's band [k f_min, k f_max] to its nearest edge (< 0).
     band = inside[0] * got["band_min"], inside[0] * got["band_max"]
     assert got["first_order_margin"] == pytest.approx(max(f1 - band[1], band[0] - f1), rel=1e-9)
@@ -194,8 +196,9 @@ def test_reference_reed_crosses_the_order_the_closed_form_says(cycle: str, event
     assert got["resonance_free"] == 0
 
 
-def test_a_stiff_reed_above_the_sixth_order_is_resonance_free() -> None:
-    # f₁ must exceed 6 × 9000/120 Hz × 1.05 = 472.5 Hz: h = 0.7 mm gives f₁ = 204.3 × 0.7/0.3.
+def test_a_stiff_reed_above_engine_order_3_is_resonance_free() -> None:
+    # Engine order 3 is the sixth harmonic of a four-stroke's event frequency: f₁ must exceed
+    # 6 × 9000/120 Hz × 1.05 = 472.5 Hz; h = 0.7 mm gives f₁ = 204.3 × 0.7/0.3.
     f1 = f1_closed_form(35e-3, 0.7e-3, *MATERIALS["spring_steel"])
     assert f1 > 6 * 9000 / 120 * 1.05
     got = reference_orders("four_stroke", thickness=0.7)
@@ -203,7 +206,7 @@ def test_a_stiff_reed_above_the_sixth_order_is_resonance_free() -> None:
     assert math.isnan(got["first_crossing_order"])
     assert math.isnan(got["first_crossing_speed"])
     assert got["first_order_margin"] == pytest.approx(f1 - 6 * 9000 / 120, rel=1e-9)
-    # ... and one just inside the ±5 % margin of the sixth order is not.
+    # ... and one just inside the ±5 % margin of engine order 3 is not.
     near = (
         0.3e-3 * (6 * 9000 / 120 * 1.03) / f1_closed_form(35e-3, 0.3e-3, *MATERIALS["spring_steel"])
     )
@@ -214,17 +217,18 @@ def test_reed_resonance_writes_a_campbell_diagram(tmp_path: Path) -> None:
     result = run_plan(plan_study("reed_resonance"), tmp_path, progress=False)
     assert (result.folder / "campbell.png").stat().st_size > 20_000
     text = (result.folder / "study.toml").read_text(encoding="utf-8")
-    assert "from the first engine order alone" in text
+    assert "from the event frequency alone" in text
     assert result.dataset["resonance_free"].values.min() == 0
     ax = campbell_figure(result.dataset.load()).axes[0]
     assert ax.get_xlabel() == "engine speed [rpm]"
     assert ax.get_ylabel() == "frequency [Hz]"
     order_lines = [line for line in ax.get_lines() if len(line.get_xdata()) == 2]
-    assert len(order_lines) == 6  # orders 1…max_order
+    assert len(order_lines) == 6  # engine orders 0.5, 1, …, 3 (max_order)
+    assert "engine orders 0.5…3" in ax.get_title()
     (marks,) = [line for line in ax.get_lines() if line.get_marker() == "o"]
-    # every marked crossing sits on its order line: f = k n e / 60
+    # every marked crossing sits on its engine-order line: f = o n / 60
     ds = result.dataset
     crossing = np.isfinite(ds["first_crossing_speed"].values)
-    expected = ds["first_crossing_order"].values * ds["first_crossing_speed"].values * 0.5 / 60
+    expected = ds["first_crossing_order"].values * ds["first_crossing_speed"].values / 60
     np.testing.assert_allclose(expected[crossing], ds["first_frequency"].values[crossing])
     assert len(marks.get_xdata()) >= crossing.sum() > 0

@@ -118,3 +118,17 @@ def test_seconds_per_case_grows_the_batch_until_the_call_overhead_is_small() -> 
     sizes.clear()
     acc.seconds_per_case(run, row, max_overhead=math.inf, repeats=3)
     assert sizes == [1, 1, 1] + [acc.COST_CASES] * 3
+
+
+def test_timing_is_the_median_of_repeats_with_its_interquartile_range(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # Timings replaced by known numbers (no wall clock in a test): 5 one-case calls, then the
+    # calibration run at COST_CASES copies and 4 more; median and IQR per case from numpy.
+    timed = iter([1e-3] * 5 + [0.64, 0.96, 0.32, 6.4, 0.64])
+    monkeypatch.setattr(acc, "_seconds", lambda run, rows: next(timed))
+    median, iqr = acc.timing_per_case(lambda rows: None, np.arange(3.0), repeats=5)
+    runs = np.array([0.64, 0.96, 0.32, 6.4, 0.64]) / acc.COST_CASES
+    assert median == pytest.approx(np.median(runs))
+    assert iqr == pytest.approx(np.percentile(runs, 75) - np.percentile(runs, 25))
+    assert iqr < 0.1 * runs.max()  # one outlier (6.4) moves neither the median nor the IQR

@@ -135,6 +135,12 @@ class CamScene(Scene):
         return np.linspace(-HALF_TURN_DEG, HALF_TURN_DEG, 2 * n + 1)
 
     # --- checks ---------------------------------------------------------------------------
+    def point_warnings(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+        """The concave cams: their contact responses are inf or 0 (a result, warned)."""
+        from studies.scenes.cam.convexity import concave_cams  # noqa: PLC0415
+
+        return concave_cams(self, points, settings)
+
     def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
         found: dict[str, list[int]] = defaultdict(list)
         tables: dict[str, str | None] = {}

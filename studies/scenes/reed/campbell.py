@@ -2,13 +2,17 @@
 orders over engine speed.
 
 Each stored mode frequency is a horizontal line (a band from its lowest to its highest value
-when it varies over the design points); each engine order k is the line f = k·n·e/60 (e events
-per crank revolution, from the ``events_per_revolution`` response); the study's speed range is
-shaded; the crossings within it (the ``*_crossing_order`` / ``*_crossing_speed`` responses)
-are marked and labelled with order and speed. Axes in rpm and Hz.
+when it varies over the design points); each engine order o (a multiple of the crankshaft
+frequency: o = k·e for harmonic k of the reed's event frequency, e events per crank revolution
+from the ``events_per_revolution`` response, so 0.5, 1, 1.5, … for a four-stroke) is the line
+f = o·n/60, up to the study's ``max_order``; the study's speed range is shaded; the crossings
+within it (the ``*_crossing_order`` / ``*_crossing_speed`` responses) are marked and labelled
+with order and speed. Axes in rpm and Hz.
 """
 
 from __future__ import annotations
+
+import json
 
 import numpy as np
 import xarray as xr
@@ -17,7 +21,7 @@ from matplotlib.figure import Figure
 MODES = ("first", "second", "third", "fourth")
 HATCHES = ("//", "\\\\", "..", "xx")
 MAX_LABELS = 8  # crossings labelled with order and speed when there are no more than this
-MIN_ORDERS = 6  # orders drawn at least (more when a crossing has a higher one)
+DEFAULT_MAX_ORDER = 3.0  # the scene's default max_order, for results that do not record it
 
 
 def campbell_figure(ds: xr.Dataset) -> Figure | None:
@@ -30,17 +34,18 @@ def campbell_figure(ds: xr.Dataset) -> Figure | None:
     speed_hi = float(np.nanmax(ds["band_max"].values)) * 60.0 / events
     modes = [m for m in MODES if f"{m}_frequency" in ds.data_vars]
     crossings = _crossings(ds, modes)
-    orders = max([MIN_ORDERS, *(int(k) for k, _, _ in crossings)])
+    highest_order = max([_max_order(ds), *(k for k, _, _ in crossings)])
+    orders = events * np.arange(1, round(highest_order / events) + 1)
     top = 1.25 * speed_hi
     fig = Figure(figsize=(7.0, 4.6), layout="constrained")
     ax = fig.subplots()
     ax.axvspan(speed_lo, speed_hi, color="0.9", label="speed range", zorder=0)
     speed = np.array([0.0, top])
     highest = 0.0
-    for k in range(1, orders + 1):
-        f = k * speed * events / 60.0
+    for order in orders:
+        f = order * speed / 60.0
         ax.plot(speed, f, color="0.45", lw=0.8, zorder=1)
-        ax.annotate(f"{k}", (top, f[-1]), xytext=(3, 0), textcoords="offset points",
+        ax.annotate(f"{order:g}", (top, f[-1]), xytext=(3, 0), textcoords="offset points",
                     fontsize="small", color="0.3", va="center")  # fmt: skip
         highest = f[-1]
     for j, m in enumerate(modes):
@@ -75,11 +80,18 @@ def campbell_figure(ds: xr.Dataset) -> Figure | None:
     ax.set_xlabel("engine speed [rpm]")
     ax.set_ylabel("frequency [Hz]")
     ax.set_title(
-        f"Campbell diagram: engine orders 1…{orders} (at the right), {events:g} event/rev",
+        f"Campbell diagram: engine orders {orders[0]:g}…{orders[-1]:g} (at the right; "
+        f"multiples of crankshaft speed), reed opens {events:g}× per revolution",
         fontsize="medium",
     )
     ax.legend(loc="upper left", fontsize="small")
     return fig
+
+
+def _max_order(ds: xr.Dataset) -> float:
+    """The study's ``max_order`` setting (the scene's default when the results lack it)."""
+    settings = json.loads(ds.attrs.get("settings", "{}"))
+    return float(settings.get("max_order", DEFAULT_MAX_ORDER))
 
 
 def _crossings(ds: xr.Dataset, modes: list[str]) -> list[tuple[float, float, float]]:

@@ -8,7 +8,14 @@ which it does, for every mode the lowest engine order (up to the setting ``max_o
 crosses it within the speed range, at which speed, and the margin to the nearest order band,
 ``resonance_free`` (no order crosses any mode within ±``resonance_margin``), and (as curves)
 the mode shapes along the reed. ``first_mode_clear``/``all_modes_clear`` compare with the
-first-order band only; ``campbell.png`` shows the orders against the modes.
+band of the event frequency only; ``campbell.png`` shows the orders against the modes.
+
+Orders are **engine orders**: multiples of the crankshaft frequency, as the ``crank`` scene's
+``torque_order_*`` (SPEC §5, §6). The reed opens e times per crank revolution (e = 0.5 for a
+four-stroke), so harmonic k of its event frequency is engine order k·e: a four-stroke's reed
+sees orders 0.5, 1, 1.5, …, and the reference reed's 204 Hz meets order 1.5 at 8172 rpm
+(n = 60 f/o). A missing crossing (no order up to ``max_order`` meets the mode in the speed
+range) is the best outcome: those responses declare ``none_means = "best"``.
 
 Materials (the ``material`` factor has string levels; E and ρ from this table):
 
@@ -123,8 +130,9 @@ SETTINGS: tuple[Parameter, ...] = (
     Parameter(
         "max_order",
         "1",
-        6.0,
-        "highest engine order checked against every natural frequency",
+        3.0,
+        "highest engine order (multiple of the crankshaft frequency) checked against every "
+        "natural frequency; a four-stroke's reed is checked at orders 0.5, 1, …, max_order",
         1.0,
         100.0,
         integer=True,
@@ -150,29 +158,33 @@ def _mode_responses() -> tuple[Response, ...]:
             Response(
                 f"{word}_margin",
                 "Hz",
-                f"margin of the {word} mode to the first-order excitation band (> 0 outside, "
-                "< 0 inside; higher orders: order_margin)",
+                f"margin of the {word} mode to the band of the event frequency (engine order "
+                "e: 0.5 four-stroke; > 0 outside, < 0 inside; other orders: order_margin)",
                 NEEDS,
                 "larger",
             ),
             Response(
                 f"{word}_crossing_order",
                 "1",
-                f"lowest engine order (≤ max_order) crossing the {word} mode in the speed range",
+                f"lowest engine order (≤ max_order; multiples of the crankshaft frequency) "
+                f"crossing the {word} mode in the speed range (none: no crossing)",
                 NEEDS,
                 "larger",
+                none_means="best",
             ),
             Response(
                 f"{word}_crossing_speed",
                 "rpm",
-                f"engine speed at which that order meets the {word} mode",
+                f"engine speed at which that order meets the {word} mode (none: no crossing)",
                 NEEDS,
                 "larger",
+                none_means="best",
             ),
             Response(
                 f"{word}_order_margin",
                 "Hz",
-                f"margin of the {word} mode to the order bands 1…max_order over the speed range "
+                f"margin of the {word} mode to the engine-order bands up to max_order over the "
+                "speed range "
                 "(> 0: distance to the nearest band; < 0: depth into the crossing order's band)",
                 NEEDS,
                 "larger",
@@ -191,8 +203,8 @@ RESPONSES: tuple[Response, ...] = (
     Response(
         "first_mode_clear",
         "1",
-        "first natural frequency outside the first-order band (only the fundamental of the "
-        "excitation: see resonance_free for its harmonics)",
+        "first natural frequency outside the band of the event frequency (only the "
+        "fundamental of the excitation: see resonance_free for the other engine orders)",
         NEEDS,
         "larger",
         flag=True,
@@ -200,8 +212,8 @@ RESPONSES: tuple[Response, ...] = (
     Response(
         "all_modes_clear",
         "1",
-        f"all {N_MODES} natural frequencies outside the first-order band (only the fundamental "
-        "of the excitation: see resonance_free for its harmonics)",
+        f"all {N_MODES} natural frequencies outside the band of the event frequency (only the "
+        "fundamental of the excitation: see resonance_free for the other engine orders)",
         NEEDS,
         "larger",
         flag=True,
@@ -209,7 +221,7 @@ RESPONSES: tuple[Response, ...] = (
     Response(
         "resonance_free",
         "1",
-        f"no engine order 1…max_order crosses any of the {N_MODES} modes within "
+        f"no engine order up to max_order crosses any of the {N_MODES} modes within "
         "±resonance_margin over the speed range",
         NEEDS,
         "larger",
@@ -224,12 +236,19 @@ RESPONSES: tuple[Response, ...] = (
     Response(
         "harmonic_order",
         "1",
-        "lowest engine-order harmonic of the band reaching f₁",
+        "engine order of the lowest harmonic of the event frequency whose band reaches f₁ "
+        "(any order; none: f₁ falls between two bands)",
         NEEDS,
         "larger",
+        none_means="best",
     ),
     Response(
-        "resonance_speed", "rpm", "engine speed at which that harmonic meets f₁", NEEDS, "larger"
+        "resonance_speed",
+        "rpm",
+        "engine speed at which that order meets f₁ (none: no order reaches f₁)",
+        NEEDS,
+        "larger",
+        none_means="best",
     ),
     Response("tip_stiffness", "N/m", "static tip stiffness 3EI/l³", NEEDS, "larger"),
     Response("mass", "g", "reed mass ρ b h l", NEEDS),
@@ -346,7 +365,7 @@ class ReedScene(Scene):
         si["all_modes_clear"] = (modes[:, rd.MODE_MARGIN, :] > 0).all(axis=1).astype(float)
         orders = np.empty((n, N_MODES, rd.N_ORDER_OUT))
         frequencies = np.ascontiguousarray(modes[:, rd.MODE_FREQUENCY, :])
-        max_order, margin = int(settings["max_order"]), float(settings["resonance_margin"])
+        max_order, margin = float(settings["max_order"]), float(settings["resonance_margin"])
         rd.order_batch(frequencies, params, max_order, margin, orders)
         for k, word in enumerate(MODE_WORDS):
             si[f"{word}_crossing_order"] = orders[:, k, rd.CROSSING_ORDER]

@@ -7,7 +7,8 @@ this scene declares them as parameters (``integrator``, ``angle_step``) and adds
 * ``reference`` — the error of each run against scipy's event-restarted reference
   (:mod:`studies.scenes.valve.accuracy_reference`), computed once per distinct set of the other parameters
   (e.g. once per camshaft speed × seat stiffness pair) and reused by every integrator and step;
-* ``cost`` — measured seconds per case of the integrator's batch kernel (a timing).
+* ``cost`` — measured seconds per case of the integrator's batch kernel (a timing: the median
+  of repeats, with their interquartile range stored beside it whenever it runs).
 
 Every ``valve`` response is available; the design points of one (integrator, step) pair are
 evaluated together by the ``valve`` machinery with those settings.
@@ -84,8 +85,15 @@ RESPONSES: tuple[Response, ...] = (
     Response(
         "cost_per_case",
         "ms",
-        "measured time per case of the batch kernel (a wall-clock timing: varies from run to "
-        "run and machine to machine)",
+        "measured time per case of the batch kernel: median of repeated timings (wall clock: "
+        "varies from run to run and machine to machine; spread in cost_per_case_iqr)",
+        COST,
+    ),
+    Response(
+        "cost_per_case_iqr",
+        "ms",
+        "interquartile range of the repeated timings behind cost_per_case (costs closer than "
+        "their spreads are not different)",
         COST,
     ),
 )
@@ -101,6 +109,7 @@ class ValveAccuracyScene(ValveScene):
     curves = ()
     curve_axis = None
     stage_order = ("tappet", "rocker", "dynamics", "jump_speed", "reference", "cost")
+    status_responses = (*ValveScene.status_responses, "cost_per_case_iqr")  # beside every cost
 
     # --- outputs beside the generic ones -----------------------------------------------------
     def figures(self) -> dict[str, FigureBuilder]:
@@ -196,6 +205,7 @@ class ValveAccuracyScene(ValveScene):
         integrator = settings["integrator"]
         step = step_deg(settings["angle_step"])
         ctx["cost"] = np.full(ctx["n"], np.nan)
+        ctx["cost_iqr"] = np.full(ctx["n"], np.nan)
         for key, idx in ctx["groups"].items():
             if not self.chain_valid(ctx, key):
                 continue
@@ -207,7 +217,7 @@ class ValveAccuracyScene(ValveScene):
                 flags = kernel_settings(settings, integrator, False)
                 run = partial(_run_kernel, self.excitation(ctx, key, step), integrator, flags)
             for i, row in zip(idx, valve_rows(ctx["points"], idx), strict=True):
-                ctx["cost"][i] = acc.seconds_per_case(run, row)
+                ctx["cost"][i], ctx["cost_iqr"][i] = acc.timing_per_case(run, row)
 
     def dopri_cost_run(
         self, ctx: dict[str, Any], key: tuple, step: float, rows: np.ndarray
@@ -233,6 +243,8 @@ class ValveAccuracyScene(ValveScene):
             return ctx["reference_error"] * MM
         if response == "cost_per_case":
             return ctx["cost"] * MS
+        if response == "cost_per_case_iqr":
+            return ctx["cost_iqr"] * MS
         return super().scalar(ctx, response)
 
 

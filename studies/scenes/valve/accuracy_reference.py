@@ -14,9 +14,11 @@ differs by round-off, so its trajectory comes from the lane kernel itself.
 Cost per case is a wall-clock timing: the integrator (or the tolerance ladder) runs copies of
 the design point, at least ``COST_CASES`` (two lane blocks so both cores work) and enough that
 the fixed cost of a call (measured as a call with one case: dispatch, thread start, tables)
-is at most ``MAX_OVERHEAD`` of a run; the median of ``COST_REPEATS`` runs is divided by the
-number of cases. On a loaded machine that fixed cost was 10–24 ms, 100× the kernel's time for
-64 lane cases. It varies from run to run and machine to machine; compare within one run.
+is at most ``MAX_OVERHEAD`` of a run; the median of ``COST_REPEATS`` runs at that size is
+divided by the number of cases, and their interquartile range (IQR) is stored beside it
+(``cost_per_case_iqr``): a difference smaller than the spreads is noise. On a loaded machine
+that fixed cost was 10–24 ms, 100× the kernel's time for 64 lane cases. It varies from run to
+run and machine to machine; compare within one run.
 """
 
 from __future__ import annotations
@@ -40,7 +42,7 @@ uses (1/256° after six halvings of 0.5°). At 1/64° the reference's own table 
 COST_CASES = 64
 MAX_COST_CASES = 1 << 16
 MAX_OVERHEAD = 0.05
-COST_REPEATS = 3
+COST_REPEATS = 5
 MAX_DENOMINATOR = 1_000_000
 
 Excitation = tuple[np.ndarray, float, float]
@@ -98,11 +100,23 @@ def seconds_per_case(
     max_overhead: float = MAX_OVERHEAD,
     repeats: int = COST_REPEATS,
 ) -> float:
-    """Median wall-clock seconds per case of ``run`` on copies of ``row``.
+    """Median wall-clock seconds per case of ``run`` on copies of ``row`` (see
+    :func:`timing_per_case`)."""
+    return timing_per_case(run, row, max_overhead, repeats)[0]
+
+
+def timing_per_case(
+    run: Callable[[np.ndarray], object],
+    row: np.ndarray,
+    max_overhead: float = MAX_OVERHEAD,
+    repeats: int = COST_REPEATS,
+) -> tuple[float, float]:
+    """Median and interquartile range of the wall-clock seconds per case of ``run`` on copies
+    of ``row``.
 
     The fixed cost of a call is the median time of ``repeats`` calls with one case; the copies
     start at ``COST_CASES`` and double until it is at most ``max_overhead`` of one run (at
-    most ``MAX_COST_CASES`` copies), then the median of ``repeats`` runs counts.
+    most ``MAX_COST_CASES`` copies); that run and ``repeats`` − 1 more are the timings.
     """
     single = np.ascontiguousarray(row[None, :])
     fixed = float(np.median([_seconds(run, single) for _ in range(repeats)]))
@@ -113,8 +127,9 @@ def seconds_per_case(
         if fixed <= max_overhead * elapsed or cases >= MAX_COST_CASES:
             break
         cases *= 2
-    times = [elapsed] + [_seconds(run, rows) for _ in range(repeats - 1)]
-    return float(np.median(times)) / cases
+    times = np.array([elapsed] + [_seconds(run, rows) for _ in range(repeats - 1)]) / cases
+    low, high = np.percentile(times, [25.0, 75.0])
+    return float(np.median(times)), float(high - low)
 
 
 def _seconds(run: Callable[[np.ndarray], object], rows: np.ndarray) -> float:

@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter
 
 from studies.figure_layout import (
     Layout,
@@ -83,8 +84,9 @@ def error_vs_cost_figure(ds: xr.Dataset) -> Figure | None:
         return None
     if not {"integrator", "angle_step"} <= set(factors):
         return None
-    layout = Layout(ds, ["integrator", "angle_step"])
+    layout = Layout(ds, ["integrator", "angle_step"], {("tolerance", 0.0): "fixed step"})
     fig, axes = layout.figure((3.8, 3.0))
+    spread = ds["cost_per_case_iqr"].values if "cost_per_case_iqr" in ds else None
     for i, j, where in layout.panels():
         ax = axes[i, j]
         points = []
@@ -92,7 +94,12 @@ def error_vs_cost_figure(ds: xr.Dataset) -> Figure | None:
             runs = runs_where(ds, where | cond)
             runs = runs[np.argsort(-ds["angle_step"].values[runs])]
             cost, error = ds["cost_per_case"].values[runs], ds["reference_error"].values[runs]
-            ax.loglog(cost, error, marker="o", color=f"C{k}", label=label)
+            half = None if spread is None else 0.5 * spread[runs]
+            ax.errorbar(cost, error, xerr=half, marker="o", color=f"C{k}", label=label,
+                        elinewidth=0.8, capsize=2)  # fmt: skip
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.xaxis.set_minor_formatter(NullFormatter())
             steps = ds["angle_step"].values[runs]
             points += list(zip(cost, error, steps, strict=True))
         for cx, ey, step in apart_labels(points):
@@ -106,13 +113,14 @@ def error_vs_cost_figure(ds: xr.Dataset) -> Figure | None:
         ax.set_title(layout.title(where), fontsize="small")
         ax.grid(alpha=0.3, which="both")
     for ax in axes[-1]:
-        ax.set_xlabel(f"{short_label(ds, 'cost_per_case')} (timing)")
+        ax.set_xlabel(f"{short_label(ds, 'cost_per_case')} (median)")
     for ax in axes[:, 0]:
         ax.set_ylabel(f"{short_label(ds, 'reference_error')}: max |y − y_ref|")
     axes[0, 0].legend(title="integrator", fontsize="x-small", title_fontsize="x-small")
     fig.suptitle(
-        "Error against the scipy reference vs cost per case (labels: RK4 step, where apart)\n"
-        f"{layout.held_note().strip()}",
+        "Error against the scipy reference vs cost per case (labels: RK4 step, where apart"
+        + ("; bars: interquartile range of the timings" if spread is not None else "")
+        + f")\n{layout.held_note().strip()}",
         fontsize="medium",
     )
     return fig

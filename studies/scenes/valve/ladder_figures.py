@@ -2,8 +2,10 @@
 
 One panel per compared response: the change of the answer from the finest rung of the study
 (the most coil masses) against the measured cost per case, a line per combination of the
-other factors, each point labelled by its rung (``lumped`` or ``N``); on the log axis the
-finest rung itself (change 0) has no point.
+other factors, each point labelled by its rung (``lumped`` or ``N``) where labels do not
+collide; on the log axis the finest rung itself (change 0) has no point. The cost is a timing:
+the median of repeats, with a horizontal bar over their interquartile range
+(``cost_per_case_iqr``) — costs whose bars overlap are not different.
 """
 
 from __future__ import annotations
@@ -13,8 +15,15 @@ import itertools
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter
 
-from studies.figure_layout import design_factors, factor_levels, runs_where, value_text
+from studies.figure_layout import (
+    apart_labels,
+    design_factors,
+    factor_levels,
+    runs_where,
+    value_text,
+)
 from studies.plots import axis_label
 
 COMPARED = (
@@ -49,6 +58,7 @@ def ladder_figure(ds: xr.Dataset) -> Figure | None:
     masses = ds["spring_masses"].values
     for ax, name in zip(axes, names, strict=True):
         values = ds[name].values.astype(float)
+        points: list[tuple[float, float, str]] = []
         for k, combo in enumerate(combos):
             where = dict(zip(others, combo, strict=True))
             runs = runs_where(ds, where)
@@ -58,24 +68,23 @@ def ladder_figure(ds: xr.Dataset) -> Figure | None:
             cost = ds["cost_per_case"].values[runs]
             shown = np.where(change > 0, change, np.nan)
             label = ", ".join(value_text(ds, f, lv) for f, lv in where.items()) or None
-            ax.plot(cost, shown, marker="o", color=f"C{k % 10}", label=label)
-            for x, y, rung in zip(cost, shown, masses[runs], strict=True):
-                if not np.isfinite(y):
-                    continue
-                ax.annotate(
-                    _rung_label(rung),
-                    (x, y),
-                    fontsize="xx-small",
-                    xytext=(3, 3),
-                    textcoords="offset points",
-                )
+            ax.errorbar(cost, shown, xerr=_half_spread(ds, runs), marker="o", color=f"C{k % 10}",
+                        label=label, elinewidth=0.8, capsize=2)  # fmt: skip
+            points += [
+                (x, y, _rung_label(m)) for x, y, m in zip(cost, shown, masses[runs], strict=True)
+            ]
+        for x, y, text in apart_labels(points):
+            ax.annotate(
+                text, (x, y), fontsize="xx-small", xytext=(3, 3), textcoords="offset points"
+            )
         ax.set_xscale("log")
         ax.set_yscale("log")
+        ax.xaxis.set_minor_formatter(NullFormatter())  # a narrow decade: no crowded minor labels
         ax.grid(alpha=0.3, which="both")
         units = ds[name].attrs.get("units", "")
         ax.set_title(name, fontsize="small")
         ax.set_ylabel(axis_label("|change| from the finest rung", units))
-        ax.set_xlabel(axis_label("cost per case (timing)", ds["cost_per_case"].attrs["units"]))
+        ax.set_xlabel(axis_label("cost per case (median)", ds["cost_per_case"].attrs["units"]))
     if len(combos) > 1:
         handles, labels = axes[0].get_legend_handles_labels()
         spare = len(grid) > len(names)
@@ -86,9 +95,17 @@ def ladder_figure(ds: xr.Dataset) -> Figure | None:
             loc="center" if spare else "best",
             fontsize="small" if spare else "xx-small",
         )
+    spread = "bars: interquartile range of the timings; " if "cost_per_case_iqr" in ds else ""
     fig.suptitle(
         "Spring-model ladder: change of each answer from the finest rung "
-        f"(N={masses.max():g}) vs cost per case\n(lumped = m_s/3 on the valve)",
+        f"(N={masses.max():g}) vs cost per case\n({spread}lumped = m_s/3 on the valve)",
         fontsize="medium",
     )
     return fig
+
+
+def _half_spread(ds: xr.Dataset, runs: np.ndarray) -> np.ndarray | None:
+    """Half the interquartile range of the timings (an error bar of that total length)."""
+    if "cost_per_case_iqr" not in ds:
+        return None
+    return 0.5 * ds["cost_per_case_iqr"].values[runs]

@@ -1,0 +1,128 @@
+"""The best computed point of a full factorial, with its neighbours, per operating condition.
+
+Every level combination of a full factorial was computed, so its optimum is not predicted: it
+is the best run. Factors have a role (:mod:`studies.definition_values`): only **control**
+factors are chosen; **operating** factors (speed, load) are conditions the design must meet at
+every level. With operating factors, the design points form a table of control combinations ×
+conditions (the operating-level combinations); the chosen control combination is the one with
+the best mean over the conditions (ties: the first in grid order), and the table gives its value
+in each condition, the worst of them, and the best run of each condition on its own.
+Neighbours: the control combinations one level below and above the chosen one in each control
+factor, others fixed (their mean over the conditions), which shows whether the optimum is flat
+and whether it sits at the edge of the grid. O(N) in the design points.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+SIDES = ("below", "above")
+
+
+@dataclass(frozen=True)
+class GridOptimum:
+    """The chosen control levels (0-based; empty when nothing varies under control) and, per
+    condition, the value and run there and the best run of that condition. ``neighbours``:
+    control factor → ((mean, run), (mean, run)) one level below and above (NaN, -1 at an edge;
+    the run only when there is a single condition)."""
+
+    levels: dict[str, int]
+    at: np.ndarray
+    runs: np.ndarray
+    best_values: np.ndarray
+    best_runs: np.ndarray
+    neighbours: dict[str, tuple[tuple[float, int], tuple[float, int]]]
+
+    @property
+    def mean(self) -> float:
+        return float(np.mean(self.at)) if self.at.size else math.nan
+
+
+class Grid:
+    """The runs of a complete full factorial as control combinations × operating conditions.
+
+    ``order``: the grid order of :func:`studies.results.grid_order` (run index of each grid
+    cell, factors in ``factors`` order, last factor fastest)."""
+
+    def __init__(
+        self,
+        factors: Sequence[str],
+        counts: Sequence[int],
+        order: np.ndarray,
+        operating: Sequence[str],
+    ) -> None:
+        self.control = [f for f in factors if f not in operating]
+        self.operating = [f for f in factors if f in operating]
+        index = {f: i for i, f in enumerate(factors)}
+        self.control_counts = tuple(int(counts[index[f]]) for f in self.control)
+        self.operating_counts = tuple(int(counts[index[f]]) for f in self.operating)
+        perm = [index[f] for f in (*self.control, *self.operating)]
+        grid = np.asarray(order).reshape(tuple(counts)).transpose(perm)
+        self.runs = grid.reshape(math.prod(self.control_counts), math.prod(self.operating_counts))
+
+    def conditions(self) -> list[dict[str, int]]:
+        """The operating-level combinations, in the column order of :meth:`table`."""
+        return [
+            dict(zip(self.operating, combo, strict=True))
+            for combo in itertools.product(*(range(n) for n in self.operating_counts))
+        ]
+
+    def table(self, y: np.ndarray) -> np.ndarray:
+        """``y`` (per run) as control combinations × conditions."""
+        return np.asarray(y, dtype=float)[self.runs]
+
+    def combination(self, levels: Mapping[str, int]) -> int:
+        """Row of :meth:`table` holding the control ``levels``."""
+        if not self.control:
+            return 0
+        codes = tuple(int(levels[f]) for f in self.control)
+        return int(np.ravel_multi_index(codes, self.control_counts))
+
+    def at(self, y: np.ndarray, levels: Mapping[str, int]) -> tuple[np.ndarray, np.ndarray]:
+        """Value and run in each condition at the control ``levels``."""
+        row = self.combination(levels)
+        return self.table(y)[row], self.runs[row]
+
+    def optimum(self, y: np.ndarray, sense: str) -> GridOptimum | None:
+        """The best computed control combination of ``y`` (NaN where a run has no value: a
+        combination missing a condition is not chosen); None if none is complete."""
+        values = self.table(y)
+        signed = values if sense == "smaller" else -values
+        with np.errstate(invalid="ignore"):
+            mean = signed.mean(axis=1)
+        if not np.isfinite(mean).any():
+            return None
+        row = int(np.nanargmin(mean))
+        codes = np.unravel_index(row, self.control_counts) if self.control else ()
+        levels = {f: int(c) for f, c in zip(self.control, codes, strict=True)}
+        best_values = np.full(values.shape[1], np.nan)
+        best_runs = np.full(values.shape[1], -1, dtype=np.int64)
+        for j in range(values.shape[1]):
+            column = signed[:, j]
+            if np.isfinite(column).any():
+                k = int(np.nanargmin(column))
+                best_values[j], best_runs[j] = values[k, j], self.runs[k, j]
+        sign = 1.0 if sense == "smaller" else -1.0
+        neighbours = {
+            f: (
+                self._neighbour(mean * sign, levels, f, -1),
+                self._neighbour(mean * sign, levels, f, 1),
+            )
+            for f in self.control
+        }
+        return GridOptimum(levels, values[row], self.runs[row], best_values, best_runs, neighbours)
+
+    def _neighbour(
+        self, mean: np.ndarray, levels: Mapping[str, int], factor: str, step: int
+    ) -> tuple[float, int]:
+        level = levels[factor] + step
+        if not 0 <= level < self.control_counts[self.control.index(factor)]:
+            return math.nan, -1
+        row = self.combination({**levels, factor: level})
+        run = int(self.runs[row, 0]) if self.runs.shape[1] == 1 else -1
+        return float(mean[row]), run

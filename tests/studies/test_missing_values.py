@@ -1,0 +1,101 @@
+"""Runs without a value, stated where they act (issue 23, item 3).
+
+The shipped reed study: at length 25 mm, 3 of the 15 design points have no crossing of any
+engine order up to max_order — the best designs. ``first_crossing_order`` declares
+``none_means = "best"``, so those points count at the best order seen (a bound), not dropped.
+Expected level means are recomputed here from the results with numpy.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from studies.analysis import analyze
+from studies.analysis_text import format_tables
+from studies.markdown_report import report_text
+from studies.plan import plan_study
+from studies.plots import main_effects_figure
+from studies.results import build_dataset
+from studies.runner import evaluate
+
+NAME = "first_crossing_order"
+
+
+@pytest.fixture(scope="module")
+def reed() -> xr.Dataset:
+    plan = plan_study("reed_resonance")
+    return build_dataset(plan, evaluate(plan, progress=False), {})
+
+
+def test_reed_no_crossing_counts_as_best_at_length_25(reed: xr.Dataset) -> None:
+    y = reed[NAME].values
+    at_25 = reed["length_level"].values == 0
+    assert reed[NAME].attrs["none_means"] == "best"
+    assert np.isnan(y[at_25]).sum() == 3  # the issue's three points
+    assert np.isnan(y).sum() == 3  # ... and no others
+    best = np.nanmax(y)  # larger is better: the highest engine order that crosses
+    assert best == 3.0  # engine order 3 = max_order
+    expected = np.where(np.isnan(y[at_25]), best, y[at_25]).mean()  # 15 runs, 3 at the bound
+    an = analyze(reed)
+    r = an.sel(response=NAME, term="length")
+    assert float(r.k.values[0]) == pytest.approx(expected, rel=1e-12)
+    assert float(r.k.values[0]) > np.nanmean(y[at_25])  # dropping them made 25 mm look worse
+    assert int(r.bounded.values[0]) == 3
+    assert int(r.left_out.values.sum()) == 0
+    assert float(an["best_bound"].sel(response=NAME)) == best
+    assert int(r.best_level) == 0  # 25 mm: the highest crossing orders, none counted as best
+    assert "left out" not in str(an["anova_note"].sel(response=NAME).values)  # all 75 runs
+    assert int(an["dof"].sel(response=NAME, source="total")) == 74
+    text = format_tables(an, NAME)
+    assert "†" in text
+    assert "length = 25 mm: 3 of 15" in text
+    assert "best value seen (3)" in text
+    report = report_text(reed, an, [NAME])
+    assert "length = 25 mm: 3 of 15" in report
+
+
+def test_unknown_leaves_runs_out_and_says_how_many_per_level(reed: xr.Dataset) -> None:
+    ds = reed.copy()
+    ds[NAME].attrs["none_means"] = "unknown"
+    y = ds[NAME].values
+    at_25 = ds["length_level"].values == 0
+    an = analyze(ds)
+    r = an.sel(response=NAME, term="length")
+    assert float(r.k.values[0]) == pytest.approx(np.nanmean(y[at_25]), rel=1e-12)  # 12 runs
+    assert int(r.left_out.values[0]) == 3
+    assert int(r.left_out.values[1:].sum()) == 0
+    assert "3 run(s) with no finite value" in str(an["anova_note"].sel(response=NAME).values)
+    text = format_tables(an, NAME)
+    assert "*" in text
+    assert "length = 25 mm: 3 of 15" in text
+    ax = main_effects_figure(an, NAME).axes[0]  # the length panel
+    hollow = [line for line in ax.get_lines() if line.get_markerfacecolor() == "white"]
+    assert len(hollow) == 1
+    np.testing.assert_allclose(hollow[0].get_xdata(), [25.0])
+    assert any(t.get_text() == "3/15 left out" for t in ax.texts)
+
+
+def test_inf_is_a_value_beyond_every_finite_one(tmp_path: Path) -> None:
+    # A smaller-is-better response with +inf at two runs: they count at the worst finite value
+    # (a bound), and the runs table prints "inf", never NaN or a dash.
+    ds = xr.Dataset(
+        {"stress": ("run", np.array([1.0, 2.0, np.inf, 4.0, np.inf, 6.0]),
+                    {"units": "MPa", "better": "smaller"})},
+        coords={"a": ("run", np.repeat([1.0, 2.0, 3.0], 2), {"units": "mm"}),
+                "a_level": ("run", np.repeat([0, 1, 2], 2)),
+                "b": ("run", np.tile([5.0, 6.0], 3), {"units": "N"}),
+                "b_level": ("run", np.tile([0, 1], 3))},
+        attrs={"design": "full_factorial", "factors": '["a", "b"]', "responses": '["stress"]'},
+    )  # fmt: skip
+    an = analyze(ds)
+    r = an.sel(response="stress")
+    assert float(r.worst_bound) == 6.0
+    np.testing.assert_allclose(r.k.sel(term="a").values[:3], [1.5, 5.0, 6.0])
+    np.testing.assert_array_equal(r.bounded.sel(term="a").values[:3], [0, 1, 1])
+    assert int(r.optimum_run.values[0]) == 0  # the best computed point is finite
+    text = report_text(ds, an, ["stress"])
+    assert "| 3 | 2 | 5 | inf |" in text

@@ -1,0 +1,170 @@
+"""The optimum a report states: a full factorial's best computed point (not a model prediction),
+an array's additive prediction, and operating conditions that are never chosen.
+
+Expected values come from brute force over the runs (numpy argmin / means of the results), never
+from the analysis under test.
+"""
+
+from __future__ import annotations
+
+import json
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from results_datasets import CATALOG, study_dataset
+from studies.analysis import analyze
+from studies.markdown_report import report_text
+from studies.plan import plan_text
+from studies.report import write_analysis
+from studies.results import build_dataset
+from studies.runner import evaluate
+from study_text import scene_study
+
+SIDE_FORCE = scene_study(
+    "crank",
+    parameters='layout = "inline"\ncylinders = 1\nfiring_order = [1]',
+    responses='["max_side_force"]',
+    factors=(
+        "[factors.reciprocating_mass]\nlevels = [1.0, 3.0, 5.0]\n"
+        "[factors.rod_ratio]\nlevels = [0.25, 0.35]"
+    ),
+)
+
+
+def crank_results(text: str) -> xr.Dataset:
+    plan = plan_text(text)
+    return build_dataset(plan, evaluate(plan, progress=False), {"study_toml": text})
+
+
+@pytest.fixture(scope="module")
+def side_force() -> xr.Dataset:
+    return crank_results(SIDE_FORCE)
+
+
+def test_full_factorial_reports_the_best_computed_run(
+    side_force: xr.Dataset, tmp_path: Path
+) -> None:
+    y = side_force["max_side_force"].values
+    best = int(np.argmin(y))  # brute force over the 6 computed points
+    assert best == 4  # run 5: reciprocating_mass = 5 kg, rod_ratio = 0.25
+    an = analyze(side_force)
+    assert an.attrs["optimum_basis"] == "computed"
+    r = an.sel(response="max_side_force")
+    assert int(r.optimum_run.values[0]) == best
+    assert float(r.optimum_value) == y[best]
+    assert np.isnan(float(r.half_width))  # no model interval on a grid
+    # The additive model's prediction at these levels is another number (the issue's case:
+    # the computed value lay outside its interval): the report must not state it.
+    mass, ratio = (
+        side_force["reciprocating_mass_level"].values,
+        side_force["rod_ratio_level"].values,
+    )
+    additive = y[mass == 2].mean() + y[ratio == 0].mean() - y.mean()
+    assert abs(additive - y[best]) > 0.1
+    files = write_analysis(side_force, tmp_path)
+    text = (tmp_path / "report.md").read_text(encoding="utf-8")
+    assert f"Best max_side_force: **{y[best]:.4g} kN** in run 5" in text
+    assert f"{additive:.4g}" not in text
+    assert "confidence interval" not in text
+    names = {f.name for f in files}
+    assert "confirmation.toml" not in names  # nothing to confirm: the point was computed
+    refinement = tomllib.loads((tmp_path / "refinement.toml").read_text(encoding="utf-8"))
+    # 5 levels between the neighbours: mass 3…5 kg (5 is the edge), rod ratio 0.25…0.35.
+    factors = refinement["factors"]
+    assert factors["reciprocating_mass"]["levels"] == [3.0, 3.5, 4.0, 4.5, 5.0]
+    assert factors["rod_ratio"]["levels"] == [0.25, 0.275, 0.3, 0.325, 0.35]
+
+
+def test_neighbours_of_the_best_point_are_the_runs_one_level_away(side_force: xr.Dataset) -> None:
+    y = side_force["max_side_force"].values
+    r = analyze(side_force).sel(response="max_side_force")
+    # Grid order: reciprocating_mass slowest, rod_ratio fastest (runs 1…6).
+    below_mass = r.sel(term="reciprocating_mass")
+    assert int(below_mass.neighbour_run.values[0]) == 2  # mass 3 kg, ratio 0.25: run 3
+    assert float(below_mass.neighbour_value.values[0]) == y[2]
+    assert int(below_mass.neighbour_run.values[1]) == -1  # 5 kg is the edge of the grid
+    above_ratio = r.sel(term="rod_ratio")
+    assert float(above_ratio.neighbour_value.values[1]) == y[5]
+    assert int(above_ratio.neighbour_run.values[0]) == -1
+
+
+OPERATING = scene_study(
+    "crank",
+    parameters='layout = "inline"\ncylinders = 1\nfiring_order = [1]',
+    responses='["max_side_force", "mean_power"]',
+    factors=(
+        "[factors.rod_ratio]\nlevels = [0.25, 0.3, 0.35]\n"
+        '[factors.engine_speed]\nlevels = [1500.0, 3000.0, 4500.0]\nrole = "operating"\n'
+        "[factors.reciprocating_mass]\nlevels = [1.0, 5.0]"
+    ),
+)
+
+
+def test_operating_conditions_are_never_chosen(tmp_path: Path) -> None:
+    ds = crank_results(OPERATING)
+    an = analyze(ds)
+    assert json.loads(an.attrs["operating_factors"]) == ["engine_speed"]
+    for name in ("max_side_force", "mean_power"):
+        r = an.sel(response=name)
+        assert int(r.optimum_level.sel(term="engine_speed")) == -1
+        assert int(r.best_level.sel(term="engine_speed")) == -1
+        # Brute force: the control combination (rod ratio × mass) with the best mean over the
+        # three speeds, its value at each speed, and its worst speed.
+        sense = ds[name].attrs["better"]
+        sign = 1.0 if sense == "smaller" else -1.0
+        y = ds[name].values
+        lv = {
+            f: ds[f"{f}_level"].values for f in ("rod_ratio", "engine_speed", "reciprocating_mass")
+        }
+        combos = {
+            (a, m): np.array(
+                [y[(lv["rod_ratio"] == a) & (lv["reciprocating_mass"] == m) & (lv["engine_speed"] == s)][0]
+                 for s in range(3)]
+            )
+            for a in range(3)
+            for m in range(2)
+        }  # fmt: skip
+        chosen = min(combos, key=lambda c: sign * combos[c].mean())
+        assert int(r.optimum_level.sel(term="rod_ratio")) == chosen[0]
+        assert int(r.optimum_level.sel(term="reciprocating_mass")) == chosen[1]
+        np.testing.assert_array_equal(r.optimum_at.values, combos[chosen])
+        assert float(r.optimum_worst) == (sign * combos[chosen]).max() * sign
+    assert int(an["chosen_level"].sel(term="engine_speed")) == -1
+    write_analysis(ds, tmp_path)
+    text = (tmp_path / "report.md").read_text(encoding="utf-8")
+    trade = text[text.index("## Trade-off summary") :]
+    assert "engine_speed |" not in trade.split("\n\n")[2]  # no column for the condition
+    assert "Operating conditions (engine_speed) are not chosen" in trade
+    assert "| engine_speed = 1500 rpm |" in text  # values per condition
+    assert "operating condition" in text[text.index("## Design") : text.index("## Runs")]
+
+
+def test_an_array_predicts_per_operating_condition() -> None:
+    ds = study_dataset(CATALOG / "isac_l9.toml", seed=5)
+    ds.attrs["operating_factors"] = json.dumps(["seg2_width"])
+    an = analyze(ds, ["max_jerk"])
+    assert an.attrs["optimum_basis"] == "predicted"
+    r = an.sel(response="max_jerk")
+    y = ds["max_jerk"].values
+    grand = y.mean()
+    lv = {f: ds[f"{f}_level"].values for f in ("seg2_width", "seg6_amplitude", "seg2_amplitude")}
+    means = {f: np.array([y[codes == i].mean() for i in range(3)]) for f, codes in lv.items()}
+    control = {f: int(np.argmin(means[f])) for f in ("seg6_amplitude", "seg2_amplitude")}
+    assert int(r.optimum_level.sel(term="seg2_width")) == -1
+    for f, level in control.items():
+        assert int(r.optimum_level.sel(term=f)) == level
+    # Taguchi's additive model in each condition (no term pooled: column D is the error).
+    effects = sum(means[f][level] - grand for f, level in control.items())
+    expected = grand + effects + means["seg2_width"] - grand
+    np.testing.assert_allclose(r.optimum_at.values, expected, rtol=1e-12)
+    assert float(r.optimum_worst) == pytest.approx(expected.max(), rel=1e-12)
+    assert float(r.predicted) == pytest.approx(expected.mean(), rel=1e-12)
+    text = report_text(ds, an, ["max_jerk"])
+    assert "### Predicted optimum" in text
+    assert "Operating conditions, not chosen: seg2_width" in text
+    assert "seg6_amplitude at level" in text  # the runs it rests on
+    assert "(runs " in text
