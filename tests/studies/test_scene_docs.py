@@ -6,6 +6,7 @@ against the closed form x(t) = x0 cos(√(k/m) t)."""
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 import re
 from pathlib import Path
 from types import ModuleType
@@ -36,15 +37,18 @@ levels = [1.0, 2.5]
 
 
 @pytest.fixture
-def scene_class(monkeypatch: pytest.MonkeyPatch) -> type[scenes.Scene]:
+def scene_class(monkeypatch: pytest.MonkeyPatch) -> Iterator[type[scenes.Scene]]:
     section = DOCS.read_text(encoding="utf-8").split("## A complete example", 1)[1]
     match = re.search(r"```python\n(.*?)```", section, re.DOTALL)
     assert match, "docs/scenes.md has no python example"
     module = ModuleType("docs_free_vibration")
     exec(compile(match.group(1), str(DOCS), "exec"), module.__dict__)  # noqa: S102
     cls = module.FreeVibrationScene
-    monkeypatch.setitem(scenes.SCENES, cls.name, cls)
-    return cls
+    found = scenes.SCENES.plugins() | {cls.name: cls}  # as if installed as a plugin
+    monkeypatch.setattr(scenes.SCENES, "plugins", lambda: found)
+    scenes.get_scene.cache_clear()
+    yield cls
+    scenes.get_scene.cache_clear()
 
 
 def test_the_documented_scene_runs_and_its_curve_is_the_closed_form(scene_class) -> None:
