@@ -33,9 +33,15 @@ SHAPE = (
     "lift_table",
 )
 """The parameters that set the cam's shape (speed, loads and limits do not change ρ)."""
-ADVICE_CAMS = 32
-"""At most this many concave cams get a rise-angle search (the others a plain warning)."""
+LISTED_CAMS = 10
+"""At most this many concave cams are warned one by one, each with a rise-angle search; the
+others are counted in one line (a check of 10⁴ points stays short and fast)."""
 ADVICE_RESOLUTION_DEG = 0.01  # the advice is rounded up to 0.1°
+SCAN_BUDGET = 4_000_000
+"""Cam angles × distinct shapes the check evaluates at most: beyond it the shapes are scanned
+on a coarser grid (at most :data:`COARSEST_SCAN_DEG`), so ``check`` stays fast at 10⁴ points;
+``run`` computes every point on the study's own grid whatever the check saw."""
+COARSEST_SCAN_DEG = 2.0
 NO_ADVICE = ("six_segment", "table")  # their shape does not scale with the rise angle alone
 MM = 1e3
 
@@ -43,14 +49,19 @@ MM = 1e3
 def concave_cams(
     scene: Scene, points: dict[str, np.ndarray], settings: dict[str, Any]
 ) -> list[str]:
-    """A warning per concave cam, naming its design points; O(N) grouping, then one kernel
-    call over the distinct cam shapes."""
+    """A warning per concave cam (the first :data:`LISTED_CAMS`), naming its design points, and
+    one line counting the rest; O(N) grouping, then one kernel call over the distinct cam
+    shapes and one per bisection step of the advice."""
     first, members = _distinct(points)
     shapes = {name: values[first] for name, values in points.items()}
+    settings, scanned = _scan_settings(settings, len(first))
     radius = _min_radius(scene, shapes, settings)
+    concave = np.flatnonzero(radius <= 0.0)
+    listed = concave[:LISTED_CAMS]
+    advised = [int(g) for g in listed if str(shapes["law"][g]) not in NO_ADVICE]
+    advice = dict(zip(advised, _convex_from(scene, shapes, advised, settings), strict=True))
     found = PointProblems()
-    searched = 0
-    for g in np.flatnonzero(radius <= 0.0):
+    for g in listed:
         law = str(shapes["law"][g])
         message = (
             f"law = {law!r} gives a concave cam at base_radius = "
@@ -59,11 +70,27 @@ def concave_cams(
             f"r0 + h + h'' = {radius[g]:.3g} mm): no Hertz line contact, so max_contact_stress "
             "is inf and the film thickness 0 there"
         )
-        if law not in NO_ADVICE and searched < ADVICE_CAMS:
-            searched += 1
-            message += "; " + _convex_from(scene, shapes, int(g), settings)
-        found.add_all(members[g].tolist(), message)
-    return found.messages()
+        found.add_all(members[g].tolist(), message + (f"; {advice[g]}" if g in advice else ""))
+    rest = concave[LISTED_CAMS:]
+    if rest.size == 0:
+        return found.messages()
+    count = sum(len(members[g]) for g in rest)
+    more = (
+        f"{rest.size} more concave cams at {count} more design points (smallest radius of "
+        f"curvature {radius[rest].min():.3g} … {radius[rest].max():.3g} mm): their "
+        "max_contact_stress is inf and their film thickness 0 too"
+    )
+    return [*found.messages(), more + scanned]
+
+
+def _scan_settings(settings: dict[str, Any], shapes: int) -> tuple[dict[str, Any], str]:
+    """The settings of the convexity scan, on a grid coarse enough for :data:`SCAN_BUDGET`,
+    and what to say when it is coarser than the study's own."""
+    step = math.radians(min(360.0 * shapes / SCAN_BUDGET, COARSEST_SCAN_DEG))
+    if step <= settings["angle_step"]:
+        return settings, ""
+    said = f" (scanned every {math.degrees(step):.2g} degree for {shapes} cam shapes)"
+    return settings | {"angle_step": step}, said
 
 
 def _distinct(points: dict[str, np.ndarray]) -> tuple[np.ndarray, list[np.ndarray]]:
@@ -88,24 +115,33 @@ def _min_radius(
 
 
 def _convex_from(
-    scene: Scene, shapes: dict[str, np.ndarray], g: int, settings: dict[str, Any]
-) -> str:
-    """Where the cam of shape ``g`` becomes convex as its rise angle grows (bisection)."""
-    one = {name: values[g : g + 1].copy() for name, values in shapes.items()}
+    scene: Scene, shapes: dict[str, np.ndarray], groups: list[int], settings: dict[str, Any]
+) -> list[str]:
+    """Where each cam shape of ``groups`` becomes convex as its rise angle grows: bisections
+    side by side, one kernel call per step for all of them."""
+    if not groups:
+        return []
+    some = {name: values[groups].copy() for name, values in shapes.items()}
     limit = scene.parameter("rise_angle")
-    high = float(limit.maximum) if limit is not None and limit.maximum is not None else 170.0
+    top = float(limit.maximum) if limit is not None and limit.maximum is not None else 170.0
 
-    def convex(beta_deg: float) -> bool:
-        one["rise_angle"] = np.array([math.radians(beta_deg)])
-        return bool(_min_radius(scene, one, settings)[0] > 0.0)
+    def convex(beta_deg: np.ndarray) -> np.ndarray:
+        some["rise_angle"] = np.radians(beta_deg)
+        return _min_radius(scene, some, settings) > 0.0
 
-    low = math.degrees(float(shapes["rise_angle"][g]))
-    if not convex(high):
-        return (
-            f"no rise angle up to {high:g} degree makes it convex: use a larger base_radius or "
+    low = np.degrees(np.asarray(shapes["rise_angle"][groups], dtype=float))
+    high = np.full(len(groups), top)
+    reachable = convex(high)
+    while (high - low).max() > ADVICE_RESOLUTION_DEG:
+        middle = 0.5 * (low + high)
+        ok = convex(middle)
+        high, low = np.where(ok, middle, high), np.where(ok, low, middle)
+    return [
+        f"it is convex from rise_angle = {math.ceil(h * 10) / 10:g} degree"
+        if fine
+        else (
+            f"no rise angle up to {top:g} degree makes it convex: use a larger base_radius or "
             "a smaller lift"
         )
-    while high - low > ADVICE_RESOLUTION_DEG:
-        middle = 0.5 * (low + high)
-        low, high = (low, middle) if convex(middle) else (middle, high)
-    return f"it is convex from rise_angle = {math.ceil(high * 10) / 10:g} degree"
+        for h, fine in zip(high, reachable, strict=True)
+    ]
