@@ -6,8 +6,8 @@ against the closed form x(t) = x0 cos(√(k/m) t)."""
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
 import re
+from collections.abc import Iterator
 from pathlib import Path
 from types import ModuleType
 
