@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -204,3 +205,23 @@ def test_chain_keys_match_a_loop_over_the_points() -> None:
     got = rocker_scene.chain_keys(points)
     assert {k: v.tolist() for k, v in got.items()} == expected
     assert len(got) == 3 * 3 * 3 * 2
+
+
+def test_a_large_concave_grid_is_warned_in_a_few_lines_counting_what_the_run_flags() -> None:
+    """400 chains: ten warned one by one, the rest counted in one line. The count is checked
+    against the run's own per-point flag ``cam_convex`` (computed per chain on the scene's
+    tappet grid; the check scans at 0.5°, so a marginal cam may differ: at most 1 %)."""
+    levels = (
+        f"[factors.valve_lift]\nlevels = {np.linspace(5.0, 9.0, 20).tolist()}\n"
+        f"[factors.rise_angle]\nlevels = {np.linspace(50.0, 100.0, 20).tolist()}"
+    )
+    plan = plan_text(study('["cam_convex"]', parameters='law = "poly345"', factors=levels))
+    warnings = plan.scene.point_warnings(plan.points, plan.settings)
+    concave = evaluate(plan, progress=False).scalars["cam_convex"] == 0.0
+    assert 100 < concave.sum() < 390  # the grid straddles the convexity limit
+    assert len(warnings) == 11
+    listed = [int(i) for w in warnings[:10] for i in re.findall(r"design point (\d+):", w)]
+    assert concave[listed].all()
+    more = re.search(r"(\d+) more concave cams at (\d+) more design points", warnings[-1])
+    assert more, warnings[-1]
+    assert abs(len(listed) + int(more.group(2)) - concave.sum()) <= 0.01 * concave.sum()
