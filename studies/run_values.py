@@ -21,7 +21,6 @@ from typing import Any
 import numpy as np
 
 from studies.definition import StudyDefinition, parse_study
-from studies.results import open_results
 from studies.scenes import Parameter, get_scene
 from studies.units import UNITS, si_unit, to_si
 
@@ -100,6 +99,8 @@ def _definition_values(study: Path) -> list[Value]:
 
 def response_values(results: Path) -> list[Value]:
     """min, mean and max of every floating-point response of a results file, in SI."""
+    from studies.results import open_results  # noqa: PLC0415  (xarray only when indexing)
+
     try:
         ds = open_results(results)  # lazily, one response at a time: flat memory
     except (OSError, ValueError):

@@ -13,11 +13,13 @@ from __future__ import annotations
 
 import re
 import unicodedata
-from typing import TextIO
+from typing import TYPE_CHECKING, TextIO
 from urllib.parse import quote
 
 import numpy as np
-import xarray as xr
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 MARKDOWN_SPECIAL = re.compile(r"([\\`*\[\]|])")
 LONE_UNDERSCORE = re.compile(r"(?<![A-Za-z0-9])_|_(?![A-Za-z0-9])")  # not inside a word

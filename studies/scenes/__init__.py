@@ -11,10 +11,12 @@ declarations.
 
 from __future__ import annotations
 
+import importlib
 import sys
 from collections.abc import Iterator, Mapping
 from functools import cache
 from importlib.metadata import EntryPoint, entry_points
+from typing import ClassVar
 
 from studies.scenes.base import (
     Curve,
@@ -26,24 +28,40 @@ from studies.scenes.base import (
     WorkEstimate,
     short,
 )
-from studies.scenes.cam import CamScene
-from studies.scenes.crank import CrankScene
-from studies.scenes.luffing import LuffingScene
-from studies.scenes.reed import ReedScene
-from studies.scenes.rocker import RockerScene
-from studies.scenes.valve import ValveAccuracyScene, ValveScene, ValveSpringLadderScene
 
 ENTRY_POINTS = "engine_studies.scenes"
-BUILT_IN: dict[str, type[Scene]] = {
-    CamScene.name: CamScene,
-    CrankScene.name: CrankScene,
-    ReedScene.name: ReedScene,
-    LuffingScene.name: LuffingScene,
-    RockerScene.name: RockerScene,
-    ValveScene.name: ValveScene,
-    ValveAccuracyScene.name: ValveAccuracyScene,
-    ValveSpringLadderScene.name: ValveSpringLadderScene,
-}
+
+
+class BuiltInScenes(Mapping[str, type[Scene]]):
+    """The built-in scenes by name, each imported (with its kernels) the first time it is looked
+    up: a command that needs no scene (``--help``, ``runs``, ``tag``) imports no Numba."""
+
+    WHERE: ClassVar[dict[str, str]] = {
+        "cam": "studies.scenes.cam:CamScene",
+        "crank": "studies.scenes.crank:CrankScene",
+        "reed": "studies.scenes.reed:ReedScene",
+        "luffing": "studies.scenes.luffing:LuffingScene",
+        "rocker": "studies.scenes.rocker:RockerScene",
+        "valve": "studies.scenes.valve:ValveScene",
+        "valve_accuracy": "studies.scenes.valve:ValveAccuracyScene",
+        "valve_spring_ladder": "studies.scenes.valve:ValveSpringLadderScene",
+    }
+
+    def __getitem__(self, name: str) -> type[Scene]:
+        module, attribute = self.WHERE[name].split(":")
+        return getattr(importlib.import_module(module), attribute)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self.WHERE
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.WHERE)
+
+    def __len__(self) -> int:
+        return len(self.WHERE)
+
+
+BUILT_IN = BuiltInScenes()
 
 
 class SceneRegistry(Mapping[str, type[Scene]]):
@@ -77,10 +95,10 @@ class SceneRegistry(Mapping[str, type[Scene]]):
         return name in BUILT_IN or name in self.plugins()
 
     def __iter__(self) -> Iterator[str]:
-        return iter(BUILT_IN | self.plugins())
+        return iter([*BUILT_IN, *self.plugins()])  # plugins never reuse a built-in name
 
     def __len__(self) -> int:
-        return len(BUILT_IN | self.plugins())
+        return len(BUILT_IN) + len(self.plugins())
 
 
 def load_plugins() -> dict[str, type[Scene]]:
