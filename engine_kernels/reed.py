@@ -1,4 +1,4 @@
-"""Reed (check) valve natural frequencies and resonance margins: the ``reed`` scene (SPEC §6).
+"""Reed (check) valve natural frequencies and resonance margins: the ``reed`` scene (physics §6).
 
 The reed is a uniform clamped–free Euler–Bernoulli beam (no damping, no torsion). Its modes are
 the roots X_n = k_n l of cos X cosh X = −1 [B1], solved as cos X + 1/cosh X = 0 so no term
@@ -11,11 +11,11 @@ four-stroke, 1 for a two-stroke), i.e. n/120 Hz for a four-stroke at n rpm; the 
 k f_min ≤ f_1), at engine speed ω = 2π f_1/(k e).
 
 Orders are reported as **engine orders** o = k·e, multiples of the crankshaft frequency as in
-the crank scene's torque harmonics (SPEC §5, §6): the 3rd harmonic of a four-stroke's event
+the crank scene's torque harmonics (physics §5, §6): the 3rd harmonic of a four-stroke's event
 frequency is engine order 1.5, and order o meets frequency f at n = 60 f/o rpm.
 
 Reference: Blevins, *Formulas for Dynamics, Acoustics and Vibration* (2016), Table 4.2
-(clamped–free beam); SPEC §6.
+(clamped–free beam); physics §6.
 """
 
 from __future__ import annotations
@@ -98,7 +98,7 @@ N_ORDER_OUT = 4
 def frequency_equation(x):
     """Overflow-safe clamped–free frequency function cos X + 1/cosh X  [B1].
 
-    x: float  X = k l [-]. Zero exactly where cos X cosh X = −1. Reference: SPEC §6.
+    x: float  X = k l [-]. Zero exactly where cos X cosh X = −1. Reference: physics §6.
     """
     return math.cos(x) + 1.0 / math.cosh(x)
 
@@ -112,7 +112,7 @@ def cantilever_root(mode):
     precision.
 
     mode: int  n ≥ 1.
-    Reference: SPEC §6; Blevins (2016) Table 4.2.
+    Reference: physics §6; Blevins (2016) Table 4.2.
     """
     lo = (mode - 1) * math.pi
     hi = mode * math.pi
@@ -144,7 +144,7 @@ def cantilever_roots(roots_out):
     """First len(roots_out) roots X_1, X_2, … of cos X cosh X = −1  [B1].
 
     roots_out: float[:]  Output.
-    Reference: SPEC §6.
+    Reference: physics §6.
     """
     for n in range(roots_out.shape[0]):
         roots_out[n] = cantilever_root(n + 1)
@@ -161,7 +161,7 @@ def reed_natural_frequency(root, length, thickness, youngs_modulus, density):
     thickness     : float  h [m].
     youngs_modulus: float  E [Pa].
     density       : float  ρ [kg/m³].
-    Returns f_n [Hz]. Reference: SPEC §6 [B2].
+    Returns f_n [Hz]. Reference: physics §6 [B2].
     """
     return (
         root**2
@@ -172,7 +172,7 @@ def reed_natural_frequency(root, length, thickness, youngs_modulus, density):
 
 @jit
 def cantilever_mode_shape(root, position, derivative):
-    """Clamped–free mode shape or its derivative, d^j w/dξ^j at ξ = x/l  (SPEC §6).
+    """Clamped–free mode shape or its derivative, d^j w/dξ^j at ξ = x/l  (physics §6).
 
     w(ξ) = cosh Xξ − cos Xξ − σ (sinh Xξ − sin Xξ), σ = (cos X + cosh X)/(sin X + sinh X)
     (unnormalised; |w(1)| = 2), evaluated as
@@ -211,14 +211,14 @@ def band_margin(frequency, band_min, band_max):
     frequency: float  f [Hz].
     band_min : float  Lowest excitation frequency [Hz].
     band_max : float  Highest excitation frequency [Hz].
-    Reference: SPEC §6 (margin to the band).
+    Reference: physics §6 (margin to the band).
     """
     return max(frequency - band_max, band_min - frequency)
 
 
 @jit
 def order_crossing(frequency, band_min, band_max, openings, max_order, margin, out):
-    """Engine orders against one natural frequency (SPEC §6, the intake pulse's harmonics).
+    """Engine orders against one natural frequency (physics §6, the intake pulse's harmonics).
 
     Harmonic k of the event frequency is engine order o = k·e; its excitation covers
     [k f_min, k f_max] over the speed range and crosses f at the engine speed ω = 2π f/(k e).
@@ -265,7 +265,7 @@ def order_batch(frequencies, params, max_order, margin, out):
     margin     : float           Relative margin of the resonance-free check [-].
     out        : float[n, q, 4]  Columns CROSSING_ORDER (engine order), CROSSING_SPEED [rad/s],
                                  ORDER_MARGIN [Hz], ORDER_CLEAR.
-    Reference: SPEC §6.
+    Reference: physics §6.
     """
     for i in prange(frequencies.shape[0]):
         openings = params[i, OPENINGS_PER_REVOLUTION]
@@ -290,7 +290,7 @@ def reed_batch(params, out, modes_out, shapes_out):
                                           1…q (q may be 0).
     shapes_out: float[n, s, g]            Mode shapes 1…s on ξ_j = j/(g − 1), normalised to a
                                           unit tip deflection; g = 0 skips them.
-    Reference: SPEC §6 [B1], [B2].
+    Reference: physics §6 [B1], [B2].
     """
     n_modes = max(modes_out.shape[2], shapes_out.shape[1], 1)
     roots = np.empty(n_modes)

@@ -1,4 +1,4 @@
-"""Cam kernels: lift laws, multi-segment profiles, contact criteria, scene batches (SPEC §2).
+"""Cam kernels: lift laws, multi-segment profiles, contact criteria, scene batches (physics §2).
 
 One physical concept per module:
 

@@ -1,4 +1,4 @@
-"""Flat-faced tappet cam: curvature, lubrication and contact quantities (SPEC §2, [C1]-[C5]).
+"""Flat-faced tappet cam: curvature, lubrication and contact quantities (physics §2, [C1]-[C5]).
 
 Scalar kernels per cam angle plus the two curve reductions of the design criteria (fullness,
 spring margin). Lift h [m], its derivatives per rad of cam angle h' [m/rad], h'' [m/rad²], the
@@ -27,7 +27,7 @@ def radius_of_curvature(base_radius, lift, acceleration):
     lift        : float  Tappet lift h [m].
     acceleration: float  Tappet acceleration h'' per cam angle [m/rad²].
 
-    Returns rho [m]; rho ≤ 0 marks a concave or cusped cam (a design error, SPEC §2).
+    Returns rho [m]; rho ≤ 0 marks a concave or cusped cam (a design error, physics §2).
     Reference: Norton, *Cam Design and Manufacturing Handbook*, 2nd ed. (flat-faced followers).
     """
     return base_radius + lift + acceleration
@@ -119,7 +119,7 @@ def film_thickness_dowson_higginson(
 
 @jit
 def contact_force(spring_preload, spring_rate, equivalent_mass, cam_speed, lift, acceleration):
-    """Cam-tappet contact force F = Ps0 + ks h + m_eq ω² h''  (SPEC §2).
+    """Cam-tappet contact force F = Ps0 + ks h + m_eq ω² h''  (physics §2).
 
     spring_preload : float  Spring preload Ps0 [N].
     spring_rate    : float  Spring rate ks [N/m].
@@ -135,7 +135,7 @@ def contact_force(spring_preload, spring_rate, equivalent_mass, cam_speed, lift,
 
 @jit
 def effective_modulus(youngs_modulus_1, poisson_1, youngs_modulus_2, poisson_2):
-    """Contact modulus E* from 1/E* = (1-nu1²)/E1 + (1-nu2²)/E2  (Johnson's E*, SPEC [C5]).
+    """Contact modulus E* from 1/E* = (1-nu1²)/E1 + (1-nu2²)/E2  (Johnson's E*, [C5]).
 
     youngs_modulus_1: float  Cam Young's modulus E1 [Pa].
     poisson_1       : float  Cam Poisson's ratio nu1 [-].
@@ -170,7 +170,7 @@ def hertz_line_contact_stress(force, modulus, width, radius):
 
 @jit
 def fullness_coefficient(theta, lift, event_duration):
-    """Fullness = ∫h dθ / (h_max * event duration)  (SPEC §2; should be slightly > 0.55).
+    """Fullness = ∫h dθ / (h_max * event duration)  (physics §2; should be slightly > 0.55).
 
     theta         : array  Cam angles covering the event, increasing, shape (m,) [rad].
     lift          : array  Lift h on ``theta``, shape (m,) [m].
@@ -191,7 +191,7 @@ def fullness_coefficient(theta, lift, event_duration):
 
 @jit
 def spring_margin(lift, acceleration, spring_preload, spring_rate, equivalent_mass, cam_speed):
-    """Spring margin = min over h'' < 0 of (Ps0 + ks h)/(m_eq ω² |h''|)  (SPEC §2; > 1.2).
+    """Spring margin = min over h'' < 0 of (Ps0 + ks h)/(m_eq ω² |h''|)  (physics §2; > 1.2).
 
     lift           : array  Lift h, shape (m,) [m].
     acceleration   : array  Acceleration h'' per cam angle, shape (m,) [m/rad²].

@@ -1,4 +1,4 @@
-"""Cam kinematics batch drivers and the parameter columns of the `cam` scene (SPEC §2, §8).
+"""Cam kinematics batch drivers and the parameter columns of the `cam` scene (physics §2, §8).
 
 Each case is a row of ``params[n, N_PARAMS]`` (float64, SI, columns P_*); six-segment shapes are
 rows of ``shapes[n, 6]`` (int64) and polydyne coefficients rows of ``coeffs[n, NCOEF]``. The
@@ -158,9 +158,9 @@ KINEMATIC_UNITS = (
     "1",
 )
 """max_velocity = max|h'| is the required face half-width; max_jerk is over the working part
-only (the ramp's acceleration steps have infinite jerk, SPEC §2); max_acceleration_time is the
+only (the ramp's acceleration steps have infinite jerk, physics §2); max_acceleration_time is the
 peak |acceleration| ω² max|h''| in m/s², min_acceleration_time the signed ω² min h''.
-fullness follows SPEC §2 over the whole event (ramps included); working_fullness is the same
+fullness follows physics §2 over the whole event (ramps included); working_fullness is the same
 ratio for the lift above the ramp over the working part only, ∫(h - Hr) dθ over |θ| <= W
 divided by (h_max - Hr)·2W — the fullness of the valve opening once the lash is taken up."""
 
@@ -204,7 +204,7 @@ def invalid_case(curves, i):
 
 @batch
 def cam_kinematics_batch(params, shapes, coeffs, theta, curves_out, diag_out):
-    """Lift curves and profile diagnostics for every case (SPEC §2).
+    """Lift curves and profile diagnostics for every case (physics §2).
 
     params    : array  (n, N_PARAMS) case parameters, SI (see PARAM_NAMES/PARAM_UNITS).
     shapes    : array  (n, 6) int64 six-segment shape codes (SHAPE_* of ``multi_segment``).
@@ -255,7 +255,7 @@ def cam_kinematics_batch(params, shapes, coeffs, theta, curves_out, diag_out):
 
 @batch
 def cam_kinematic_responses_batch(params, theta, curves, out):
-    """Scalar kinematic responses per case (SPEC §2).
+    """Scalar kinematic responses per case (physics §2).
 
     params: array  (n, N_PARAMS) case parameters, SI.
     theta : array  (m,) increasing cam angles covering the event [rad].

@@ -1,8 +1,8 @@
-"""Normalised rise laws of a cam follower with exact derivatives up to jerk (SPEC §2).
+"""Normalised rise laws of a cam follower with exact derivatives up to jerk (physics §2).
 
 A rise law is f(x) on x ∈ [0, 1] with f(0) = 0, f(1) = 1. A rise over the cam angle β [rad]
 of height H [m] gives h = H f, h' = H f1/β, h'' = H f2/β², h''' = H f3/β³ (derivatives per rad
-of cam angle), so the acceleration factor of a law is Ca = max|f2| (SPEC: a = Ca·H ω²/β²).
+of cam angle), so the acceleration factor of a law is Ca = max|f2| (physics.md: a = Ca·H ω²/β²).
 
 The piecewise laws (modified sine, modified trapezoid) follow Norton, *Cam Design and
 Manufacturing Handbook*, 2nd ed. (double-dwell functions); their peak factors come out in
@@ -32,7 +32,7 @@ LAW_POLY345 = 4
 LAW_POLY4567 = 5
 LAW_POLYDYNE = 6
 LAW_SIX_SEGMENT = 7
-"""Not a rise law: the multi-segment acceleration profile of ``multi_segment`` (SPEC §2)."""
+"""Not a rise law: the multi-segment acceleration profile of ``multi_segment`` (physics §2)."""
 
 N_RISE_LAWS = 7
 """Rise-law codes are 0 … N_RISE_LAWS - 1."""
@@ -113,7 +113,7 @@ def _polynomial(x, coeffs):
 
 @jit
 def rise_law(law, x, coeffs):
-    """Normalised rise f(x) and its exact derivatives f1, f2, f3 with respect to x (SPEC §2).
+    """Normalised rise f(x) and its exact derivatives f1, f2, f3 with respect to x (physics §2).
 
     law   : int    Law code, LAW_CYCLOIDAL … LAW_POLYDYNE.
     x     : float  Normalised cam angle, 0 at the start and 1 at the end of the rise [-].

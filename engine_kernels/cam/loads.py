@@ -1,4 +1,4 @@
-"""Cam geometry and load batch drivers of the `cam` scene: curvature, lubrication, contact (SPEC §2).
+"""Cam geometry and load batch drivers of the `cam` scene: curvature, lubrication, contact (physics §2).
 
 Drivers 3 and 4 of :mod:`engine_kernels.cam.kinematics` (which holds the parameter columns
 P_*), one design case per ``prange`` iteration, from the kinematic curves it computed:
@@ -114,7 +114,7 @@ LOAD_CURVE_UNITS = ("N", "Pa", "m")
 
 @batch
 def cam_geometry_batch(params, theta, curves, out, curves_out):
-    """Curvature and lubrication responses per case (SPEC [C1]-[C4]).
+    """Curvature and lubrication responses per case ([C1]-[C4]).
 
     params    : array  (n, N_PARAMS) case parameters, SI.
     theta     : array  (m,) cam angles from the nose [rad].
@@ -173,7 +173,7 @@ def cam_geometry_batch(params, theta, curves, out, curves_out):
 
 @batch
 def cam_loads_batch(params, theta, curves, out, curves_out):
-    """Contact-load responses per case (SPEC §2, [C5]).
+    """Contact-load responses per case (physics §2, [C5]).
 
     params    : array  (n, N_PARAMS) case parameters, SI.
     theta     : array  (m,) cam angles from the nose [rad].

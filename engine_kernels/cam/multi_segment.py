@@ -1,4 +1,4 @@
-"""Multi-segment symmetric acceleration profile of a flat-faced tappet cam (SPEC §2, §9).
+"""Multi-segment symmetric acceleration profile of a flat-faced tappet cam (physics §2, §9).
 
 The working half-event (ramp end → nose) is split into six segments of widths w_k [rad]. Each
 segment's acceleration a(x) [m/rad²] over x ∈ [0, 1] runs from the previous segment's end value
@@ -80,10 +80,10 @@ _REL_TOL = 1e-12
 
 @jit
 def segment_widths(widths, shapes, half_event, out):
-    """Segment widths after keeping the working half-event fixed (SPEC §2 width rule).
+    """Segment widths after keeping the working half-event fixed (physics §2 width rule).
 
     The excess Δ = Σw - half_event is absorbed -Δ/2 by the first fillet segment and -Δ/2 by
-    the last segment, or all by the last segment when there is no fillet before it (SPEC §9:
+    the last segment, or all by the last segment when there is no fillet before it (physics §9:
     segment 2 going 11 → 9 turns fillet 22 → 23 and segment 6 23 → 24).
 
     widths    : array  Nominal widths w_k, shape (6,) [rad].
@@ -120,7 +120,7 @@ def segment_widths(widths, shapes, half_event, out):
 
 @jit
 def ramp_layout(height, width, velocity):
-    """Lash-take-up ramp: constant acceleration over width w1, then constant velocity (SPEC §2).
+    """Lash-take-up ramp: constant acceleration over width w1, then constant velocity (physics §2).
 
     Height Hr = v (Wr - w1/2), so w1 = 2 (Wr - Hr/v), feasible iff Hr/v ≤ Wr ≤ 2 Hr/v. An
     infeasible ramp is clamped to the nearest feasible w1 (its height then differs from Hr) and
@@ -273,7 +273,7 @@ def multi_segment_cam(
     out,
     diag,
 ):
-    """Lift h and derivatives of the symmetric multi-segment cam on a grid (SPEC §2, §9).
+    """Lift h and derivatives of the symmetric multi-segment cam on a grid (physics §2, §9).
 
     Nose at θ = 0; for θ < 0 the ramp starts at -(Wr + W) and the working part spans [-W, 0];
     the fall (θ > 0) is the mirror image; base circle outside the event.
@@ -296,7 +296,7 @@ def multi_segment_cam(
     grid cannot hold.
     Invalid input (unknown shape, a negative width after absorption, a profile whose
     closure or lift system is singular) gives NaN curves with diag[D_INPUT_VALID] = 0.
-    Reference: SPEC §2 (12V150 exhaust-cam design method).
+    Reference: physics §2 (12V150 exhaust-cam design method).
     """
     w = np.empty(N_SEGMENTS)
     valid = segment_widths(widths, shapes, half_event, w)

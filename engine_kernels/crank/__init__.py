@@ -1,4 +1,4 @@
-"""Slider-crank kernels: kinematics, forces, multi-cylinder layouts, cycle pressure (SPEC §5).
+"""Slider-crank kernels: kinematics, forces, multi-cylinder layouts, cycle pressure (physics §5).
 
 One physical concept per module:
 

@@ -1,4 +1,4 @@
-"""Parametric single-zone cylinder-pressure cycle for the ``crank`` scene (SPEC §5).
+"""Parametric single-zone cylinder-pressure cycle for the ``crank`` scene (physics §5).
 
 A four-stroke cycle on the crank-angle grid of :mod:`engine_kernels.crank.kinematics` (α_j = 4π j/m,
 gas-exchange TDC at α = 0, firing TDC at α = 2π):
@@ -20,7 +20,7 @@ alone exceeds the target). The Wiebe law is normalised so the burned fraction re
 at the end of combustion: x_b = (1 − exp(−a τ^(m+1)))/(1 − exp(−a)), τ = (α − α_s)/Δα.
 
 References: Heywood, *Internal Combustion Engine Fundamentals* (2nd ed., 2018), §9.2
-(single-zone heat-release analysis, Wiebe function); SPEC §5.
+(single-zone heat-release analysis, Wiebe function); physics §5.
 """
 
 from __future__ import annotations
@@ -105,7 +105,7 @@ def cylinder_volume(bore, crank_radius, rod_ratio, compression_ratio, crank_angl
     rod_ratio        : float  λ = r/l [-].
     compression_ratio: float  ε [-].
     crank_angle      : float  α from TDC [rad].
-    Reference: SPEC §5 [K1] (exact displacement).
+    Reference: physics §5 [K1] (exact displacement).
     """
     area = 0.25 * math.pi * bore * bore
     clearance = 2.0 * crank_radius * area / (compression_ratio - 1.0)
@@ -199,7 +199,7 @@ def cycle_pressure_batch(params, out, pressure_out):
                                       W = Q − (p_eo − p_a)V_bdc/(k − 1) + (p_a − p_ex)V_d) and
                                       IMEP = W/V_d.
     pressure_out: float[n, m]         Pressure on α_j = 4π j/m [Pa] (m sets the grid).
-    Reference: module docstring; SPEC §5.
+    Reference: module docstring; physics §5.
     """
     m = pressure_out.shape[1]
     for i in prange(params.shape[0]):

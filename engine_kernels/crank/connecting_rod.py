@@ -1,4 +1,4 @@
-"""Connecting-rod motion of the slider crank: angle, angular velocity, acceleration (SPEC §5).
+"""Connecting-rod motion of the slider crank: angle, angular velocity, acceleration (physics §5).
 
 Rod angle β from sin β = λ sin α [K1], its rates at constant crank speed ω and their extremes
 over a revolution. Conventions in :mod:`engine_kernels.crank.kinematics`.
@@ -17,7 +17,7 @@ def rod_angle(rod_ratio, crank_angle):
 
     rod_ratio  : float  λ = r/l [-].
     crank_angle: float  Crank angle α from TDC [rad].
-    Reference: SPEC §5 [K1].
+    Reference: physics §5 [K1].
     """
     return math.asin(rod_ratio * math.sin(crank_angle))
 
@@ -29,7 +29,7 @@ def rod_angular_velocity(rod_ratio, angular_speed, crank_angle):
     rod_ratio    : float  λ = r/l [-].
     angular_speed: float  Crank speed ω [rad/s].
     crank_angle  : float  α from TDC [rad].
-    Reference: SPEC §5.
+    Reference: physics §5.
     """
     s = math.sin(crank_angle)
     return rod_ratio * angular_speed * math.cos(crank_angle) / math.sqrt(1.0 - (rod_ratio * s) ** 2)
@@ -42,7 +42,7 @@ def rod_angular_acceleration(rod_ratio, angular_speed, crank_angle):
     rod_ratio    : float  λ = r/l [-].
     angular_speed: float  Crank speed ω [rad/s].
     crank_angle  : float  α from TDC [rad].
-    Reference: SPEC §5 (exact, constant ω).
+    Reference: physics §5 (exact, constant ω).
     """
     s = math.sin(crank_angle)
     cos_beta = math.sqrt(1.0 - (rod_ratio * s) ** 2)
@@ -53,7 +53,7 @@ def rod_angular_acceleration(rod_ratio, angular_speed, crank_angle):
 def rod_angle_max(rod_ratio):
     """Largest rod angle β_max = asin λ, at α = 90° (and −β_max at 270°).
 
-    rod_ratio: float  λ = r/l [-]. Reference: SPEC §5.
+    rod_ratio: float  λ = r/l [-]. Reference: physics §5.
     """
     return math.asin(rod_ratio)
 
@@ -64,7 +64,7 @@ def rod_angular_velocity_max(rod_ratio, angular_speed):
 
     rod_ratio    : float  λ = r/l [-].
     angular_speed: float  Crank speed ω [rad/s].
-    Reference: SPEC §5.
+    Reference: physics §5.
     """
     return rod_ratio * angular_speed
 
@@ -77,6 +77,6 @@ def rod_angular_acceleration_max(rod_ratio, angular_speed):
 
     rod_ratio    : float  λ = r/l [-].
     angular_speed: float  Crank speed ω [rad/s].
-    Reference: SPEC §5.
+    Reference: physics §5.
     """
     return rod_ratio * angular_speed**2 / math.sqrt(1.0 - rod_ratio**2)

@@ -1,4 +1,4 @@
-"""Slider-crank forces and torque of one cylinder: the ``forces`` driver (SPEC §5 [F1]–[F3]).
+"""Slider-crank forces and torque of one cylinder: the ``forces`` driver (physics §5 [F1]–[F3]).
 
 This module holds the gas force [F1], the reciprocating inertia forces of first and second order
 [F2], the rotating inertia force [F3], the rod, side, tangential and radial forces, the
@@ -98,7 +98,7 @@ def gas_force(bore, pressure, crankcase_pressure):
     bore              : float  D [m].
     pressure          : float  Cylinder pressure p [Pa].
     crankcase_pressure: float  p0 [Pa].
-    Reference: SPEC §5 [F1].
+    Reference: physics §5 [F1].
     """
     return 0.25 * math.pi * bore * bore * (pressure - crankcase_pressure)
 
@@ -111,7 +111,7 @@ def reciprocating_inertia_first_order(reciprocating_mass, crank_radius, angular_
     crank_radius      : float  r [m].
     angular_speed     : float  ω [rad/s].
     crank_angle       : float  α from TDC [rad].
-    Reference: SPEC §5 [F2].
+    Reference: physics §5 [F2].
     """
     return -reciprocating_mass * crank_radius * angular_speed**2 * math.cos(crank_angle)
 
@@ -127,7 +127,7 @@ def reciprocating_inertia_second_order(
     rod_ratio         : float  λ [-].
     angular_speed     : float  ω [rad/s].
     crank_angle       : float  α from TDC [rad].
-    Reference: SPEC §5 [F2].
+    Reference: physics §5 [F2].
     """
     return (
         -reciprocating_mass
@@ -145,7 +145,7 @@ def rotating_inertia_force(rotating_mass, crank_radius, angular_speed):
     rotating_mass: float  mr [kg].
     crank_radius : float  r [m].
     angular_speed: float  ω [rad/s].
-    Reference: SPEC §5 [F3].
+    Reference: physics §5 [F3].
     """
     return -rotating_mass * crank_radius * angular_speed**2
 
@@ -156,7 +156,7 @@ def rod_force(piston_force, rod_angle_):
 
     piston_force: float  P = Pg + Pj [N].
     rod_angle_  : float  β [rad].
-    Reference: SPEC §5.
+    Reference: physics §5.
     """
     return piston_force / math.cos(rod_angle_)
 
@@ -167,7 +167,7 @@ def side_force(piston_force, rod_angle_):
 
     piston_force: float  P [N].
     rod_angle_  : float  β [rad].
-    Reference: SPEC §5.
+    Reference: physics §5.
     """
     return piston_force * math.tan(rod_angle_)
 
@@ -179,7 +179,7 @@ def tangential_force(piston_force, crank_angle, rod_angle_):
     piston_force: float  P [N].
     crank_angle : float  α [rad].
     rod_angle_  : float  β [rad].
-    Reference: SPEC §5.
+    Reference: physics §5.
     """
     return piston_force * math.sin(crank_angle + rod_angle_) / math.cos(rod_angle_)
 
@@ -191,7 +191,7 @@ def radial_force(piston_force, crank_angle, rod_angle_):
     piston_force: float  P [N].
     crank_angle : float  α [rad].
     rod_angle_  : float  β [rad].
-    Reference: SPEC §5.
+    Reference: physics §5.
     """
     return piston_force * math.cos(crank_angle + rod_angle_) / math.cos(rod_angle_)
 
@@ -205,7 +205,7 @@ def piston_force(model, row, pressure, crank_angle):
     row        : float[:]    One row of ``params`` (columns of :mod:`engine_kernels.crank.kinematics`).
     pressure   : float       Cylinder pressure p [Pa].
     crank_angle: float       α [rad].
-    Returns (Pg [N], Pj [N]). Reference: SPEC §5.
+    Returns (Pg [N], Pj [N]). Reference: physics §5.
     """
     r = row[CRANK_RADIUS]
     acc = piston_motion(model, r, row[ROD_RATIO], row[ANGULAR_SPEED], crank_angle)[2]
@@ -220,7 +220,7 @@ def crank_torque_curve(row, pressure, torque_out):
     row       : float[:]  One row of ``params``.
     pressure  : float[:]  Cylinder pressure on α_j = CYCLE_ANGLE·j/m [Pa].
     torque_out: float[:]  Output, length m [N m].
-    Reference: SPEC §5 (M = T r).
+    Reference: physics §5 (M = T r).
     """
     m = pressure.shape[0]
     model = int(row[KINEMATICS_MODEL])
@@ -245,7 +245,7 @@ def crank_forces_batch(params, pressure, out, curves_out):
     out       : float[n, N_FORCE_OUT]  Scalars, columns FORCE_* (names FORCE_OUTPUTS); the
                                      side force is the largest |N|.
     curves_out: float[n, N_FORCE_CURVES, m], or last dimension 0 to skip. Curves FC_*.
-    Reference: SPEC §5.
+    Reference: physics §5.
     """
     m = pressure.shape[1]
     shared = pressure.shape[0] == 1

@@ -1,4 +1,4 @@
-"""Slider-crank kinematics: the parameter matrix and piston and rod motion (SPEC §5).
+"""Slider-crank kinematics: the parameter matrix and piston and rod motion (physics §5).
 
 This module holds what every ``crank`` kernel shares — the cycle angle, the kinematics model
 codes and the columns of the parameter matrix — plus piston motion under the chosen model, its
@@ -158,7 +158,7 @@ def piston_motion(model, crank_radius, rod_ratio, angular_speed, crank_angle):
     rod_ratio    : float  λ = r/l [-].
     angular_speed: float  Crank speed ω [rad/s].
     crank_angle  : float  α from TDC [rad].
-    Returns (x [m], ẋ [m/s], ẍ [m/s²]). Reference: SPEC §5.
+    Returns (x [m], ẋ [m/s], ẍ [m/s²]). Reference: physics §5.
     """
     if model == MODEL_TWO_TERM:
         return (
@@ -184,7 +184,7 @@ def piston_velocity_max(model, crank_radius, rod_ratio, angular_speed):
     crank_radius : float  r [m].
     rod_ratio    : float  λ = r/l [-], 0 ≤ λ < 1.
     angular_speed: float  Crank speed ω [rad/s], > 0.
-    Returns (v_max [m/s], α [rad]). Reference: SPEC §5 [K1]/[K3].
+    Returns (v_max [m/s], α [rad]). Reference: physics §5 [K1]/[K3].
     """
     lo = 0.0
     hi = 0.5 * math.pi
@@ -210,7 +210,7 @@ def piston_acceleration_min(model, crank_radius, rod_ratio, angular_speed):
     crank_radius : float  r [m].
     rod_ratio    : float  λ = r/l [-].
     angular_speed: float  Crank speed ω [rad/s].
-    Returns ẍ_min [m/s²]. Reference: SPEC §5 [K1]/[K4].
+    Returns ẍ_min [m/s²]. Reference: physics §5 [K1]/[K4].
     """
     lo = 0.5 * math.pi
     hi = math.pi
@@ -242,7 +242,7 @@ def mean_piston_speed(crank_radius, angular_speed):
 
     crank_radius : float  r [m].
     angular_speed: float  Crank speed ω [rad/s].
-    Reference: SPEC §5.
+    Reference: physics §5.
     """
     return 2.0 * crank_radius * angular_speed / math.pi
 
@@ -263,7 +263,7 @@ def crank_kinematics_batch(params, n_angles, out, curves_out):
 
     Velocity maximum and acceleration minimum are located to machine precision; the two-term
     model's errors (max |exact − two-term| of x, ẋ, ẍ) are grid maxima.
-    Reference: SPEC §5.
+    Reference: physics §5.
     """
     store = curves_out.shape[2] > 0
     for i in prange(params.shape[0]):

@@ -1,4 +1,4 @@
-"""Multi-cylinder layouts of the slider-crank engine: the ``multicylinder`` driver (SPEC §5).
+"""Multi-cylinder layouts of the slider-crank engine: the ``multicylinder`` driver (physics §5).
 
 This module holds firing angles (even, and V engines with shared crankpins), cylinder axis
 angles of V layouts, the free first- and second-order reciprocating forces and moments of a
@@ -57,7 +57,7 @@ MULTI_OUTPUT_UNITS = ("N m", "N m", "N m", "N m", "-", "W", "N", "N", "N m", "N 
 
 @jit
 def even_firing_angles(firing_order, firing_out):
-    """Even firing: cylinder firing_order[k] fires at k·720°/z  (SPEC §5).
+    """Even firing: cylinder firing_order[k] fires at k·720°/z  (physics §5).
 
     firing_order: int[:]    Cylinder numbers (1-based) in firing order, length z.
     firing_out  : float[:]  Output, firing angle of cylinder c at index c − 1 [rad].
@@ -79,7 +79,7 @@ def v_crank_firing_angles(firing_order, bank_angle, firing_out):
     firing_order: int[:]    Cylinder numbers (1-based) in firing order, even length z.
     bank_angle  : float     γ between the banks [rad].
     firing_out  : float[:]  Output, firing angle of cylinder c at index c − 1 [rad].
-    Reference: SPEC §5 (a 6-throw V12 fires evenly only at a 60° bank).
+    Reference: physics §5 (a 6-throw V12 fires evenly only at a 60° bank).
     """
     z = firing_order.shape[0]
     for k in range(z):
@@ -98,7 +98,7 @@ def v_axis_angles(firing_order, bank_angle, axis_out):
     firing_order: int[:]    Cylinder numbers (1-based) in firing order.
     bank_angle  : float     γ [rad].
     axis_out    : float[:]  Output, axis angle of cylinder c at index c − 1 [rad].
-    Reference: SPEC §5.
+    Reference: physics §5.
     """
     for k in range(firing_order.shape[0]):
         axis_out[firing_order[k] - 1] = bank_angle * ((k % 2) - 0.5)
@@ -113,7 +113,7 @@ def free_force_amplitude(a_x, a_y, b_x, b_y):
 
     a_x, a_y: float  Components of A [N].
     b_x, b_y: float  Components of B [N].
-    Reference: SPEC §5 (free forces of a layout).
+    Reference: physics §5 (free forces of a layout).
     """
     aa = a_x * a_x + a_y * a_y
     bb = b_x * b_x + b_y * b_y
@@ -172,7 +172,7 @@ def free_reciprocating_force(
     axis              : float[:]  Cylinder axis angles θ_i [rad].
     cylinders         : int       Number of cylinders used (leading entries of the arrays).
     order             : int       1 or 2.
-    Returns the largest magnitude of the resultant [N]. Reference: SPEC §5 [F2].
+    Returns the largest magnitude of the resultant [N]. Reference: physics §5 [F2].
     """
     scale = reciprocating_mass * crank_radius * angular_speed**2 * rod_ratio ** (order - 1)
     return scale * layout_resultant(firing, axis, np.ones(cylinders), cylinders, order)
@@ -199,7 +199,7 @@ def free_reciprocating_moment(
     positions: float[:]  Axial position z_i of each cylinder's axis along the crankshaft [m];
                          NaN where it is not modelled (then the result is NaN).
     Other arguments as in :func:`free_reciprocating_force`. Returns the largest magnitude
-    [N m]. Reference: SPEC §5 [F2]; e.g. Taylor, *The Internal-Combustion Engine in Theory
+    [N m]. Reference: physics §5 [F2]; e.g. Taylor, *The Internal-Combustion Engine in Theory
     and Practice*, vol. 2, ch. 8 (couples of multi-cylinder engines).
     """
     middle = positions[:cylinders].sum() / cylinders
@@ -270,7 +270,7 @@ def crank_multicylinder_batch(
     harmonics_out: float[n, q_max]     Amplitude of engine orders 0.5, 1, 1.5, …, q_max/2 [N m]
                                        (q_max may be 0).
     curves_out   : float[n, 1, m], or last dimension 0 to skip. Summed torque [N m].
-    Reference: SPEC §5.
+    Reference: physics §5.
     """
     m = pressure.shape[1]
     shared_p = pressure.shape[0] == 1

@@ -1,4 +1,4 @@
-"""Piston motion of the slider crank: exact [K1] and two-term [K2]–[K4] relations (SPEC §5).
+"""Piston motion of the slider crank: exact [K1] and two-term [K2]–[K4] relations (physics §5).
 
 Displacement x from TDC, velocity ẋ and acceleration ẍ at crank angle α, constant crank speed
 ω. Conventions in :mod:`engine_kernels.crank.kinematics`.
@@ -21,7 +21,7 @@ def piston_displacement_exact(crank_radius, rod_ratio, crank_angle):
     crank_radius: float  r [m].
     rod_ratio   : float  λ = r/l [-].
     crank_angle : float  α from TDC [rad].
-    Reference: SPEC §5 [K1].
+    Reference: physics §5 [K1].
     """
     s = math.sin(crank_angle)
     cos_beta = math.sqrt(1.0 - (rod_ratio * s) ** 2)
@@ -36,7 +36,7 @@ def piston_velocity_exact(crank_radius, rod_ratio, angular_speed, crank_angle):
     rod_ratio    : float  λ = r/l [-].
     angular_speed: float  Crank speed ω [rad/s].
     crank_angle  : float  α from TDC [rad].
-    Reference: SPEC §5 [K1], differentiated once in time at constant ω.
+    Reference: physics §5 [K1], differentiated once in time at constant ω.
     """
     s = math.sin(crank_angle)
     cos_beta = math.sqrt(1.0 - (rod_ratio * s) ** 2)
@@ -55,7 +55,7 @@ def piston_acceleration_exact(crank_radius, rod_ratio, angular_speed, crank_angl
     rod_ratio    : float  λ = r/l [-].
     angular_speed: float  Crank speed ω [rad/s].
     crank_angle  : float  α from TDC [rad].
-    Reference: SPEC §5 [K1], differentiated twice in time at constant ω.
+    Reference: physics §5 [K1], differentiated twice in time at constant ω.
     """
     s = math.sin(crank_angle)
     cos_beta = math.sqrt(1.0 - (rod_ratio * s) ** 2)
@@ -78,7 +78,7 @@ def piston_displacement_two_term(crank_radius, rod_ratio, crank_angle):
     crank_radius: float  r [m].
     rod_ratio   : float  λ = r/l [-].
     crank_angle : float  α from TDC [rad].
-    Reference: SPEC §5 [K2].
+    Reference: physics §5 [K2].
     """
     return crank_radius * (
         (1.0 - math.cos(crank_angle)) + 0.25 * rod_ratio * (1.0 - math.cos(2.0 * crank_angle))
@@ -93,7 +93,7 @@ def piston_velocity_two_term(crank_radius, rod_ratio, angular_speed, crank_angle
     rod_ratio    : float  λ = r/l [-].
     angular_speed: float  Crank speed ω [rad/s].
     crank_angle  : float  α from TDC [rad].
-    Reference: SPEC §5 [K3].
+    Reference: physics §5 [K3].
     """
     return (
         crank_radius
@@ -110,7 +110,7 @@ def piston_acceleration_two_term(crank_radius, rod_ratio, angular_speed, crank_a
     rod_ratio    : float  λ = r/l [-].
     angular_speed: float  Crank speed ω [rad/s].
     crank_angle  : float  α from TDC [rad].
-    Reference: SPEC §5 [K4].
+    Reference: physics §5 [K4].
     """
     return (
         crank_radius

@@ -1,4 +1,4 @@
-"""Trolley drive chain of the luffing rig: resistance, motor, belt, coupling, key, bearing (SPEC §7).
+"""Trolley drive chain of the luffing rig: resistance, motor, belt, coupling, key, bearing (physics §7).
 
 Resistance [L1] → work power → drive efficiency → required motor power → next rated motor →
 belt design power, pulley, shaft load → coupling torque, key crushing stress, bearing life
@@ -33,7 +33,7 @@ def travel_resistance(
     speed               : float  V [m/s].
     friction_coefficient: float  μ [-].
     gravity             : float  g [m/s²].
-    Reference: SPEC §7 [L1].
+    Reference: physics §7 [L1].
     """
     return acceleration * mass + damping_coefficient * speed + friction_coefficient * mass * gravity
 
@@ -45,7 +45,7 @@ def work_power(resistance, speed, work_efficiency):
     resistance     : float  Fw [N].
     speed          : float  V [m/s].
     work_efficiency: float  ηw [-].
-    Reference: SPEC §7.
+    Reference: physics §7.
     """
     return resistance * speed / work_efficiency
 
@@ -57,7 +57,7 @@ def drive_efficiency(coupling_efficiency, belt_efficiency, bearing_efficiency):
     coupling_efficiency: float  [-].
     belt_efficiency    : float  [-].
     bearing_efficiency : float  [-].
-    Reference: SPEC §7.
+    Reference: physics §7.
     """
     return coupling_efficiency * belt_efficiency * bearing_efficiency
 
@@ -68,7 +68,7 @@ def motor_power_required(work_power_, efficiency):
 
     work_power_: float  Pw [W].
     efficiency : float  η [-].
-    Reference: SPEC §7.
+    Reference: physics §7.
     """
     return work_power_ / efficiency
 
@@ -79,7 +79,7 @@ def next_rated_motor(required_power, rated_powers):
 
     required_power: float     P0 [W].
     rated_powers  : float[:]  Rated powers of the available motors, ascending [W].
-    Returns the index, or NO_MOTOR. Reference: SPEC §7.
+    Returns the index, or NO_MOTOR. Reference: physics §7.
     """
     for k in range(rated_powers.shape[0]):
         if rated_powers[k] >= required_power:
@@ -93,7 +93,7 @@ def belt_design_power(service_factor, power):
 
     service_factor: float  KA [-].
     power         : float  Transmitted power P [W].
-    Reference: SPEC §7.
+    Reference: physics §7.
     """
     return service_factor * power
 
@@ -104,7 +104,7 @@ def pulley_pitch_diameter(pitch, teeth):
 
     pitch: float  Belt pitch p [m].
     teeth: float  Number of teeth Z [-].
-    Reference: SPEC §7.
+    Reference: physics §7.
     """
     return pitch * teeth / math.pi
 
@@ -115,7 +115,7 @@ def shaft_load(design_power, belt_speed):
 
     design_power: float  Pd [W].
     belt_speed  : float  V [m/s].
-    Reference: SPEC §7.
+    Reference: physics §7.
     """
     return design_power / belt_speed
 
@@ -127,7 +127,7 @@ def implied_reduction_ratio(motor_speed, belt_speed, pitch_diameter):
     motor_speed   : float  ω_motor [rad/s].
     belt_speed    : float  V [m/s].
     pitch_diameter: float  d [m].
-    Reference: SPEC §7 (consistency check of the 1:1 belt).
+    Reference: physics §7 (consistency check of the 1:1 belt).
     """
     return motor_speed * pitch_diameter / (2.0 * belt_speed)
 
@@ -142,7 +142,7 @@ def coupling_torque(power, speed, kw, k, kz, kt):
     k    : float  Working-machine factor [-].
     kz   : float  Start-frequency factor [-].
     kt   : float  Temperature factor [-].
-    Reference: SPEC §7.
+    Reference: physics §7.
     """
     return power * kw * k * kz * kt / speed
 
@@ -155,7 +155,7 @@ def key_crushing_stress(torque, contact_height, length, shaft_diameter):
     contact_height: float  k, key height in contact with the hub [m].
     length        : float  l, working length of the key [m].
     shaft_diameter: float  d [m].
-    Reference: SPEC §7.
+    Reference: physics §7.
     """
     return 2.0 * torque / (contact_height * length * shaft_diameter)
 
@@ -177,6 +177,6 @@ def bearing_life(rating, load, speed, exponent):
     load    : float  Equivalent load P [N].
     speed   : float  Shaft speed ω [rad/s].
     exponent: float  p [-] (:func:`bearing_life_exponent`).
-    Reference: SPEC §7; ISO 281.
+    Reference: physics §7; ISO 281.
     """
     return (rating / load) ** exponent * RATING_REVOLUTIONS * 2.0 * math.pi / speed

@@ -1,4 +1,4 @@
-"""Guide tube of the luffing rig: a simply supported beam loaded at mid-span [L2] (SPEC §7).
+"""Guide tube of the luffing rig: a simply supported beam loaded at mid-span [L2] (physics §7).
 
 Second moment of the tube section, mid-span deflection and end slope under the trolley load
 and the tube's own weight. SI units throughout.
@@ -17,7 +17,7 @@ def tube_second_moment(outer_diameter, inner_diameter):
 
     outer_diameter: float  D [m].
     inner_diameter: float  d [m].
-    Reference: SPEC §7.
+    Reference: physics §7.
     """
     return math.pi * (outer_diameter**4 - inner_diameter**4) / 64.0
 
@@ -27,11 +27,11 @@ def tube_midspan_deflection(load, weight, span, modulus, second_moment):
     """Mid-span deflection of a simply supported tube, y = (F + G) l³/(48 E I)  [L2].
 
     load         : float  F [N].
-    weight       : float  G [N] (treated as acting at mid-span, as in the SPEC).
+    weight       : float  G [N] (treated as acting at mid-span, as in docs/physics.md).
     span         : float  l [m].
     modulus      : float  E [Pa].
     second_moment: float  I [m⁴].
-    Reference: SPEC §7 [L2].
+    Reference: physics §7 [L2].
     """
     return (load + weight) * span**3 / (48.0 * modulus * second_moment)
 
@@ -45,6 +45,6 @@ def tube_end_slope(load, weight, span, modulus, second_moment):
     span         : float  l [m].
     modulus      : float  E [Pa].
     second_moment: float  I [m⁴].
-    Reference: SPEC §7 [L2].
+    Reference: physics §7 [L2].
     """
     return (load + weight) * span**2 / (16.0 * modulus * second_moment)

@@ -1,4 +1,4 @@
-"""Tower-crane test-rig trolley drive sizing checks: the ``luffing`` scene (SPEC §7).
+"""Tower-crane test-rig trolley drive sizing checks: the ``luffing`` scene (physics §7).
 
 This module holds the parameter and output columns and the batch driver; the formulas of the
 drive chain are in :mod:`engine_kernels.luffing.drive`, those of the guide tube in
@@ -9,7 +9,7 @@ resistance [L1] → work power → drive efficiency → required motor power →
 belt design power, pulley, shaft load → coupling torque, key, bearing life; the guide tube is a
 simply supported beam loaded at mid-span [L2].
 
-Choices the SPEC leaves open (documented here, applied in :func:`luffing_batch`):
+Choices the physics reference leaves open (documented here, applied in :func:`luffing_batch`):
 
 * belt design power, coupling torque and everything downstream use the *rated* power of the
   selected motor (the drive must carry what the motor can deliver);
@@ -24,7 +24,7 @@ Every check is written as (value, limit, pass) with pass = 1.0 or 0.0; all quant
 (the coupling-torque formula 9550·P[kW]·K/n[rpm] is T = P K/ω in SI; bearing life in seconds:
 L10h = life/3600).
 
-Reference: SPEC §7; bearing life ISO 281 (basic rating life L10 = (C/P)^p 10⁶ revolutions,
+Reference: physics §7; bearing life ISO 281 (basic rating life L10 = (C/P)^p 10⁶ revolutions,
 p = 3 ball, 10/3 roller).
 """
 
@@ -205,20 +205,20 @@ def check_flag(passed):
     """Pass flag of a design check: 1.0 if it passes, else 0.0.
 
     passed: bool  Outcome of the comparison (comparisons with NaN are False, so NaN fails).
-    Reference: SPEC §7 (checks as value, limit, pass).
+    Reference: physics §7 (checks as value, limit, pass).
     """
     return 1.0 if passed else 0.0
 
 
 @batch
 def luffing_batch(params, rated_powers, out):
-    """All SPEC §7 sizing quantities and checks of every case.
+    """All physics §7 sizing quantities and checks of every case.
 
     params      : float[n, N_PARAMS]  Case parameters (columns of this module).
     rated_powers: float[k]            Rated powers of the available motors, ascending [W].
     out         : float[n, N_OUT]     Columns OUT_* (names OUTPUTS); NaN motor quantities (and
                                       those derived from them) when no listed motor suffices.
-    Reference: SPEC §7; choices in the module docstring.
+    Reference: physics §7; choices in the module docstring.
     """
     for i in prange(params.shape[0]):
         row = params[i]

@@ -1,4 +1,4 @@
-"""Valve-train kernels: rocker, valve model [V1], [V2], RK4 integrators, lanes (SPEC §3, §4).
+"""Valve-train kernels: rocker, valve model [V1], [V2], RK4 integrators, lanes (physics §3, §4).
 
 One physical concept per module:
 

@@ -1,4 +1,4 @@
-"""Energy balance of a valve run: the physics check behind ``STATUS_UNSTABLE`` (SPEC §4).
+"""Energy balance of a valve run: the physics check behind ``STATUS_UNSTABLE`` (physics §4).
 
 The valve-train energy may never exceed its start value plus the work the cam did through the
 drive, and may only fall once the valve has closed on the base circle (checked every

@@ -1,4 +1,4 @@
-"""Stability guard of the valve integrators: input checks and RK4 sub-step counts (SPEC §4).
+"""Stability guard of the valve integrators: input checks and RK4 sub-step counts (physics §4).
 
 Explicit RK4 is stable only while ``|h λ|`` stays inside its stability region for every
 eigenvalue of the active linear system. Before a case is integrated, the largest eigenvalue
@@ -43,7 +43,7 @@ STEP_RATIO_TARGET = 2.0
 
 @jit
 def valid_valve_parameters(params, excitation):
-    """True if the parameter row and excitation table can be integrated (SPEC §4 inputs).
+    """True if the parameter row and excitation table can be integrated (physics §4 inputs).
 
     params     : 1-D array  Parameter row (``P_*``, SI units).
     excitation : 2-D array  Excitation table (3, n); at least one RK4 step (n ≥ 3).

@@ -1,4 +1,4 @@
-"""Valve jump: the lowest camshaft speed at which the valve leaves its drive (SPEC §4).
+"""Valve jump: the lowest camshaft speed at which the valve leaves its drive (physics §4).
 
 A scan over speeds followed by bisection, each speed one run of
 :func:`engine_kernels.valvetrain.integrator.valve_response`.
@@ -40,7 +40,7 @@ def jump_speed(
     scan_points,
     tolerance,
 ):
-    """Lowest camshaft speed at which the valve separates from the drive (SPEC §4).
+    """Lowest camshaft speed at which the valve separates from the drive (physics §4).
 
     Scans ``scan_points`` geometrically spaced speeds from ``speed_low`` to ``speed_high``
     for the first one with a jump (``O_JUMP_DURATION > 0``), then bisects between it and

@@ -1,9 +1,9 @@
-"""Valve dynamics [V2] of many cases in SIMD blocks: the lane batch drivers (SPEC §4).
+"""Valve dynamics [V2] of many cases in SIMD blocks: the lane batch drivers (physics §4).
 
 :func:`valve_response_lanes` gives the results of
 :func:`engine_kernels.valvetrain.integrator.valve_response_batch` (plain RK4, no curves),
 ``LANES`` cases per block stepped together by :mod:`engine_kernels.valvetrain.lanes`, about
-4× more cases per CPU-second at the SPEC §9 step. The cases are grouped by the RK4 sub-step
+4× more cases per CPU-second at the physics §9 step. The cases are grouped by the RK4 sub-step
 count the stability guard gives each of them, so a block steps all its lanes together with
 one count while each case keeps exactly its own: a case's results do not depend on which
 other cases share its block. Blocks run in a ``prange``, in an order that spreads the costly
@@ -167,7 +167,7 @@ def valve_response_lanes(excitation, table_step, table_start, params, settings, 
 
     Same arguments and outputs as :func:`engine_kernels.valvetrain.integrator.valve_response_batch`
     (``settings[S_SWITCH_AWARE]`` is ignored: this kernel is plain fixed-step RK4).
-    Reference: SPEC §4; STYLE "Hot integrators process a block of cases in SIMD lanes".
+    Reference: physics §4; STYLE "Hot integrators process a block of cases in SIMD lanes".
     """
     n_cases = params.shape[0]
     substeps = np.empty(n_cases, dtype=np.int64)

@@ -4,7 +4,7 @@ Within a step of :func:`engine_kernels.valvetrain.switching.switch_aware_step` t
 contact and the seat contact are either on or off (no clipping); these kernels give the
 acceleration and one RK4 step in such a fixed mode of [V2], and the modes a state implies.
 The coefficients are those of a ``P_*`` parameter row (SI units, as in
-:func:`engine_kernels.valvetrain.model.valve_acceleration`). Reference: SPEC §4.
+:func:`engine_kernels.valvetrain.model.valve_acceleration`). Reference: physics §4.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Fixed-step classic Runge–Kutta helpers: stability bound, sub-step count, dense output.
 
-The valve kernels step a piecewise-linear oscillator with classic RK4 (SPEC §4). Explicit RK4
+The valve kernels step a piecewise-linear oscillator with classic RK4 (physics §4). Explicit RK4
 is stable while ``|h λ|`` stays inside its stability region for every eigenvalue ``λ`` of the
 active linear system. The region reaches 2√2 = 2.828 on the imaginary axis (undamped modes)
 and 2.785 on the negative real axis (heavily over-damped modes), but between the two it dips:
@@ -41,7 +41,7 @@ def oscillator_spectral_radius(mass, damping, stiffness):
     """Largest eigenvalue modulus ``max |λ|`` of ``M λ² + c λ + K = 0``.
 
     Under-damped modes have ``|λ| = sqrt(K/M)``; over-damped ones a fast real eigenvalue
-    ``(c + sqrt(c² − 4MK))/(2M)``, larger than the natural frequency (SPEC §4, stability).
+    ``(c + sqrt(c² − 4MK))/(2M)``, larger than the natural frequency (physics §4, stability).
 
     mass      : float  Mass M [kg], > 0.
     damping   : float  Viscous damping c [N s/m], ≥ 0.

@@ -1,4 +1,4 @@
-"""Overhead cam with a variable-ratio rocker: valve lift from the flat-tappet lift law (SPEC §3).
+"""Overhead cam with a variable-ratio rocker: valve lift from the flat-tappet lift law (physics §3).
 
 The cam is given by its flat-tappet lift law ``h(φ)`` (with ``h'`` and ``h''``) on a grid of
 tappet angles φ, in lift-table order (φ increases with time, nose at φ = 0). A rocker pivoting
@@ -9,14 +9,14 @@ puts it in contact and to the rocker angle W and valve lift Y; the non-uniform `
 resampled onto the caller's cam-angle grid with cubic Hermite pieces whose slopes are the exact
 chain derivatives.
 
-Sign convention (SPEC §3): φ, ψ and φr are measured in the direction of rotation. With the pad
+Sign convention (physics §3): φ, ψ and φr are measured in the direction of rotation. With the pad
 centre A *ahead* of the line OcO (``PAD_AHEAD``) ``φr = φ + ψ + (K − K_d)``; *behind*
 (``PAD_BEHIND``) ``φr = φ + ψ − (K − K_d)``. Because ``K`` falls as the pad rises, a symmetric
 cam with the pad ahead opens over a shorter cam angle than it closes (steeper opening flank,
 larger opening than closing velocity); with the pad behind it is the mirror image.
 
 Geometry is passed as a 1-D array indexed by the ``G_*`` constants (all lengths in m).
-Reference: SPEC §3 (125 cc motorcycle OHC valve train).
+Reference: physics §3 (125 cc motorcycle OHC valve train).
 """
 
 from __future__ import annotations
@@ -141,7 +141,7 @@ def cam_centre_angle(pad_arm, centre_distance, centre_to_pad):
 def base_circle_rocker_angle(base_radius, pad_radius, pad_arm, centre_distance):
     """Rocker angle W0 with the pad on the base circle [R5].
 
-    ``W0 = acos((la² + lc² − (r0 + rs)²)/(2 la lc))``; 73.543° for the SPEC §3 geometry.
+    ``W0 = acos((la² + lc² − (r0 + rs)²)/(2 la lc))``; 73.543° for the physics §3 geometry.
 
     base_radius     : float  Cam base-circle radius r0 [m].
     pad_radius      : float  Rocker pad radius rs [m].
@@ -155,7 +155,7 @@ def base_circle_rocker_angle(base_radius, pad_radius, pad_arm, centre_distance):
 def valve_arm_base_angle(valve_arm, ball_radius, stem_height, lash):
     """Valve-arm angle β0 on the base circle, from the plane through O normal to the valve [R6].
 
-    ``β0 = asin((Δ + ρb + z)/lb)``; 20.583° for the SPEC §3 geometry.
+    ``β0 = asin((Δ + ρb + z)/lb)``; 20.583° for the physics §3 geometry.
 
     valve_arm   : float  Pivot to ball-centre distance lb [m].
     ball_radius : float  Adjusting-screw ball radius ρb [m].
@@ -186,7 +186,7 @@ def tappet_lift_for_valve_lift(valve_lift, geometry):
     """Tappet lift at the nose (h' = 0) that gives a theoretical valve lift Y [R3], [R6].
 
     Closed-form inverse of the chain at the nose, used to scale a lift law to a target valve
-    lift (SPEC §3: 7.815 mm of valve lift is about 6.30 mm of tappet lift).
+    lift (physics §3: 7.815 mm of valve lift is about 6.30 mm of tappet lift).
 
     valve_lift : float     Theoretical valve lift Y [m].
     geometry   : 1-D array Rocker geometry indexed by the ``G_*`` constants [m].
@@ -208,7 +208,7 @@ def tappet_lift_for_valve_lift(valve_lift, geometry):
 def force_ratio(
     centre_distance, cam_angle_signed, offset_angle, centre_to_pad, valve_arm, arm_angle
 ):
-    """Force ratio i = valve force / cam force from virtual work (SPEC §3).
+    """Force ratio i = valve force / cam force from virtual work (physics §3).
 
     ``i`` = normal velocity of the pad at the contact / valve velocity = ``d/(lb cos β)``,
     where ``d = lc sin(κ + ψ) − R sin ψ`` is the moment arm of the contact normal about O
@@ -269,7 +269,7 @@ def rocker_valve_lift(phi, lift, lift_velocity, lift_acceleration, geometry, sid
 
     Returns an int status: ``ROCKER_OK`` or a sum of ``ROCKER_*`` flags (see
     ``ROCKER_STATUS_FLAGS``); the curves are still filled so the caller can report them.
-    Reference: SPEC §3.
+    Reference: physics §3.
     """
     r0 = geometry[G_BASE_RADIUS]
     rs = geometry[G_PAD_RADIUS]

@@ -18,7 +18,7 @@ closed its share ``g = clash_travel/(N+1)`` of the travel to solid. Equations of
 
 ``M_v`` is the valve-side mass without any spring share. The segment damper is stiffness
 proportional, ``c_s = 2 ζ_s k_seg/ω_1``, so the first fixed–fixed spring mode has the modal
-damping ratio ζ_s (higher modes ζ_n = ζ_s ω_n/ω_1). Reference: SPEC §4 [V2], [V4]; the
+damping ratio ζ_s (higher modes ζ_n = ζ_s ω_n/ω_1). Reference: physics §4 [V2], [V4]; the
 fixed–fixed lumped chain: Meirovitch, *Fundamentals of Vibrations*, §8.5 (beaded string).
 """
 
@@ -70,7 +70,7 @@ def continuous_spring_frequency(spring_rate, spring_mass, mode):
     """Natural frequency of the continuous spring, ends held, ``f_n = (n/2)·√(ks/m_s)`` [Hz].
 
     spring_rate : float  Spring rate ks [N/m];  spring_mass : float  m_s [kg].
-    mode        : int    Mode number n ≥ 1 [-]. Reference: SPEC [V4] (wave equation).
+    mode        : int    Mode number n ≥ 1 [-]. Reference: [V4] (wave equation).
     """
     return 0.5 * mode * math.sqrt(spring_rate / spring_mass)
 

@@ -7,7 +7,7 @@ sub-stepped and judged the same way by both.
 Stability guard: the bound of :func:`~engine_kernels.valvetrain.spring_chain.chain_spectral_radius`
 (every contact active, coil clash included) sets equal sub-steps keeping ``|h λ| ≤ 2`` (the
 lumped kernel's ``STEP_RATIO_TARGET``, under RK4's 2.6); past ``max_substeps`` the case is
-refused with ``STATUS_SUBSTEP_LIMIT``. Reference: SPEC §4 [V2], [V4].
+refused with ``STATUS_SUBSTEP_LIMIT``. Reference: physics §4 [V2], [V4].
 """
 
 from __future__ import annotations

@@ -50,7 +50,7 @@ def chain_jump_speed(
     scan_points,
     tolerance,
 ):
-    """Lowest camshaft speed at which the valve separates, multi-mass spring (SPEC §4, [V4]).
+    """Lowest camshaft speed at which the valve separates, multi-mass spring (physics §4, [V4]).
 
     Returns ``(speed [rad/s], code)`` with the codes of
     :func:`engine_kernels.valvetrain.jump.jump_speed`. params : 1-D array ``SC_*`` row (its

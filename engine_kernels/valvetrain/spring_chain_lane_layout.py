@@ -17,7 +17,7 @@ integrators", as :mod:`engine_kernels.valvetrain.lanes`):
 
 Within a node sweep the rows a lane loop touches in one array sit a compile-time number of
 rows apart, so the compiler sees that they never overlap; across the three arrays it checks
-once per loop at run time. Reference: SPEC §4 [V4].
+once per loop at run time. Reference: physics §4 [V4].
 """
 
 from __future__ import annotations

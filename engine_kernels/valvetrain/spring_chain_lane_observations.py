@@ -6,7 +6,7 @@ energy balance, jump, seat phase, bounces, seating velocity) with its branches w
 selects, inlined into the valve loop of the observation sweep
 (:mod:`engine_kernels.valvetrain.spring_chain_lanes`), which then vectorises.
 They update the ``LO_*`` rows of :mod:`engine_kernels.valvetrain.spring_chain_lane_layout`.
-Reference: SPEC §4 [V2], [V4].
+Reference: physics §4 [V2], [V4].
 """
 
 from __future__ import annotations

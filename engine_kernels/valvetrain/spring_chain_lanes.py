@@ -23,7 +23,7 @@ block: the drive velocity ω·Y' and the coil accelerations pass through rows. W
 lane loops vectorised (checked in the tests): inlined helpers (``jit_inline``) with selects,
 no calls; unsigned node indices (no wraparound branch); the stage a constant of each sweep;
 NumPy's error model (``jit_lanes``: no divide-by-zero branch).
-Reference: SPEC §4 [V2], [V4].
+Reference: physics §4 [V2], [V4].
 """
 
 from __future__ import annotations

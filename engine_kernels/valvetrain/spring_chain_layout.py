@@ -61,7 +61,7 @@ CHAIN_PARAM_NAMES = (
 )
 CHAIN_PARAM_UNITS = (*VALVE_PARAM_UNITS, *(u for _, u in _SPRING))
 
-# Valid numbers of coil masses (SPEC [V4], issue 12: 1–24).
+# Valid numbers of coil masses ([V4], issue 12: 1–24).
 MIN_SPRING_MASSES = 1
 MAX_SPRING_MASSES = 24
 

@@ -14,7 +14,7 @@ run's energy scale is ``STATUS_UNSTABLE``.
 Observations are taken at every RK4 sub-step point (a coil clash or a seat landing can last
 less than a grid step). The batch entry :func:`spring_chain_response_batch` runs blocks of
 cases in SIMD lanes (:mod:`engine_kernels.valvetrain.spring_chain_lanes`), with the same
-numbers. Reference: SPEC §4 [V2], [V4].
+numbers. Reference: physics §4 [V2], [V4].
 """
 
 from __future__ import annotations
@@ -104,7 +104,7 @@ def _rk4_substep(s, tau, ym, vm, y1, v1, c):
 
 @jit
 def spring_chain_response(excitation, table_step, table_start, params, settings, out, curves):
-    """Valve dynamics of one case with the N-mass spring [V4], fixed-step RK4 (SPEC §4).
+    """Valve dynamics of one case with the N-mass spring [V4], fixed-step RK4 (physics §4).
 
     excitation  : 2-D array  (3, n) rows Y [m], Y' [m/rad], Y'' [m/rad²] at ``table_step``.
     table_step  : float      Table spacing [rad cam]; the RK4 grid step is twice it.
@@ -267,7 +267,7 @@ def spring_chain_response_batch(excitation, table_step, table_start, params, set
     than ``MIN_BLOCK_CASES`` runs its cases one at a time, where the lanes would cost more.
     params : 2-D array  (n_cases, len(CHAIN_PARAM_NAMES)) ``SC_*`` rows (N may differ per row).
     out    : 2-D array  (n_cases, len(CHAIN_OUTPUT_NAMES)) outputs ``CO_*``.
-    Other arguments as in :func:`spring_chain_response`. Reference: SPEC §4 [V4]; STYLE "Hot
+    Other arguments as in :func:`spring_chain_response`. Reference: physics §4 [V4]; STYLE "Hot
     integrators".
     """
     n_cases = params.shape[0]

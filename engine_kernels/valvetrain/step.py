@@ -1,6 +1,6 @@
 """One plain RK4 step of the valve model [V2], shared by the one-case and lane integrators.
 
-Reference: Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.1; SPEC §4.
+Reference: Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.1; physics §4.
 """
 
 from __future__ import annotations

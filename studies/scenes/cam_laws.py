@@ -1,6 +1,6 @@
 """The cam lift laws every cam-driven scene shares (``cam``, ``rocker``, ``valve``): the law and
 segment-shape names and their kernel codes, the six-segment profile's parameters (12V150
-initial design, SPEC §9), and the conditions a polydyne polynomial must meet."""
+initial design, physics §9), and the conditions a polydyne polynomial must meet."""
 
 from __future__ import annotations
 

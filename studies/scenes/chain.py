@@ -1,4 +1,4 @@
-"""Scene ``rocker``: OHC cam with a variable-ratio rocker, valve kinematics (SPEC §3).
+"""Scene ``rocker``: OHC cam with a variable-ratio rocker, valve kinematics (physics §3).
 
 Two stages, each a compiled kernel:
 

@@ -1,9 +1,9 @@
 """Declarations of the ``rocker`` scene: parameters, settings, responses and curves.
 
-Defaults are the SPEC §3 reference valve train (125 cc motorcycle OHC rocker) and a synthetic
+Defaults are the physics §3 reference valve train (125 cc motorcycle OHC rocker) and a synthetic
 convex cam: the §9 six-segment acceleration shape over ±70° cam without a ramp, scaled so that
 the theoretical valve lift is 7.815 mm (about 6.30 mm of tappet lift). The segment parameters
-are the ``cam`` scene's declarations (12V150 initial design, SPEC §9). ``source`` on each
+are the ``cam`` scene's declarations (12V150 initial design, physics §9). ``source`` on each
 parameter says where its default comes from.
 """
 
@@ -17,7 +17,7 @@ from studies.scenes.cam_laws import (
     segment_parameters,
 )
 
-SPEC3, SYNTHETIC = "SPEC §3", "synthetic cam (SPEC §3 suggestion)"
+PHYSICS_3, SYNTHETIC = "physics §3", "synthetic cam (physics §3 suggestion)"
 ROCKER_LAWS = tuple(law for law in LAWS if law != "table")
 PAD_SIDES = ("ahead", "behind")
 # h = H (1 − u²)³ (1 + 2u²), u = θ/β, written in the rise fraction x = 1 + u: the convex law of
@@ -43,7 +43,7 @@ CAM_LAW_PARAMETERS: tuple[Parameter, ...] = (
         0.0,
         30.0,
         True,
-        source=SPEC3,
+        source=PHYSICS_3,
     ),
     rise_angle_parameter(150.0, SYNTHETIC),
     *ramp_parameters(0.0, 0.0, 0.0, SYNTHETIC),
@@ -60,11 +60,18 @@ CAM_LAW_PARAMETERS: tuple[Parameter, ...] = (
 
 GEOMETRY_PARAMETERS: tuple[Parameter, ...] = (
     Parameter(
-        "base_radius", "mm", 12.5, "cam base-circle radius r0", 0.0, 200.0, True, source=SPEC3
+        "base_radius", "mm", 12.5, "cam base-circle radius r0", 0.0, 200.0, True, source=PHYSICS_3
     ),
-    Parameter("pad_radius", "mm", 30.0, "rocker pad radius rs", 0.0, 500.0, True, source=SPEC3),
+    Parameter("pad_radius", "mm", 30.0, "rocker pad radius rs", 0.0, 500.0, True, source=PHYSICS_3),
     Parameter(
-        "pad_arm", "mm", 39.61, "pivot O to pad centre A, la = |OA|", 0.0, 500.0, True, source=SPEC3
+        "pad_arm",
+        "mm",
+        39.61,
+        "pivot O to pad centre A, la = |OA|",
+        0.0,
+        500.0,
+        True,
+        source=PHYSICS_3,
     ),
     Parameter(
         "centre_distance",
@@ -74,7 +81,7 @@ GEOMETRY_PARAMETERS: tuple[Parameter, ...] = (
         0.0,
         500.0,
         True,
-        source=SPEC3,
+        source=PHYSICS_3,
     ),
     Parameter(
         "valve_arm",
@@ -84,10 +91,10 @@ GEOMETRY_PARAMETERS: tuple[Parameter, ...] = (
         0.0,
         500.0,
         True,
-        source=SPEC3,
+        source=PHYSICS_3,
     ),
     Parameter(
-        "ball_radius", "mm", 10.0, "adjusting-screw ball radius ρb", 0.0, 100.0, source=SPEC3
+        "ball_radius", "mm", 10.0, "adjusting-screw ball radius ρb", 0.0, 100.0, source=PHYSICS_3
     ),
     Parameter(
         "stem_height",
@@ -96,9 +103,9 @@ GEOMETRY_PARAMETERS: tuple[Parameter, ...] = (
         "height z of the valve-stem tip above the pivot",
         -100.0,
         100.0,
-        source=SPEC3,
+        source=PHYSICS_3,
     ),
-    Parameter("lash", "mm", 0.05, "valve lash Δ", 0.0, 5.0, source=SPEC3),
+    Parameter("lash", "mm", 0.05, "valve lash Δ", 0.0, 5.0, source=PHYSICS_3),
     Parameter(
         "pad_side",
         "1",

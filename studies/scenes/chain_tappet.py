@@ -3,7 +3,7 @@
 Every design point's tappet law comes from :func:`engine_kernels.cam.kinematics.cam_kinematics_batch`
 with the nose lift that gives the target valve lift through the rocker
 (:func:`engine_kernels.valvetrain.rocker.tappet_lift_for_valve_lift`). A concave cam (r0 + h + h'' ≤ 0
-somewhere, SPEC §3) is a per-point result, not an error; :func:`concave_chains` says before a
+somewhere, physics §3) is a per-point result, not an error; :func:`concave_chains` says before a
 run which points will have one and from which rise angle their law is convex.
 """
 

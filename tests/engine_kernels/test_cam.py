@@ -1,4 +1,4 @@
-"""Cam curvature, lubrication and contact kernels (SPEC §2, [C1]-[C5])."""
+"""Cam curvature, lubrication and contact kernels (physics §2, [C1]-[C5])."""
 
 from __future__ import annotations
 
@@ -44,7 +44,7 @@ def _cycloidal_cam(theta, lift, beta):
 
 
 def _spec_12v150_cam(theta):
-    # SPEC §9 initial design, no ramp, closure only.
+    # physics §9 initial design, no ramp, closure only.
     out = np.empty((4, theta.size))
     multi_segment_cam(
         theta,
@@ -133,7 +133,7 @@ def test_lubrication_coefficient_and_entrainment_identities(base_radius, lift, a
 
 
 def test_relative_film_thickness_special_values():
-    # SPEC [C4]: 0.354 on the base circle (N = 1), zero at N = 0 and N = 0.5 where the
+    # [C4]: 0.354 on the base circle (N = 1), zero at N = 0 and N = 0.5 where the
     # entrainment reverses, a local maximum 0.125 at N = 0.25.
     assert relative_film_thickness(1.0) == pytest.approx(0.354, abs=5e-4)
     assert relative_film_thickness(1.0) == pytest.approx(1.0 / (2.0 * math.sqrt(2.0)), rel=1e-5)
@@ -145,7 +145,7 @@ def test_relative_film_thickness_special_values():
 
 
 def test_effective_modulus_steel_on_steel():
-    # SPEC §2 / Johnson §4.2: E* = E/(2(1 - nu²)) = 115.4 GPa for 210 GPa, 0.3.
+    # physics §2 / Johnson §4.2: E* = E/(2(1 - nu²)) = 115.4 GPa for 210 GPa, 0.3.
     modulus = effective_modulus(STEEL_E, STEEL_NU, STEEL_E, STEEL_NU)
     assert modulus == pytest.approx(115.4e9, abs=0.05e9)
     assert modulus == pytest.approx(STEEL_E / (2.0 * (1.0 - STEEL_NU**2)), rel=1e-14)
@@ -203,7 +203,7 @@ def test_dowson_higginson_edge_cases_are_numbers():
 
 
 def test_contact_force_closed_form():
-    # SPEC §2: F = Ps0 + ks h + m_eq ω² h''; 1300 rpm camshaft.
+    # physics §2: F = Ps0 + ks h + m_eq ω² h''; 1300 rpm camshaft.
     omega = 1300.0 * 2.0 * math.pi / 60.0
     expected = 400.0 + 40e3 * 0.01 + 0.3 * omega**2 * (-0.02)
     assert contact_force(400.0, 40e3, 0.3, omega, 0.01, -0.02) == pytest.approx(expected)

@@ -1,4 +1,4 @@
-"""Batch drivers of the cam scene against Python loops over the scalar kernels (SPEC §2, §8)."""
+"""Batch drivers of the cam scene against Python loops over the scalar kernels (physics §2, §8)."""
 
 from __future__ import annotations
 
@@ -49,7 +49,7 @@ from engine_kernels.cam.multi_segment import (
 
 DEG = math.pi / 180.0
 MM = 1e-3
-CAM_SPEED = 1300.0 * 2.0 * math.pi / 60.0  # SPEC §9: camshaft 1300 rpm
+CAM_SPEED = 1300.0 * 2.0 * math.pi / 60.0  # physics §9: camshaft 1300 rpm
 SHAPES_12V150 = np.array(
     [SHAPE_LIN, SHAPE_SIN_FULL, SHAPE_LIN, SHAPE_SIN_LEFT, SHAPE_FILLET, SHAPE_SIN_LEFT],
     dtype=np.int64,
@@ -59,7 +59,7 @@ THETA = np.linspace(-math.pi, math.pi, 721)
 
 
 def _case(law, lift, rise_angle, base_radius=20.5 * MM, ramp=(0.0, 0.0, 0.0), speed=CAM_SPEED):
-    """One row of params with the SPEC §9 assumptions (steel, 20 mm width, 400 N, 40 N/mm)."""
+    """One row of params with the physics §9 assumptions (steel, 20 mm width, 400 N, 40 N/mm)."""
     p = np.zeros(cb.N_PARAMS)
     p[cb.P_LAW] = law
     p[cb.P_CAM_SPEED] = speed
@@ -208,12 +208,12 @@ def test_kinematic_responses_match_numpy_reductions(results):
 
 def test_12v150_max_jerk_is_the_segment_1_slope_and_ramp_jerk_is_excluded(results):
     diag, kin = results.diag, results.kin
-    # Segment 1 is a straight line 0 -> 55 mm/rad² over 4.5 deg (SPEC §9), scaled by sp; its
+    # Segment 1 is a straight line 0 -> 55 mm/rad² over 4.5 deg (physics §9), scaled by sp; its
     # slope is the largest jerk of the working part.
     unscaled = kin[3, cb.K_MAX_JERK]
     assert unscaled == pytest.approx(55.0 * MM / (4.5 * DEG), rel=1e-12)
     assert kin[4, cb.K_MAX_JERK] == pytest.approx(unscaled * diag[4, D_POSITIVE_SCALE], rel=1e-12)
-    # SPEC §2 criterion: jerk < 1000 mm/rad³; fullness slightly above 0.55.
+    # physics §2 criterion: jerk < 1000 mm/rad³; fullness slightly above 0.55.
     assert unscaled < 1.0
     assert 0.55 < kin[3, cb.K_FULLNESS] < 0.56
     # Without a ramp the two fullness columns measure the same area (up to the grid interval
@@ -287,7 +287,7 @@ def test_loads_match_a_python_loop_over_scalar_kernels(results):
             ]
         )
         np.testing.assert_array_equal(load_curves[i], np.stack([force, stress, film]))
-        # Spring margin by its definition (SPEC §2) over the decelerating region.
+        # Spring margin by its definition (physics §2) over the decelerating region.
         neg = h2 < 0.0
         inertia = p[cb.P_EQUIVALENT_MASS] * p[cb.P_CAM_SPEED] ** 2
         margin = np.min((args[0] + args[1] * h[neg]) / (inertia * -h2[neg]))

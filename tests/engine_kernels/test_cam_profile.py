@@ -1,4 +1,4 @@
-"""Multi-segment symmetric acceleration profile (SPEC §2, 12V150 reference set in §9)."""
+"""Multi-segment symmetric acceleration profile (physics §2, 12V150 reference set in §9)."""
 
 from __future__ import annotations
 
@@ -33,7 +33,7 @@ from engine_kernels.cam.multi_segment import (
 
 DEG = math.pi / 180.0
 MM = 1e-3
-# SPEC §9, 12V150 exhaust cam, initial design.
+# physics §9, 12V150 exhaust cam, initial design.
 WIDTHS = np.array([4.5, 11.0, 4.5, 5.0, 22.0, 23.0]) * DEG
 SHAPES = np.array(
     [SHAPE_LIN, SHAPE_SIN_FULL, SHAPE_LIN, SHAPE_SIN_LEFT, SHAPE_FILLET, SHAPE_SIN_LEFT],
@@ -72,7 +72,7 @@ def _joints(ramp, widths=WIDTHS):
 
 
 def _reference_acceleration(sp, sn):
-    """The SPEC §2 profile written out directly, as a function of s from the ramp end [rad]."""
+    """The physics §2 profile written out directly, as a function of s from the ramp end [rad]."""
     scale = np.array([sp] * 3 + [sn] * 3)
     a_end = ACCELS * scale
     amp = AMPS * scale * np.array([1, 1, 1, -1, -1, -1])
@@ -107,7 +107,7 @@ def _reference_acceleration(sp, sn):
 
 
 def test_width_rule_reproduces_the_chosen_12v150_design():
-    # SPEC §9: segment 2 going 11 -> 9 deg makes the fillet 22 -> 23 and segment 6 23 -> 24.
+    # physics §9: segment 2 going 11 -> 9 deg makes the fillet 22 -> 23 and segment 6 23 -> 24.
     nominal = np.array([4.5, 9.0, 4.5, 5.0, 22.0, 23.0]) * DEG
     out = np.empty(6)
     assert segment_widths(nominal, SHAPES, HALF_EVENT, out)
@@ -124,7 +124,7 @@ def test_width_rule_without_fillet_uses_the_last_segment_and_flags_negative_widt
 
 
 def test_12v150_unscaled_working_lift_matches_quadrature_of_the_spec_profile():
-    # Independent: the SPEC §2 profile written out above, integrated by adaptive quadrature.
+    # Independent: the physics §2 profile written out above, integrated by adaptive quadrature.
     # Closure fixes sn from ∫a = 0 over the working part; the nose lift is ∫(W - s) a(s) ds.
     half = WIDTHS.sum()
     pos, starts = _reference_acceleration(1.0, 0.0)
@@ -140,7 +140,7 @@ def test_12v150_unscaled_working_lift_matches_quadrature_of_the_spec_profile():
     assert diag[D_UNSCALED_WORKING_LIFT] == pytest.approx(lift, rel=1e-10)
     assert out[0, 0] == pytest.approx(lift, rel=1e-10)
     assert diag[D_RAW_NOSE_VELOCITY] == pytest.approx(v_pos + v_neg, rel=1e-10)
-    # SPEC §9: "about 10.8 mm" for the source's scaled profiles.
+    # physics §9: "about 10.8 mm" for the source's scaled profiles.
     assert 10.0 * MM < lift < 11.5 * MM
 
 
@@ -173,7 +173,7 @@ def test_continuity_at_every_joint():
         right = out[:, half + n : half + 2 * n]
         np.testing.assert_allclose(left[0], right[0], atol=1e-12)  # lift [m]
         np.testing.assert_allclose(left[1], right[1], atol=1e-10)  # velocity [m/rad]
-        # Acceleration steps only at the ramp start and knee (SPEC §2: constant-acceleration
+        # Acceleration steps only at the ramp start and knee (physics §2: constant-acceleration
         # ramp); the working part and its joint with the ramp are continuous.
         np.testing.assert_allclose(left[2, 2:], right[2, 2:], atol=1e-8)
     velocity = RAMP[2]
@@ -207,7 +207,7 @@ def test_derivatives_are_exact_between_joints(ramp):
 def test_target_lift_without_ramp_is_a_uniform_scale():
     theta = np.linspace(-1.3, 1.3, 1001)
     plain, plain_diag = _evaluate(theta)
-    target = 10.8 * MM  # SPEC §9
+    target = 10.8 * MM  # physics §9
     scaled, diag = _evaluate(theta, target=target)
     factor = target / plain_diag[D_UNSCALED_WORKING_LIFT]
     np.testing.assert_allclose(scaled, factor * plain, rtol=1e-12, atol=1e-16)
@@ -239,7 +239,7 @@ def test_closure_holds_for_any_segment_2_width_and_amplitudes(width2, amp2, amp4
     out, diag = _evaluate(
         np.array([-HALF_EVENT, 0.0]), widths=widths, amps=amps, ramp=RAMP, target=target * 2e-2
     )
-    # Closure (SPEC §2): zero velocity at the nose whatever the factors; the half-event
+    # Closure (physics §2): zero velocity at the nose whatever the factors; the half-event
     # stays fixed by the width rule.
     assert out[1, 1] == pytest.approx(0.0, abs=1e-15)
     assert diag[D_EVENT_HALF_WIDTH] == pytest.approx(HALF_EVENT + RAMP[1], abs=1e-15)
@@ -249,7 +249,7 @@ def test_closure_holds_for_any_segment_2_width_and_amplitudes(width2, amp2, amp4
 @given(st.floats(0.0, 1e-3), st.floats(0.0, 0.6), st.floats(1e-4, 5e-3))
 def test_ramp_layout_feasibility_band(height, width, velocity):
     w1, actual, used, feasible = ramp_layout(height, width, velocity)
-    # SPEC §2: feasible iff Hr/v <= Wr <= 2 Hr/v (tested away from the band edges).
+    # physics §2: feasible iff Hr/v <= Wr <= 2 Hr/v (tested away from the band edges).
     lo, hi = height / velocity, 2.0 * height / velocity
     if lo * (1 + 1e-9) < width < hi * (1 - 1e-9):
         assert feasible

@@ -1,4 +1,4 @@
-"""Single-zone polytropic cycle with Wiebe heat release (SPEC §5, cylinder pressure)."""
+"""Single-zone polytropic cycle with Wiebe heat release (physics §5, cylinder pressure)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Slider-crank kinematics [K1]–[K4], forces [F1]–[F3] and multi-cylinder layouts (SPEC §5)."""
+"""Slider-crank kinematics [K1]–[K4], forces [F1]–[F3] and multi-cylinder layouts (physics §5)."""
 
 from __future__ import annotations
 
@@ -16,8 +16,8 @@ from engine_kernels.crank import kinematics as crank
 from engine_kernels.crank import multicylinder as crank_layout
 
 RPM = math.pi / 30.0
-# 12V150 (SPEC §5): bore 150 mm, rated 2600 rpm, 23 MPa max pressure; stroke 180 mm is the
-# SPEC's stated assumption. λ, masses and the cycle settings below are our assumptions.
+# 12V150 (physics §5): bore 150 mm, rated 2600 rpm, 23 MPa max pressure; stroke 180 mm is the
+# physics.md's stated assumption. λ, masses and the cycle settings below are our assumptions.
 BORE = 0.150
 RADIUS = 0.090
 LAMBDA = 0.28
@@ -334,7 +334,7 @@ def firing_and_axes(order, bank_angle=None, even=False):
 
 
 def test_12v150_firing_intervals_follow_the_crank_geometry():
-    # A 6-throw V12 with shared crankpins fires at alternating γ and 120° − γ (SPEC §5: even
+    # A 6-throw V12 with shared crankpins fires at alternating γ and 120° − γ (physics §5: even
     # only at 60°). Expected intervals: 90°/30° at a 90° bank; 60° at a 60° bank.
     order = FIRING_ORDER_12V150
     firing, axis = firing_and_axes(order, math.radians(90.0))

@@ -1,4 +1,4 @@
-"""Normalised rise laws and the rise-return cam built from them (SPEC §2)."""
+"""Normalised rise laws and the rise-return cam built from them (physics §2)."""
 
 from __future__ import annotations
 
@@ -70,11 +70,11 @@ def _max_abs_f2(law, coeffs=NO_COEFFS):
 @pytest.mark.parametrize(
     ("law", "expected", "tol"),
     [
-        (LAW_CYCLOIDAL, 2.0 * math.pi, 1e-9),  # SPEC §2: Ca = 2π
-        (LAW_HARMONIC, math.pi**2 / 2.0, 1e-9),  # SPEC §2: Ca = π²/2
-        (LAW_POLY345, 10.0 / math.sqrt(3.0), 1e-8),  # SPEC §2: Ca = 10/√3
-        (LAW_MODIFIED_TRAPEZOID, 4.888, 5e-4),  # SPEC §2, rounded to 3 dp
-        (LAW_MODIFIED_SINE, 5.528, 5e-4),  # SPEC §2, rounded to 3 dp
+        (LAW_CYCLOIDAL, 2.0 * math.pi, 1e-9),  # physics §2: Ca = 2π
+        (LAW_HARMONIC, math.pi**2 / 2.0, 1e-9),  # physics §2: Ca = π²/2
+        (LAW_POLY345, 10.0 / math.sqrt(3.0), 1e-8),  # physics §2: Ca = 10/√3
+        (LAW_MODIFIED_TRAPEZOID, 4.888, 5e-4),  # physics §2, rounded to 3 dp
+        (LAW_MODIFIED_SINE, 5.528, 5e-4),  # physics §2, rounded to 3 dp
         # closed form: f''' = 0 at x = (5 - √5)/10 for the 4-5-6-7 polynomial
         (LAW_POLY4567, _peak_of_polynomial_acceleration(POLY4567), 1e-8),
     ],
@@ -170,7 +170,7 @@ def test_rise_return_cam_scales_mirrors_and_dwells():
     theta = np.linspace(-2.0, 2.0, 801)
     out = np.empty((4, theta.size))
     rise_return_cam(LAW_CYCLOIDAL, lift, beta, NO_COEFFS, theta, out)
-    # Chain rule on h = H f((θ + β)/β) for the rise (SPEC §2).
+    # Chain rule on h = H f((θ + β)/β) for the rise (physics §2).
     for j in np.flatnonzero((theta >= -beta) & (theta <= 0.0)):
         f, f1, f2, f3 = rise_law(LAW_CYCLOIDAL, (theta[j] + beta) / beta, NO_COEFFS)
         expected = [lift * f, lift * f1 / beta, lift * f2 / beta**2, lift * f3 / beta**3]

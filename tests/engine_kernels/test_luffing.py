@@ -1,4 +1,4 @@
-"""Trolley-drive sizing checks [L1], [L2] (SPEC §7), recomputed by hand from the inputs."""
+"""Trolley-drive sizing checks [L1], [L2] (physics §7), recomputed by hand from the inputs."""
 
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ RPM = math.pi / 30.0
 HOUR = 3600.0
 MM = 1e-3
 
-# SPEC §7 reference inputs; the rest (coupling factors and rating, allowable deflection and
+# physics §7 reference inputs; the rest (coupling factors and rating, allowable deflection and
 # slope, key, bearing) are stated assumptions of this test: a 100 W servo with an 8 mm shaft,
 # a 3 × 3 key (k = 1.5 mm, l = 14 mm), a 6001 deep-groove ball bearing (C = 5.1 kN).
 REFERENCE = {
@@ -78,7 +78,7 @@ def run(rows, motors=MOTORS):
 
 
 def test_reference_drive_recomputed_by_hand():
-    # Every expected value is plain arithmetic on the SPEC §7 inputs (the source's hand results
+    # Every expected value is plain arithmetic on the physics §7 inputs (the source's hand results
     # have slips and are not used).
     out = dict(zip(lf.OUTPUTS, run(params_row())[0], strict=True))
     resistance = 20 * 5 + 0.2 * 0.5 + 0.2 * 5 * 10  # 110.1 N

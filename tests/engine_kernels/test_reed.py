@@ -1,4 +1,4 @@
-"""Reed valve natural frequencies [B1], [B2], mode shapes and resonance margins (SPEC §6)."""
+"""Reed valve natural frequencies [B1], [B2], mode shapes and resonance margins (physics §6)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import pytest
 from engine_kernels import reed
 
 RPM = math.pi / 30.0
-# SPEC §6 reference reed and the 1200–9000 rpm four-stroke band.
+# physics §6 reference reed and the 1200–9000 rpm four-stroke band.
 LENGTH, WIDTH, THICKNESS = 35e-3, 11.5e-3, 0.3e-3
 MODULUS, DENSITY = 2.08e11, 7800.0
 
@@ -44,7 +44,7 @@ def test_roots_match_high_precision_solution():
     reed.cantilever_roots(roots)
     for n in range(1, 13):
         assert roots[n - 1] == pytest.approx(float(mp_root(n)), rel=2e-16)
-    # SPEC §6 / Blevins Table 4.2 values to 6 decimals.
+    # physics §6 / Blevins Table 4.2 values to 6 decimals.
     np.testing.assert_allclose(roots[:4], [1.875104, 4.694091, 7.854757, 10.995541], atol=1e-6)
 
 

@@ -13,7 +13,7 @@ from numpy.polynomial import polynomial as poly
 from engine_kernels.valvetrain import rocker
 
 MM = 1e-3
-# SPEC §3 reference geometry (125 cc motorcycle): r0, rs, la, lc, lb, rho_b, z, lash [mm].
+# physics §3 reference geometry (125 cc motorcycle): r0, rs, la, lc, lb, rho_b, z, lash [mm].
 GEOMETRY = np.array([12.5, 30.0, 39.61, 30.28, 33.28, 10.0, 1.65, 0.05]) * MM
 TARGET_VALVE_LIFT = 7.815 * MM
 EVENT_HALF_ANGLE = math.radians(80.0)
@@ -84,7 +84,7 @@ def brute_force(side, theta, height):
 
 
 def valve_lift_from_angle(angle):
-    """[R6] written out with numpy (stem-tip geometry of SPEC §3)."""
+    """[R6] written out with numpy (stem-tip geometry of physics §3)."""
     r0, rs, la, lc, lb, ball, z, lash = GEOMETRY
     base = math.acos((la**2 + lc**2 - (r0 + rs) ** 2) / (2 * la * lc))
     beta0 = math.asin((lash + ball + z) / lb)
@@ -92,7 +92,7 @@ def valve_lift_from_angle(angle):
 
 
 def test_reference_angles():
-    # SPEC §3 reference values: W0 = 73.543 deg, beta0 = 20.583 deg.
+    # physics §3 reference values: W0 = 73.543 deg, beta0 = 20.583 deg.
     r0, rs, la, lc, lb, ball, z, lash = GEOMETRY
     w0 = rocker.base_circle_rocker_angle(r0, rs, la, lc)
     beta0 = rocker.valve_arm_base_angle(lb, ball, z, lash)
@@ -101,7 +101,7 @@ def test_reference_angles():
 
 
 def test_tappet_lift_for_reference_valve_lift():
-    # SPEC §3: 7.815 mm of theoretical valve lift is "about 6.30 mm" of tappet lift.
+    # physics §3: 7.815 mm of theoretical valve lift is "about 6.30 mm" of tappet lift.
     assert rocker.tappet_lift_for_valve_lift(TARGET_VALVE_LIFT, GEOMETRY) == pytest.approx(
         6.30 * MM, abs=0.01 * MM
     )
@@ -109,7 +109,7 @@ def test_tappet_lift_for_reference_valve_lift():
 
 @pytest.mark.parametrize(("tappet_lift", "expected"), [(0.0, 1.15), (6.30 * MM, 1.35)])
 def test_lift_ratio_base_circle_and_nose(tappet_lift, expected):
-    # SPEC §3: dY/dh is "about 1.15 on the base circle and 1.35 at the nose" (h' = 0 there).
+    # physics §3: dY/dh is "about 1.15 on the base circle and 1.35 at the nose" (h' = 0 there).
     r0, rs, la, lc, lb, ball, z, lash = GEOMETRY
     w0 = rocker.base_circle_rocker_angle(r0, rs, la, lc)
     beta0 = rocker.valve_arm_base_angle(lb, ball, z, lash)

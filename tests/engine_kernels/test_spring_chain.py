@@ -1,6 +1,6 @@
 """Multi-mass valve spring [V4]: chain frequencies, energy, limits against the lumped model, guard.
 
-Reference set as in test_valve.py (SPEC §4 thesis data plus stated choices): valve-side mass
+Reference set as in test_valve.py (physics §4 thesis data plus stated choices): valve-side mass
 0.033 kg valve group + 5e-6 kg m² rocker inertia / lb² (no spring share: the chain carries the
 spring mass), drive 1.17e4 N/mm and 150 N s/m, spring 30 N/mm, preload 205.8 N, 15 g, seat
 5e7 N/m and 900 N s/m, spring damping ratio 0.03, no coil clash unless a test sets it.
@@ -105,7 +105,7 @@ def chain_matrices(masses, valve_mass=None, **extra):
 
 @pytest.mark.parametrize("masses", [1, 2, 3, 8, 16, 24])
 def test_fixed_fixed_frequencies_match_the_closed_form(masses):
-    # Closed form (SPEC [V4]): omega_n = 2 sqrt(k_seg/m_c) sin(n pi / (2 (N + 1))).
+    # Closed form ([V4]): omega_n = 2 sqrt(k_seg/m_c) sin(n pi / (2 (N + 1))).
     mass, _, stiffness = chain_matrices(masses)
     omega = np.sqrt(np.linalg.eigvalsh(stiffness / mass[0]))
     closed = [
@@ -239,7 +239,7 @@ def test_vanishing_spring_mass_converges_to_the_lumped_model_without_spring_mass
 
 def test_vanishing_spring_mass_with_seat_landing():
     # Cosine event with lift-off and seating at 3500 rpm, 0.5 deg; the seat switch keeps plain
-    # RK4 at ~1e-7 m here (SPEC §4), so the bound is that. Measured 8.2e-7 (1 g) -> 9.6e-8 m
+    # RK4 at ~1e-7 m here (physics §4), so the bound is that. Measured 8.2e-7 (1 g) -> 9.6e-8 m
     # (1 mg); seating velocity 0.4029 vs 0.4042 m/s.
     excitation, step, start = table(cosine_event, 0.5)
     lumped_out, lumped = run_lumped(excitation, step, start, lumped_row(VALVE_MASS))

@@ -5,7 +5,7 @@ scipy's event-restarted DOP853 in test_spring_chain.py): the same model and obse
 integrated one case at a time with plain loops and branches, the brute-force alternative to
 the node sweeps, lane loops, selects and block bookkeeping checked here. Both keep the same
 arithmetic, so the agreement asked for is round-off (1e-12 relative); measured: bit for bit.
-Reference valve train as in test_spring_chain.py (SPEC §4 thesis data plus stated choices).
+Reference valve train as in test_spring_chain.py (physics §4 thesis data plus stated choices).
 """
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ def column(name):
 
 
 def cosine_event_table(step_deg, start_deg=-100.0, stop_deg=110.0):
-    """Excitation table at half the RK4 step (SPEC §9): rows Y, Y', Y''."""
+    """Excitation table at half the RK4 step (physics §9): rows Y, Y', Y''."""
     theta = np.radians(np.arange(start_deg, stop_deg + step_deg / 4, step_deg / 2))
     wave = math.pi / HALF
     inside = np.abs(theta) < HALF

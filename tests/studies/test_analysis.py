@@ -24,7 +24,7 @@ from studies.analysis_text import format_tables
 from studies.designs.orthogonal_arrays import orthogonal_array
 from studies.plots import main_effects_figure, save_main_effects
 
-# Physical values of the 12V150 L9 study (SPEC §9): A, B, C; D is the empty column.
+# Physical values of the 12V150 L9 study (physics §9): A, B, C; D is the empty column.
 VALUES = {"A": [7.0, 9.0, 11.0], "B": [3.5, 4.5, 5.5], "C": [12.0, 14.0, 16.0]}
 UNITS = {"A": "deg", "B": "mm/rad^2", "C": "mm/rad^2"}
 

@@ -3,7 +3,7 @@
 Timings are never asserted (shared machines); what is checked is that the chain rows are the
 lumped valve train with the spring modelled as N masses (the [V1] equivalent mass
 ``M_v + m_s/3`` recovered exactly, and far below surge the same max lift as the lumped run:
-the one-third rule, SPEC [V1]) and that every N gets its timings and consistent ratios.
+the one-third rule, [V1]) and that every N gets its timings and consistent ratios.
 """
 
 from __future__ import annotations

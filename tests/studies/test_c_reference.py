@@ -33,7 +33,7 @@ CONTINUOUS = tuple(
 
 
 def event_table(step_deg=0.5, height=4e-3, half=1.4):
-    """1 − cos cam event, rows Y [m], Y' [m/rad], Y'' at half the RK4 step (SPEC §9)."""
+    """1 − cos cam event, rows Y [m], Y' [m/rad], Y'' at half the RK4 step (physics §9)."""
     theta = np.radians(np.arange(-100.0, 110.0 + step_deg / 4, step_deg / 2))
     wave = math.pi / half
     inside = np.abs(theta) < half

@@ -1,5 +1,5 @@
 """The crank and reed scenes mean the same thing by "engine order k at speed n": a component at
-k times the crankshaft frequency, k·n/60 Hz (SPEC §5, §6). The reed's crossing order and speed
+k times the crankshaft frequency, k·n/60 Hz (physics §5, §6). The reed's crossing order and speed
 are checked against the crank's torque harmonics through the physical frequency they share."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ from study_text import run, scene_study
 
 
 def reed_crossing() -> tuple[float, float, float]:
-    """(f₁ [Hz], crossing engine order, crossing speed [rpm]) of the SPEC §6 reference reed."""
+    """(f₁ [Hz], crossing engine order, crossing speed [rpm]) of the physics §6 reference reed."""
     text = scene_study(
         "reed",
         responses='["first_frequency", "first_crossing_order", "first_crossing_speed"]',

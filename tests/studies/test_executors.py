@@ -1,4 +1,4 @@
-"""Results are identical whichever executor ran the chunks (SPEC §8)."""
+"""Results are identical whichever executor ran the chunks (physics §8)."""
 
 from __future__ import annotations
 

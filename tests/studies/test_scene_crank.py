@@ -35,7 +35,7 @@ def study(
 
 
 def textbook_displacement(r, lam, alpha):
-    """[K1] as written in SPEC §5: x = r(1 − cos α) + l(1 − cos β), sin β = λ sin α."""
+    """[K1] as written in physics §5: x = r(1 − cos α) + l(1 − cos β), sin β = λ sin α."""
     beta = np.arcsin(lam * np.sin(alpha))
     return r * (1 - np.cos(alpha)) + r / lam * (1 - np.cos(beta))
 
@@ -224,7 +224,7 @@ def test_kinematic_curves_follow_the_model_setting(model: str) -> None:
 
 def test_inline_four_free_forces_closed_form() -> None:
     # Inline four, firing 1-3-4-2 evenly: first orders cancel, second orders add up to
-    # 4 mj r ω² λ (SPEC §5 [F2] summed over the four cylinders).
+    # 4 mj r ω² λ (physics §5 [F2] summed over the four cylinders).
     ev = run(
         study(
             parameters='cylinders = 4\nlayout = "inline"\nfiring_order = [1, 3, 4, 2]',
@@ -306,7 +306,7 @@ def test_constant_pressure_table_gives_the_closed_form_gas_torque(tmp_path: Path
             factors="[factors.rod_ratio]\nlevels = [0.25, 0.3]",
         )
     )
-    # Gas force only: M = (π D²/4)(p − p0) r sin(α + β)/cos β (SPEC §5), p = 2 MPa everywhere.
+    # Gas force only: M = (π D²/4)(p − p0) r sin(α + β)/cos β (physics §5), p = 2 MPa everywhere.
     alpha = np.radians(np.arange(0.0, 720.0, 1.0))
     force = math.pi / 4 * 0.150**2 * (2.0e6 - 101325.0)
     for i, lam in enumerate([0.25, 0.3]):

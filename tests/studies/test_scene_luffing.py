@@ -61,7 +61,7 @@ def test_luffing_sizing_runs_with_every_check_as_value_limit_pass(tmp_path: Path
         np.testing.assert_array_equal(ds[f"{check}_ok"].values, expected.astype(int))
     flags = np.stack([ds[f"{c}_ok"].values for c in CHECKS])
     np.testing.assert_array_equal(ds["all_checks_ok"].values, flags.min(axis=0))
-    # Reference point a = 20 m/s², m = 5 kg, V = 0.5 m/s, by hand from the SPEC §7 inputs:
+    # Reference point a = 20 m/s², m = 5 kg, V = 0.5 m/s, by hand from the physics §7 inputs:
     # Fw = 20·5 + 0.2·0.5 + 0.2·5·10 = 110.1 N, P0 = Fw V/(0.96 · 0.99 · 0.98 · 0.98) = 60.31 W.
     ref = ds.isel(
         run=int(

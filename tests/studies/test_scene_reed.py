@@ -1,4 +1,4 @@
-"""The ``reed`` scene: the shipped study, the SPEC §6 reference reed, checks, mode shapes."""
+"""The ``reed`` scene: the shipped study, the physics §6 reference reed, checks, mode shapes."""
 
 from __future__ import annotations
 
@@ -61,11 +61,11 @@ def test_reed_resonance_runs_and_reports_the_reference_reed(tmp_path: Path) -> N
             float(ds["length"][run]) * 1e-3, float(ds["thickness"][run]) * 1e-3, modulus, density
         )
         assert float(ds["first_frequency"][run]) == pytest.approx(f1, rel=1e-12)
-        # The band is n/120 Hz for 1200–9000 rpm (SPEC §6): 10–75 Hz.
+        # The band is n/120 Hz for 1200–9000 rpm (physics §6): 10–75 Hz.
         margin = max(f1 - 75.0, 10.0 - f1)
         assert float(ds["first_margin"][run]) == pytest.approx(margin, rel=1e-12)
         assert int(ds["first_mode_clear"][run]) == int(margin > 0)
-    # The SPEC §6 reference reed (l = 35, h = 0.3 mm, steel) is reported to 4 significant
+    # The physics §6 reference reed (l = 35, h = 0.3 mm, steel) is reported to 4 significant
     # figures with its margin to the band: f1 = 204.3 Hz, 129.3 Hz above 75 Hz.
     f1 = f1_closed_form(35e-3, 0.3e-3, 2.08e11, 7800.0)
     assert f"{f1:.4g}" == "204.3"
@@ -160,7 +160,7 @@ ORDER_RESPONSES = (
 
 
 def reference_orders(cycle: str, thickness: float = 0.3) -> dict[str, float]:
-    """Order responses of the SPEC §6 reference reed (one design point) for a cycle."""
+    """Order responses of the physics §6 reference reed (one design point) for a cycle."""
     text = study(
         parameters=f'cycle = "{cycle}"',
         responses=ORDER_RESPONSES,

@@ -45,7 +45,7 @@ def test_chain_reaches_the_target_lift_and_the_published_tappet_lift() -> None:
     # By construction [R3], [R6]: the nose of the chain gives the target valve lift exactly
     # (the nose, θ = 0, is a grid point).
     np.testing.assert_allclose(ev.scalars["max_valve_lift"], [6.0, 7.815], rtol=1e-9)
-    # SPEC §3: 7.815 mm of valve lift is "about 6.30 mm" of tappet lift.
+    # physics §3: 7.815 mm of valve lift is "about 6.30 mm" of tappet lift.
     assert ev.scalars["max_tappet_lift"][1] == pytest.approx(6.30, abs=0.01)
     assert (ev.scalars["cam_convex"] == 1).all()
     assert (ev.scalars["chain_ok"] == 1).all()
@@ -84,7 +84,7 @@ def test_force_ratio_curve_obeys_virtual_work() -> None:
 
 
 def test_concave_cam_is_a_flag_not_an_error() -> None:
-    # SPEC §3: a 3-4-5 law as high as 6.30 mm needs at least ±83° to stay convex; at ±65° the
+    # physics §3: a 3-4-5 law as high as 6.30 mm needs at least ±83° to stay convex; at ±65° the
     # closed form r0 + h + h'' = 12.5 + 6.30 (1 + ...) goes negative near the nose.
     ev = evaluate(
         plan_text(

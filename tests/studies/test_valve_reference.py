@@ -10,7 +10,7 @@ import pytest
 from engine_kernels import valvetrain as valve
 from studies.scenes.valve.reference.valve_ivp import table_excitation, valve_reference
 
-# SPEC §4 reference data with the values the source does not give (see test_valve.py).
+# physics §4 reference data with the values the source does not give (see test_valve.py).
 PARAMS = np.array(
     [2 * math.pi * 3500 / 60, 0.0425, 1.17e7, 150.0, 3.0e4, 205.8, 5.0e7, 900.0, 0.0, 0.0, 0.0]
 )

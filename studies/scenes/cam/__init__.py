@@ -1,4 +1,4 @@
-"""Scene ``cam``: flat-faced tappet cam kinematics and contact criteria (SPEC §2): the scene
+"""Scene ``cam``: flat-faced tappet cam kinematics and contact criteria (physics §2): the scene
 (``scene``), its declarations (``parameters``), measured lift tables (``lift_tables``) and
 figures (``figures``)."""
 

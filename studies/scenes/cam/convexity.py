@@ -2,7 +2,7 @@
 
 A flat-faced tappet cam must be convex: ρ = r0 + h + h'' > 0 everywhere [C1]. A concave or
 cusped cam still runs — its kinematics are what they are — but it has no Hertz line contact:
-its contact stress is reported as inf and its EHL film as 0 (SPEC §2: a design error to
+its contact stress is reported as inf and its EHL film as 0 (physics §2: a design error to
 report, not to crash on). ``check`` and ``run`` warn per design point, with the rise angle from
 which the law is convex: a standard rise law scales as h'' ∝ H/β², so its smallest radius of
 curvature grows with the rise angle β, and a bisection finds where it turns positive.

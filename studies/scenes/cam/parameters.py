@@ -1,6 +1,6 @@
 """Declarations of the ``cam`` scene: parameters, settings, responses and curves.
 
-Defaults are the 12V150 exhaust cam of SPEC §9 (initial design) with the stated assumptions for
+Defaults are the 12V150 exhaust cam of physics §9 (initial design) with the stated assumptions for
 values the source does not give; ``source`` on each parameter says which is which.
 """
 
@@ -142,7 +142,7 @@ PARAMETERS: tuple[Parameter, ...] = (
         "smallest allowed radius of curvature",
         0.0,
         100.0,
-        source="SPEC §2",
+        source="physics §2",
     ),
     Parameter(
         "stress_limit",
@@ -152,7 +152,7 @@ PARAMETERS: tuple[Parameter, ...] = (
         0.0,
         1e4,
         True,
-        source="SPEC §2",
+        source="physics §2",
     ),
     Parameter(
         "spring_margin_limit",
@@ -161,7 +161,7 @@ PARAMETERS: tuple[Parameter, ...] = (
         "smallest allowed spring margin",
         0.0,
         100.0,
-        source="SPEC §2",
+        source="physics §2",
     ),
     Parameter(
         "jerk_limit",
@@ -171,7 +171,7 @@ PARAMETERS: tuple[Parameter, ...] = (
         0.0,
         1e7,
         True,
-        source="SPEC §2",
+        source="physics §2",
     ),
     Parameter(
         "fullness_limit",
@@ -180,7 +180,7 @@ PARAMETERS: tuple[Parameter, ...] = (
         "smallest wanted fullness coefficient",
         0.0,
         1.0,
-        source="SPEC §2",
+        source="physics §2",
     ),
 )
 

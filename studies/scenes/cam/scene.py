@@ -1,4 +1,4 @@
-"""Scene ``cam``: flat-faced tappet cam kinematics and contact criteria (SPEC §2).
+"""Scene ``cam``: flat-faced tappet cam kinematics and contact criteria (physics §2).
 
 Three stages, each one compiled batch driver of :mod:`engine_kernels.cam.kinematics` and :mod:`engine_kernels.cam.loads`:
 

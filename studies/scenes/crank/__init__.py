@@ -1,5 +1,5 @@
 """Scene ``crank``: slider-crank kinematics, forces, torque and multi-cylinder harmonics
-(SPEC §5): the scene, its declarations, pressure tables and figures."""
+(physics §5): the scene, its declarations, pressure tables and figures."""
 
 from studies.scenes.crank.scene import CrankScene
 

@@ -1,7 +1,7 @@
 """Declarations of the ``crank`` scene: parameters, settings, responses and curves.
 
-Defaults are the 12V150 diesel of SPEC §5 (12 cylinders, V 90°, bore 150 mm, 2600 rpm, 23 MPa,
-firing order 1-12-9-4-5-8-11-2-3-10-7-6). The source gives no stroke: 180 mm is the SPEC's
+Defaults are the 12V150 diesel of physics §5 (12 cylinders, V 90°, bore 150 mm, 2600 rpm, 23 MPa,
+firing order 1-12-9-4-5-8-11-2-3-10-7-6). The source gives no stroke: 180 mm is the physics reference's
 stated assumption. λ, the masses and the single-zone cycle are our assumptions (the values of
 tests/engine_kernels/test_crank.py); ``source`` on each parameter says which is which.
 """
@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from studies.scenes.base import Curve, CurveAxis, Parameter, Response
 
-SRC, ASSUMED = "12V150 source (SPEC §5)", "assumption"
-STROKE_SOURCE = "assumption: the 12V150 source gives no stroke; 180 mm is the SPEC §5 assumption"
+SRC, ASSUMED = "12V150 source (physics §5)", "assumption"
+STROKE_SOURCE = "assumption: the 12V150 source gives no stroke; 180 mm is the physics §5 assumption"
 FIRING_ORDER_12V150 = [1, 12, 9, 4, 5, 8, 11, 2, 3, 10, 7, 6]
 
 LAYOUTS = ("inline", "v")
@@ -70,7 +70,7 @@ PARAMETERS: tuple[Parameter, ...] = (
         "crankcase pressure p0 under the piston",
         0.0,
         1e5,
-        source="SPEC §5 (≈ 1 atm)",
+        source="physics §5 (≈ 1 atm)",
     ),
     Parameter("layout", "1", "v", "cylinder layout", choices=LAYOUTS, source=SRC),
     Parameter(
@@ -126,7 +126,7 @@ PARAMETERS: tuple[Parameter, ...] = (
         "firing angles: 'even' = 720°/z in firing order; 'shared_crankpins' = V engine with "
         "two rods per throw (even only when γ = 720°/z); 'given' = firing_angles",
         choices=FIRINGS,
-        source="SPEC §5 (even firing by default)",
+        source="physics §5 (even firing by default)",
     ),
     Parameter(
         "firing_angles",

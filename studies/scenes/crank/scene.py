@@ -1,4 +1,4 @@
-"""The ``crank`` scene: slider-crank kinematics, forces and multi-cylinder torque (SPEC §5).
+"""The ``crank`` scene: slider-crank kinematics, forces and multi-cylinder torque (physics §5).
 
 Stages (each one compiled batch driver; a study runs only those its responses and curves need):
 
@@ -165,14 +165,14 @@ def _empty_curves(n: int, count: int, store: bool, m: int) -> np.ndarray:
 
 
 class CrankScene(Scene):
-    """Slider-crank and multi-cylinder engine (SPEC §5)."""
+    """Slider-crank and multi-cylinder engine (physics §5)."""
 
     name = "crank"
     seconds_per_point = 2e-3
     work_estimate = staticmethod(work.work_estimate)  # type: ignore[assignment]
     description = (
         "slider-crank kinematics (exact and two-term), gas and inertia forces, torque, "
-        "multi-cylinder torque harmonics, free forces and moments (SPEC §5)"
+        "multi-cylinder torque harmonics, free forces and moments (physics §5)"
     )
     parameters = PARAMETERS
     settings = SETTINGS

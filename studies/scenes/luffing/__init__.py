@@ -1,4 +1,4 @@
-"""Scene ``luffing``: the crane-trolley drive sizing checks (SPEC §7): the scene, its
+"""Scene ``luffing``: the crane-trolley drive sizing checks (physics §7): the scene, its
 declarations, summary tables and figures."""
 
 from studies.scenes.luffing.scene import LuffingScene

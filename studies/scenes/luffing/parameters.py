@@ -1,20 +1,20 @@
-"""Declarations of the ``luffing`` scene: parameters and responses (SPEC §7).
+"""Declarations of the ``luffing`` scene: parameters and responses (physics §7).
 
-Defaults are the SPEC §7 reference inputs; the values the source does not give are stated
+Defaults are the physics §7 reference inputs; the values the source does not give are stated
 assumptions (the same as tests/engine_kernels/test_luffing.py): a servo catalogue of 50…750 W,
 coupling factors Kw = 1, K = 1.5, Kz = Kt = 1 and a 5 N·m coupling, allowable tube deflection
 span/250 and end slope 0.01 rad, a 3 × 3 key (k = 1.5 mm, l = 14 mm) on an 8 mm shaft with
 100 MPa allowed, a 6001 deep-groove ball bearing (C = 5.1 kN) for 20 000 h.
 
 Every check is reported as value, limit and pass flag (``*_ok``); see
-:mod:`engine_kernels.luffing.sizing` for the choices the SPEC leaves open.
+:mod:`engine_kernels.luffing.sizing` for the choices the physics reference leaves open.
 """
 
 from __future__ import annotations
 
 from studies.scenes.base import Parameter, Response
 
-SRC, ASSUMED = "SPEC §7", "assumption"
+SRC, ASSUMED = "physics §7", "assumption"
 BEARINGS = ("ball", "roller")
 
 PARAMETERS: tuple[Parameter, ...] = (

@@ -1,4 +1,4 @@
-"""The ``luffing`` scene: trolley-drive sizing checks of the tower-crane test rig (SPEC §7).
+"""The ``luffing`` scene: trolley-drive sizing checks of the tower-crane test rig (physics §7).
 
 One stage, ``sizing`` (:func:`engine_kernels.luffing.sizing.luffing_batch`): the chain resistance →
 work power → motor power → next rated motor → belt, pulley, shaft load → coupling torque, key,
@@ -43,13 +43,13 @@ def luffing_params(points: dict[str, np.ndarray]) -> np.ndarray:
 
 
 class LuffingScene(Scene):
-    """Tower-crane test-rig trolley drive (SPEC §7)."""
+    """Tower-crane test-rig trolley drive (physics §7)."""
 
     name = "luffing"
     seconds_per_point = 3e-4
     description = (
         "tower-crane test-rig trolley drive: motor, belt, coupling, key, bearing and "
-        "guide-tube checks as value, limit and pass (SPEC §7)"
+        "guide-tube checks as value, limit and pass (physics §7)"
     )
     parameters = PARAMETERS
     responses = RESPONSES

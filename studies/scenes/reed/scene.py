@@ -1,4 +1,4 @@
-"""The ``reed`` scene: reed-valve natural frequencies, mode shapes and resonance margins (SPEC §6).
+"""The ``reed`` scene: reed-valve natural frequencies, mode shapes and resonance margins (physics §6).
 
 One stage, ``frequencies`` (:func:`engine_kernels.reed.reed_batch`): roots of the clamped–free
 frequency equation [B1], natural frequencies [B2] of the first ``N_MODES`` modes, the engine
@@ -11,7 +11,7 @@ the mode shapes along the reed. ``first_mode_clear``/``all_modes_clear`` compare
 band of the event frequency only; ``campbell.png`` shows the orders against the modes.
 
 Orders are **engine orders**: multiples of the crankshaft frequency, as the ``crank`` scene's
-``torque_order_*`` (SPEC §5, §6). The reed opens e times per crank revolution (e = 0.5 for a
+``torque_order_*`` (physics §5, §6). The reed opens e times per crank revolution (e = 0.5 for a
 four-stroke), so harmonic k of its event frequency is engine order k·e: a four-stroke's reed
 sees orders 0.5, 1, 1.5, …, and the reference reed's 204 Hz meets order 1.5 at 8172 rpm
 (n = 60 f/o). A missing crossing (no order up to ``max_order`` meets the mode in the speed
@@ -22,7 +22,7 @@ Materials (the ``material`` factor has string levels; E and ρ from this table):
 ============  =========  ===========  ==============================================
 material      E [GPa]    ρ [kg/m³]    source
 ============  =========  ===========  ==============================================
-spring_steel  208        7800         SPEC §6 reference reed
+spring_steel  208        7800         physics §6 reference reed
 stainless     193        7900         AISI 301 spring-temper strip, typical handbook
                                       values (assumption)
 glass_epoxy   18.6       1850         G-10/FR-4 laminate, lengthwise flexural
@@ -48,7 +48,7 @@ if TYPE_CHECKING:
 
     from studies.scenes.base import FigureBuilder
 
-SRC = "SPEC §6 reference reed"
+SRC = "physics §6 reference reed"
 MATERIALS: dict[str, tuple[float, float]] = {
     "spring_steel": (208e9, 7800.0),
     "stainless": (193e9, 7900.0),
@@ -95,7 +95,7 @@ PARAMETERS: tuple[Parameter, ...] = (
         0.0,
         1e5,
         True,
-        source="SPEC §6",
+        source="physics §6",
     ),
     Parameter(
         "speed_max",
@@ -105,7 +105,7 @@ PARAMETERS: tuple[Parameter, ...] = (
         0.0,
         1e5,
         True,
-        source="SPEC §6",
+        source="physics §6",
     ),
     Parameter(
         "cycle",
@@ -113,7 +113,7 @@ PARAMETERS: tuple[Parameter, ...] = (
         "four_stroke",
         "engine cycle: the reed opens once per cycle",
         choices=tuple(OPENINGS),
-        source="SPEC §6",
+        source="physics §6",
     ),
 )
 
@@ -273,13 +273,13 @@ def material_properties(points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.n
 
 
 class ReedScene(Scene):
-    """Clamped–free reed valve excited by the engine (SPEC §6)."""
+    """Clamped–free reed valve excited by the engine (physics §6)."""
 
     name = "reed"
     seconds_per_point = 3e-4
     description = (
         "reed-valve natural frequencies, mode shapes and margins to the engine's "
-        "excitation band (SPEC §6)"
+        "excitation band (physics §6)"
     )
     parameters = PARAMETERS
     settings = SETTINGS

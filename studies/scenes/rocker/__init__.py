@@ -1,4 +1,4 @@
-"""Scene ``rocker``: OHC cam with a variable-ratio rocker, valve kinematics (SPEC §3)."""
+"""Scene ``rocker``: OHC cam with a variable-ratio rocker, valve kinematics (physics §3)."""
 
 from studies.scenes.rocker.scene import RockerScene
 

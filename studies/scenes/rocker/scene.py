@@ -1,4 +1,4 @@
-"""Scene ``rocker``: OHC cam with a variable-ratio rocker, valve kinematics (SPEC §3).
+"""Scene ``rocker``: OHC cam with a variable-ratio rocker, valve kinematics (physics §3).
 
 The chain itself (tappet law, rocker kinematics, caches, checks) is
 :class:`studies.scenes.chain.ChainScene`, which the ``valve`` scene builds on too; this scene

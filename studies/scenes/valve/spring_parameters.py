@@ -1,6 +1,6 @@
 """Declarations of the valve scene's spring model ladder [V4]: parameters, settings, responses.
 
-Two rungs model the valve spring (SPEC §4):
+Two rungs model the valve spring (physics §4):
 
 * ``spring_model = "lumped"`` (the default, the cheap rung) — the thesis's single degree of
   freedom: one third of the spring's mass on the valve (``equivalent_mass`` [V1]), the spring

@@ -1,4 +1,4 @@
-"""Figure of the spring responses over camshaft speed: ``surge_sweep.png`` (SPEC §4 [V4]).
+"""Figure of the spring responses over camshaft speed: ``surge_sweep.png`` (physics §4 [V4]).
 
 Top: surge amplitude against camshaft speed, a line per spring-model rung (or per level of the
 other factor); bottom: the smallest retainer force over the static spring force. Dotted lines
