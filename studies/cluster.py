@@ -12,6 +12,7 @@ the client and a ``local`` cluster are closed quietly when the run is over.
 from __future__ import annotations
 
 import logging
+import threading
 from collections.abc import Iterator
 from concurrent.futures import Executor
 from contextlib import contextmanager
@@ -21,6 +22,9 @@ from studies import provenance
 from studies.runner import dask_client
 
 SHUTDOWN_LOGGERS = ("distributed", "tornado", "asyncio")
+CHECK_TIMEOUT_S = 60.0
+"""The workers' first task, the code check: a cluster that has not answered it by then (a hung
+or overloaded worker) ends the command with one line instead of hanging it."""
 
 
 def worker_code(scenes: list[str]) -> dict[str, Any]:
@@ -65,6 +69,25 @@ def differences(here: dict[str, Any], there: dict[str, Any] | BaseException) -> 
     return out
 
 
+def _within(seconds: float, call: Any, *args: Any, **kwargs: Any) -> Any:
+    """``call(*args, **kwargs)`` in a thread given ``seconds``: its result, None past them
+    (the thread is left to finish on its own: a daemon, it never holds the process)."""
+    box: dict[str, Any] = {}
+
+    def target() -> None:
+        try:
+            box["result"] = call(*args, **kwargs)
+        except BaseException as exc:  # noqa: BLE001  re-raised in the caller's thread
+            box["error"] = exc
+
+    thread = threading.Thread(target=target, daemon=True, name="dask-code-check")
+    thread.start()
+    thread.join(seconds)
+    if "error" in box:
+        raise box["error"]
+    return box.get("result")
+
+
 def _key(code: dict[str, Any]) -> tuple[Any, ...]:
     return code.get("distribution"), code.get("version"), code.get("source_sha256")
 
@@ -72,7 +95,14 @@ def _key(code: dict[str, Any]) -> tuple[Any, ...]:
 def check_workers(client: Any, scheduler: str, scenes: list[str]) -> None:
     """ValueError in one line when a worker's code differs from this process's."""
     here = worker_code(scenes)
-    reports = client.run(worker_code, scenes, on_error="return")
+    reports = _within(CHECK_TIMEOUT_S, client.run, worker_code, scenes, on_error="return")
+    if reports is None:
+        msg = (
+            f"--scheduler {scheduler}: the workers did not answer the code check (their first "
+            f"task) within {CHECK_TIMEOUT_S:g} s: a worker is hung or overloaded; restart the "
+            "workers; nothing was run"
+        )
+        raise ValueError(msg)
     wrong = {w: d for w, r in sorted(reports.items()) if (d := differences(here, r))}
     if not wrong:
         return

@@ -5,11 +5,12 @@ workers build their scene registry from what is installed, not from this process
 from __future__ import annotations
 
 import sys
+import threading
 from pathlib import Path
 
 import pytest
 
-from studies import provenance
+from studies import cluster, provenance
 from studies.cli import main
 from studies.scenes import SCENES, get_scene
 
@@ -91,3 +92,21 @@ def test_another_engine_source_on_the_workers_is_refused(
 def test_workers_with_the_same_code_run_the_study(address: str, tmp_path: Path, capsys) -> None:
     assert run_on(address, tmp_path, CAM) == ["0", "True"]
     assert "cam_cluster: 2 design points" in capsys.readouterr().out
+
+
+def test_workers_that_never_answer_the_code_check_end_the_command(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A hung worker: its first task (the code check) is given up after CHECK_TIMEOUT_S."""
+    released = threading.Event()
+
+    class HungClient:
+        def run(self, *args: object, **kwargs: object) -> None:
+            released.wait(30)  # a worker that never answers (released when the test ends)
+
+    monkeypatch.setattr(cluster, "CHECK_TIMEOUT_S", 0.2)
+    try:
+        with pytest.raises(ValueError, match=r"did not answer the code check .* within 0.2 s"):
+            cluster.check_workers(HungClient(), "tcp://10.0.0.1:8786", ["cam"])
+    finally:
+        released.set()
