@@ -317,7 +317,7 @@ def test_status_codes_are_integers_with_cf_flags_and_are_counted_not_averaged(
         "not_evaluated": 0,
     }
     assert not list(folder.glob("*status*.png"))
-    text = (folder / "analysis.txt").read_text(encoding="utf-8")
+    text = " ".join((folder / "analysis.txt").read_text(encoding="utf-8").split())  # wrapped
     assert "status (run status of the dynamics" in text
     assert ": 2 ok, 2 not_run — a status code" in text
     assert "- chain_status (kinematic chain status bits (0: valid)): 2 ok, 2 cam_not_convex" in (
