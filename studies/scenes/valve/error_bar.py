@@ -68,6 +68,9 @@ from studies.scenes.valve.parameters import (
 )
 
 Excitation = tuple[np.ndarray, float, float]
+ExcitationAt = Callable[[float, bool], Excitation]
+"""(angle step [deg], unclipped) -> the excitation table at half that step (the scene's
+``excitation``: clipped for RK4, unclipped for ``dopri``)."""
 SWITCH_AWARE = "rk4_switch_aware"
 BAR_FACTOR = 3.0
 """Error bar per unit of step-halving difference: 1/(1 − 2⁻¹) for first order × 1.5 [-]."""
@@ -82,6 +85,13 @@ DOPRI_BAR_FACTOR = 3.0
 """Error bar of ``dopri`` per unit of its companion difference [-] (see the module docstring)."""
 DOPRI_TIGHTENING = 10.0
 """The ``dopri`` companion runs at the tolerance per step / DOPRI_TIGHTENING [-]."""
+COMPANION_TOLERANCE = 1e-10
+"""Lift tolerance per step [m] of the ``dopri`` companion of fixed-step derived outputs."""
+COMPANION_TABLE_DEG = 1.0 / 256.0
+"""Excitation table spacing [deg] of that companion."""
+COMPANION_BAR_FACTOR = 2.0
+"""Bar of a fixed-step derived output per unit of its difference from the companion:
+1/(1 − 1/2), the companion's own error allowed up to half the run's [-]."""
 
 
 @dataclass
@@ -142,7 +152,7 @@ def output_difference(coarse: np.ndarray, fine: np.ndarray) -> np.ndarray:
 
 
 def halving_ladder(
-    excitation_at: Callable[[float], Excitation],
+    excitation_at: ExcitationAt,
     rows: np.ndarray,
     flags: np.ndarray,
     coarse_deg: float,
@@ -152,13 +162,15 @@ def halving_ladder(
 ) -> Ladder:
     """Run the points ``rows`` down the ladder (see the module docstring).
 
-    excitation_at : angle step [deg] -> its excitation table (spacing half the step).
+    excitation_at : (angle step [deg], unclipped) -> its excitation table (``ExcitationAt``).
     flags         : kernel settings row (``S_*``) of the integrator.
     tolerance     : [m]; 0 stops every point at the first level (the error bar only).
     budget        : also estimate the integration and excitation parts of the bar.
     """
     n = rows.shape[0]
-    out, lifts = lift_runs(excitation_at(coarse_deg), rows, flags, np.zeros(n, dtype=np.int64))
+    out, lifts = lift_runs(
+        excitation_at(coarse_deg, False), rows, flags, np.zeros(n, dtype=np.int64)
+    )
     finished = out[:, valve.O_STATUS] == valve.STATUS_OK
     forced = np.where(np.isfinite(out[:, valve.O_SUBSTEPS]), out[:, valve.O_SUBSTEPS], 0)
     forced = forced.astype(np.int64)
@@ -177,19 +189,15 @@ def halving_ladder(
         if pending.size == 0:
             break
         step = coarse_deg / 2**level
-        fine = excitation_at(step / 2.0)
+        fine = excitation_at(step / 2.0, False)
         fine_out, fine_lifts = lift_runs(fine, rows[pending], flags, forced[pending])
         bar = BAR_FACTOR * halving_difference(lifts, fine_lifts)
         done = (bar <= tolerance) | (level == max_halvings) | (tolerance <= 0.0)
         take = pending[done]
         ladder.out[take], ladder.level[take], ladder.bar[take] = out[done], level, bar[done]
         ladder.met[take] = (bar[done] <= tolerance).astype(float)
-        for name, column in DERIVED_BARS.items():
-            ladder.derived[name][take] = BAR_FACTOR * output_difference(
-                out[done, column], fine_out[done, column]
-            )
         if budget and take.size:
-            middle = lift_runs(excitation_at(step), rows[take], flags, 2 * forced[take])[1]
+            middle = lift_runs(excitation_at(step, False), rows[take], flags, 2 * forced[take])[1]
             ladder.budget["integration_error"][take] = BAR_FACTOR * np.max(
                 np.abs(lifts[done] - middle), axis=1
             )
@@ -201,7 +209,7 @@ def halving_ladder(
 
 
 def dopri_ladder(
-    excitation_at: Callable[[float], Excitation],
+    excitation_at: ExcitationAt,
     rows: np.ndarray,
     coarse_deg: float,
     tolerance: float,
@@ -211,9 +219,9 @@ def dopri_ladder(
     its bar from the companion (see the module docstring). Level 0, no forced sub-steps."""
     atol = dopri_tolerance(tolerance)
     spacing = dopri_table_deg(tolerance)
-    out, lifts = dopri_lifts(excitation_at(2.0 * spacing), rows, coarse_deg, atol)
+    out, lifts = dopri_lifts(excitation_at(2.0 * spacing, True), rows, coarse_deg, atol, 0.0)
     fine_out, fine_lifts = dopri_lifts(
-        excitation_at(spacing), rows, coarse_deg, atol / DOPRI_TIGHTENING
+        excitation_at(spacing, True), rows, coarse_deg, atol / DOPRI_TIGHTENING, coarse_deg
     )
     finished = (out[:, valve.O_STATUS] == valve.STATUS_OK) & (
         fine_out[:, valve.O_STATUS] == valve.STATUS_OK
@@ -242,14 +250,48 @@ def dopri_ladder(
     )
 
 
+def companion_bars(
+    excitation_at: ExcitationAt,
+    rows: np.ndarray,
+    out: np.ndarray,
+    coarse_deg: float,
+    tolerance: float,
+) -> dict[str, np.ndarray]:
+    """Bars of the derived outputs of fixed-step runs (``out``, (n, O_*)) of ``rows``: the
+    factor ``COMPANION_BAR_FACTOR`` times their difference from a ``dopri`` companion at
+    ``COMPANION_TOLERANCE`` per step (or the tolerance mode's companion, if tighter) on an
+    unclipped table every ``COMPANION_TABLE_DEG`` (or finer), its steps at most the grid step
+    (see the module docstring). NaN where either run did not finish."""
+    atol = COMPANION_TOLERANCE
+    spacing = COMPANION_TABLE_DEG
+    if tolerance > 0.0:
+        atol = min(atol, dopri_tolerance(tolerance) / DOPRI_TIGHTENING)
+        spacing = min(spacing, dopri_table_deg(tolerance) / 2.0)
+    companion = dopri_lifts(excitation_at(2.0 * spacing, True), rows, coarse_deg, atol, coarse_deg)[
+        0
+    ]
+    finished = (out[:, valve.O_STATUS] == valve.STATUS_OK) & (
+        companion[:, valve.O_STATUS] == valve.STATUS_OK
+    )
+    return {
+        name: np.where(
+            finished,
+            COMPANION_BAR_FACTOR * output_difference(out[:, column], companion[:, column]),
+            np.nan,
+        )
+        for name, column in DERIVED_BARS.items()
+    }
+
+
 def tolerance_rungs(
-    excitation_at: Callable[[float], Excitation],
+    excitation_at: ExcitationAt,
     rows: np.ndarray,
     flags_of: Callable[[str], np.ndarray],
     integrator: str,
     coarse_deg: float,
     tolerance: float,
     budget: bool,
+    derived: bool,
 ) -> list[tuple[np.ndarray, str, Ladder]]:
     """The rungs a study's points go down: (row positions, method, its ladder) each.
 
@@ -259,7 +301,8 @@ def tolerance_rungs(
     (:func:`dopri_ladder`: it met 1e-3 mm on a random sample at about 1/80 of the ladder's
     cost), and those still above go down the ladder of switch-aware RK4 (plain RK4 left 12 %
     of a random sample above 1e-3 mm after six halvings). ``flags_of``: kernel settings of a
-    method.
+    method; ``derived``: bars of the derived outputs (``DERIVED_BARS``) are wanted, which for
+    the points a fixed-step rung reports come from :func:`companion_bars`.
     """
     rungs = [(integrator, MAX_HALVINGS if tolerance > 0.0 else 0)]
     if tolerance > 0.0 and integrator == DOPRI:
@@ -283,7 +326,15 @@ def tolerance_rungs(
                 halvings,
                 budget,
             )
-        taken.append((pending, method, ladder))
         finished = ladder.out[:, valve.O_STATUS] == valve.STATUS_OK
-        pending = pending[finished & (ladder.met == 0.0)]
+        passed_on = finished & (ladder.met == 0.0) & ((method, halvings) != rungs[-1])
+        if derived and method != DOPRI and (~passed_on).any():
+            kept = np.flatnonzero(~passed_on)
+            bars = companion_bars(
+                excitation_at, rows[pending[kept]], ladder.out[kept], coarse_deg, tolerance
+            )
+            for name, values in bars.items():
+                ladder.derived[name][kept] = values
+        taken.append((pending, method, ladder))
+        pending = pending[passed_on]
     return taken
