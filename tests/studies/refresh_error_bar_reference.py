@@ -1,4 +1,4 @@
-"""Refresh the scipy reference of the error-bar samples: run this file (about 25 CPU-minutes).
+"""Refresh the scipy reference of the error-bar samples: run this file (about 9 CPU-minutes).
 
 Solves the reference of every point of the samples of tests/valve_samples.py and
 writes tests/studies/data/valve_error_bar_reference.nc: per sample and point the reference
@@ -65,8 +65,13 @@ def refresh() -> Path:
         attrs={
             "made_by": "python tests/studies/refresh_error_bar_reference.py",
             "git_commit": commit,
-            "samples": "tests/studies/valve_samples.py: "
+            "samples": "tests/valve_samples.py: "
             + ", ".join(f"{name} seed {seed}" for name, seed in valve_samples.SEEDS.items()),
+            "sample_ranges": " ".join(
+                " ".join(part.split())
+                for part in (valve_samples.__doc__ or "").split("\n\n")
+                if part.startswith("Sample ")
+            ),
             "points_digest": ",".join(f"{k}:{v}" for k, v in digests.items()),
             "reference": (
                 f"scipy {scipy.__version__} solve_ivp DOP853 rtol {valve_samples.REFERENCE_RTOL} "
