@@ -28,15 +28,20 @@ from engine_kernels.valvetrain.dopri_observe import (
     grid_points,
     observe_grid_point,
     observe_inside_step,
+    observe_point,
+    observe_turn,
+    record_closure,
     stop_run,
 )
 from engine_kernels.valvetrain.dopri_step import (
+    SWITCH_ANGLE_TOLERANCE,
     dense_state,
     dopri_step,
     locate_switch,
     mode_acceleration,
     mode_violation,
     switching_functions,
+    velocity_turn,
 )
 from engine_kernels.valvetrain.guard import valid_valve_parameters
 from engine_kernels.valvetrain.layout import (
@@ -66,7 +71,6 @@ from engine_kernels.valvetrain.observations import (
     finish_observations,
     nose_position,
     observe_closure,
-    record_closure_events,
 )
 from engine_kernels.valvetrain.step import valve_time_steps
 
@@ -92,7 +96,16 @@ def _initial_mode(lift, velocity, drive_lift, slope, c):
 
 @jit
 def dopri_response(
-    excitation, table_step, table_start, grid_step, params, tolerance, max_steps, out, curves
+    excitation,
+    table_step,
+    table_start,
+    grid_step,
+    params,
+    tolerance,
+    max_step,
+    max_steps,
+    out,
+    curves,
 ):
     """Valve dynamics of one case by adaptive DP5(4) with located switches, outputs ``O_*``.
 
@@ -107,6 +120,10 @@ def dopri_response(
                              ``tolerance·ω`` [m/s]: a velocity error kept through a free
                              flight of about a radian of cam grows into a lift error of
                              that size.
+    max_step    : float      Longest step [rad of cam], 0 for none: without it the steps grow
+                             fivefold per step while the valve rests, and a step then spans
+                             tens of degrees; the error bar's companion run caps its steps
+                             so that its switch detection does not share the run's long steps.
     max_steps   : int        Step attempts allowed before ``STATUS_SUBSTEP_LIMIT``.
     out         : 1-D array  Outputs ``O_*``: as :func:`engine_kernels.valvetrain.valve_response`,
                              but ``O_SUBSTEPS`` holds the accepted DP5 steps and
@@ -152,8 +169,10 @@ def dopri_response(
             slope,
             curves,
         )[0],
+        0.0,
     )
-    h = min(end, 1.0 / radius) if radius > 0.0 else end
+    longest = max_step / speed if max_step > 0.0 else end
+    h = min(end, longest, 1.0 / radius) if radius > 0.0 else min(end, longest)
     dense = np.empty(10)
     time = 0.0
     next_grid = 1
@@ -230,6 +249,13 @@ def dopri_response(
         fresh = False
         stop = end if last else time + length
         on_grid = False
+        # a maximum of the lift inside the step: located on the dense output and observed as a
+        # point of its own, in time order among the grid points
+        turn = (
+            time + length * velocity_turn(dense, SWITCH_ANGLE_TOLERANCE / (length * speed))
+            if velocity > 0.0 and not new_velocity > 0.0
+            else math.inf
+        )
         # Inside a step the valve can cross the seat plane unseen only while off its seat
         # with an end of the step below the plane (a landing is a located switch).
         sample = 1 if not mode[1] and min(lift, new_lift) <= c[K_SEAT_DEPTH] else SWITCH_SAMPLES
@@ -250,6 +276,9 @@ def dopri_response(
                     prev,
                 )
                 sample += 1
+            if turn < at:
+                observe_turn(record, excitation, table_step, table_start, time, length, dense, turn)
+                turn = math.inf
             y, v = dense_state(dense, (at - time) / length)
             angle = table_start + next_grid * grid_step
             drive_lift, slope = excitation_lift_slope(
@@ -268,8 +297,8 @@ def dopri_response(
                 curves,
             )
             if event:
-                record_closure_events(record, 0, 1, prev[0], prev[1], prev[2])
-            prev = (y, v, acc_here)
+                record_closure(record, excitation, table_step, prev)
+            prev = (y, v, acc_here, at)
             next_grid += 1
         for inside in range(sample, SWITCH_SAMPLES):
             prev = observe_inside_step(
@@ -284,6 +313,8 @@ def dopri_response(
                 inside / SWITCH_SAMPLES,
                 prev,
             )
+        if turn < math.inf:
+            observe_turn(record, excitation, table_step, table_start, time, length, dense, turn)
         accepted += 1
         largest_ratio = max(largest_ratio, length * radius)
         time = stop
@@ -292,13 +323,17 @@ def dopri_response(
             stop_run(out, curves, STATUS_NONFINITE)
             return
         if not on_grid and next_grid < n_grid:
+            if which >= 0:
+                observe_point(
+                    record, excitation, table_step, table_start, time, lift, velocity, which == 0
+                )
             if observe_closure(record, 0, 1, lift, table_start + time * speed >= nose):
                 # A located seat switch ends this step on the seat plane: the seating
                 # velocity is read there, not extrapolated over a whole step.
                 if which == 1:
-                    prev = (lift, velocity, acc)
-                record_closure_events(record, 0, 1, prev[0], prev[1], prev[2])
-            prev = (lift, velocity, acc)
+                    prev = (lift, velocity, acc, time)
+                record_closure(record, excitation, table_step, prev)
+            prev = (lift, velocity, acc, time)
         if which >= 0:
             drive_lift, slope = excitation_lift_slope(
                 excitation, table_step, time * speed / table_step
@@ -315,6 +350,7 @@ def dopri_response(
             switched = which
             fresh = True
         h *= min(FAC_MAX, max(FAC_MIN, SAFETY * error**-0.2)) if error > 0.0 else FAC_MAX
+        h = min(h, longest)
     finish_observations(record, 0, 1, grid_step, lift, velocity, out)
     out[O_SUBSTEPS] = accepted
     out[O_STEP_RATIO] = largest_ratio
@@ -322,7 +358,16 @@ def dopri_response(
 
 @batch
 def dopri_batch(
-    excitation, table_step, table_start, grid_step, params, tolerance, max_steps, out, lifts
+    excitation,
+    table_step,
+    table_start,
+    grid_step,
+    params,
+    tolerance,
+    max_step,
+    max_steps,
+    out,
+    lifts,
 ):
     """:func:`dopri_response` for many cases, one case per prange iteration.
 
@@ -342,6 +387,7 @@ def dopri_batch(
             grid_step,
             params[i],
             tolerance,
+            max_step,
             max_steps,
             out[i],
             curves,

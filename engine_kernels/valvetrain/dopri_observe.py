@@ -25,6 +25,7 @@ from engine_kernels.valvetrain.layout import (
     K_SPEED,
     O_STATUS,
 )
+from engine_kernels.valvetrain.located import jerk_at, observe_peak, remember_point
 from engine_kernels.valvetrain.model import case_coefficients, excitation_lift_slope, specific_point
 from engine_kernels.valvetrain.observations import (
     observe_closure,
@@ -112,15 +113,49 @@ def observe_inside_step(
              excitation table; nose: the nose's cam angle [rad]; time [s], length [s], dense:
              the step's start, length and dense output
              (:func:`engine_kernels.valvetrain.dopri_step.dopri_step`); prev: (lift [m],
-             velocity [m/s], acceleration [m/s²]) at the previous observed point.
+             velocity [m/s], acceleration [m/s²], time [s]) at the previous observed point
+             (:func:`record_closure`).
     """
     lift, velocity = dense_state(dense, s)
     speed = record[K_SPEED]
-    angle = table_start + (time + s * length) * speed
-    drive_lift, slope = excitation_lift_slope(
-        excitation, table_step, (angle - table_start) / table_step
-    )
+    at = time + s * length
+    angle = table_start + at * speed
+    drive_lift, slope = excitation_lift_slope(excitation, table_step, at * speed / table_step)
     acc = specific_point(lift, velocity, drive_lift, slope, case_coefficients(record, 0, 1))[2]
     if observe_closure(record, 0, 1, lift, angle >= nose):
-        record_closure_events(record, 0, 1, prev[0], prev[1], prev[2])
-    return lift, velocity, acc
+        record_closure(record, excitation, table_step, prev)
+    return lift, velocity, acc, at
+
+
+@jit
+def record_closure(record, excitation, table_step, prev):
+    """``record_closure_events`` with the previous observed point ``prev`` = (lift [m],
+    velocity [m/s], acceleration [m/s²], time [s] from the table's start)."""
+    lift, velocity, acc, time = prev
+    position = time * record[K_SPEED] / table_step
+    c = case_coefficients(record, 0, 1)
+    jerk = jerk_at(excitation, table_step, position, lift, velocity, acc, c)
+    record_closure_events(record, 0, 1, lift, velocity, acc, jerk)
+
+
+@jit
+def observe_point(record, excitation, table_step, table_start, time, lift, velocity, drive_root):
+    """A located switch or maximum as an observed point: the lift's maximum since the previous
+    point is located (:func:`engine_kernels.valvetrain.located.observe_peak`) and this point
+    becomes the previous one. At the root of the drive force (``drive_root``: a located drive
+    switch) its drive force is taken as zero, so a separation starting there is dated to it.
+    ``time`` [s] from the table's start; lift [m], velocity [m/s] there."""
+    speed = record[K_SPEED]
+    angle = table_start + time * speed
+    drive_lift, slope = excitation_lift_slope(excitation, table_step, time * speed / table_step)
+    drive = specific_point(lift, velocity, drive_lift, slope, case_coefficients(record, 0, 1))[0]
+    observe_peak(record, 0, 1, angle, lift, velocity)
+    remember_point(record, 0, 1, angle, lift, velocity, 0.0 if drive_root else drive)
+
+
+@jit
+def observe_turn(record, excitation, table_step, table_start, time, length, dense, turn):
+    """The lift's maximum located at time ``turn`` [s] inside the step from ``time`` [s] of
+    length ``length`` [s] (dense output ``dense``) as an observed point (:func:`observe_point`)."""
+    lift, velocity = dense_state(dense, (turn - time) / length)
+    observe_point(record, excitation, table_step, table_start, turn, lift, velocity, False)

@@ -10,8 +10,8 @@ and the pair keeps its orders. The step gives the fifth-order end state, the emb
 fourth-order error estimate and Hairer's free fourth-order dense output. The switching
 functions are the drive force ``k(Y − y) + b(Ẏ − ẏ)`` (contact while positive) and the seat
 function ``min(kz(δ0 − y), kz(δ0 − y) − bz ẏ)`` (seated while positive: below the seat plane
-and pushing); both are evaluated on the dense output, and a crossing is located by the
-Illinois method on it. The driver is :mod:`engine_kernels.valvetrain.dopri`.
+and pushing); both are evaluated on the dense output, and a crossing is located on it to a
+stated angle (``SWITCH_ANGLE_TOLERANCE``). The driver is :mod:`engine_kernels.valvetrain.dopri`.
 
 Reference: Dormand & Prince, J. Comput. Appl. Math. 6 (1980) 19–26; Hairer, Nørsett & Wanner,
 *Solving ODEs I*, §II.4–II.6 (tableau, dense output ``contd5``, step-size control).
@@ -27,7 +27,7 @@ from engine_kernels.valvetrain.layout import (
     K_SEAT_STIFFNESS,
     K_SPRING_RATE,
 )
-from engine_kernels.valvetrain.model import drive_push, specific_forces
+from engine_kernels.valvetrain.model import drive_push, lash_clip, specific_forces
 
 C2, C3, C4, C5 = 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0
 A21 = 1.0 / 5.0
@@ -43,8 +43,14 @@ D1, D3 = -12715105075.0 / 11282082432.0, 87487479700.0 / 32700410799.0
 D4, D5 = -10690763975.0 / 1880347072.0, 701980252875.0 / 199316789632.0
 D6, D7 = -1453857185.0 / 822651844.0, 69997945.0 / 29380423.0
 
-LOCATE_ITERATIONS = 60
-"""Illinois iterations on a bracketed switch (each at least a halving once it stalls)."""
+SWITCH_ANGLE_TOLERANCE = 1e-9
+"""Width [rad of cam] to which a switch is bracketed on the dense output before the step is
+redone to the bracket's far end: the switch is applied at most this late. A force jump of
+M·1500 m/s² (the drive taking up the lash at 9000 rpm) applied 1e-9 rad late moves the lift by
+~1e-11 m over the rest of the event."""
+MAX_LOCATE_ITERATIONS = 200
+"""A guard only: at least every third iteration halves the bracket, so a step of up to
+1e10 rad of cam is located in fewer iterations."""
 
 
 @jit_inline
@@ -71,7 +77,8 @@ def excitation_stage(excitation, table_step, scale, time):
     """Excitation Y [m] and Y' [m/rad] at time ``time`` [s] (table position ``time·scale``).
 
     The cubic Hermite of :func:`engine_kernels.valvetrain.model.excitation_lift_slope`, the
-    same numbers, written out here so it is inlined into the stages.
+    same numbers (clipped at the lash take-up), written out here so it is inlined into the
+    stages.
     """
     position = time * scale
     index = min(int(position), excitation.shape[1] - 2)
@@ -84,7 +91,9 @@ def excitation_stage(excitation, table_step, scale, time):
     h11 = (s3 - s2) * table_step
     y0, d0, a0 = excitation[0, index], excitation[1, index], excitation[2, index]
     y1, d1, a1 = excitation[0, index + 1], excitation[1, index + 1], excitation[2, index + 1]
-    return h00 * y0 + h10 * d0 + h01 * y1 + h11 * d1, h00 * d0 + h10 * a0 + h01 * d1 + h11 * a1
+    return lash_clip(
+        h00 * y0 + h10 * d0 + h01 * y1 + h11 * d1, h00 * d0 + h10 * a0 + h01 * d1 + h11 * a1
+    )
 
 
 @jit
@@ -183,35 +192,78 @@ def mode_violation(excitation, table_step, speed, time, h, dense, s, mode, band,
     return (-drive if contact else drive) - band, (-seat if seated else seat) - band
 
 
+@jit_inline
+def _bracket_trial(lo, hi, f_lo, f_hi, iteration, last_width):
+    """Next trial point of a bracket [lo, hi] with f(lo) ≤ 0 < f(hi): the Illinois method's
+    (regula falsi that halves the weight of a stale end, :func:`_bracket_narrow`), or the
+    midpoint when two of its steps have not halved the bracket. Returns the point and the
+    width to compare the next pair of steps with."""
+    s = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
+    if iteration % 2 == 1:
+        if hi - lo > 0.5 * last_width:
+            s = 0.5 * (lo + hi)
+        last_width = hi - lo
+    if not lo < s < hi:
+        s = 0.5 * (lo + hi)
+    return s, last_width
+
+
+@jit_inline
+def _bracket_narrow(lo, hi, f_lo, f_hi, side, s, f):
+    """The bracket after the trial point ``s`` with value ``f`` (see :func:`_bracket_trial`)."""
+    if f > 0.0:
+        if side == 1:
+            f_lo *= 0.5
+        return lo, s, f_lo, f, 1
+    if side == -1:
+        f_hi *= 0.5
+    return s, hi, f, f_hi, -1
+
+
 @jit
 def locate_switch(excitation, table_step, speed, time, h, dense, lo, hi, which, mode, band, c):
     """Fraction of the step just past the first crossing of switch ``which`` in (lo, hi].
 
     The violation (:func:`mode_violation`, 0 drive, 1 seat) is ≤ 0 at ``lo`` and > 0 at
-    ``hi``; the Illinois method (regula falsi that halves the weight of a stale end) shrinks
-    the bracket on the dense output and returns its end past the root, so the redone step
-    ends on the far side of the switch. Other arguments as in :func:`mode_violation`.
+    ``hi``; the bracket shrinks on the dense output until it spans at most
+    ``SWITCH_ANGLE_TOLERANCE`` of cam angle, and its end past the root is returned, so the
+    redone step ends on the far side of the switch, never later than that tolerance. Trial
+    points: :func:`_bracket_trial` (the Illinois method, bisection when it stalls), so a jump
+    of the switching function (the drive force at lash take-up, where Ẏ jumps) is bracketed
+    as tightly as a smooth crossing. Other arguments as in :func:`mode_violation`.
     """
     f_lo = mode_violation(excitation, table_step, speed, time, h, dense, lo, mode, band, c)[which]
     f_hi = mode_violation(excitation, table_step, speed, time, h, dense, hi, mode, band, c)[which]
+    width = SWITCH_ANGLE_TOLERANCE / (h * speed)
     side = 0
-    for _ in range(LOCATE_ITERATIONS):
-        if hi - lo <= 1e-13 * hi:
+    last_width = hi - lo
+    for iteration in range(MAX_LOCATE_ITERATIONS):
+        if hi - lo <= width:
             break
-        s = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
+        s, last_width = _bracket_trial(lo, hi, f_lo, f_hi, iteration, last_width)
         if not lo < s < hi:
-            s = 0.5 * (lo + hi)
-        f = mode_violation(excitation, table_step, speed, time, h, dense, s, mode, band, c)[which]
-        if f > 0.0:
-            hi, f_hi = s, f
-            if side == 1:
-                f_lo *= 0.5
-            side = 1
-        else:
-            lo, f_lo = s, f
-            if side == -1:
-                f_hi *= 0.5
-            side = -1
-        if f == 0.0:
             break
+        f = mode_violation(excitation, table_step, speed, time, h, dense, s, mode, band, c)[which]
+        lo, hi, f_lo, f_hi, side = _bracket_narrow(lo, hi, f_lo, f_hi, side, s, f)
     return hi
+
+
+@jit
+def velocity_turn(dense, width):
+    """Fraction of a step where its dense-output velocity turns from positive (at the start)
+    to not positive (at the end): a maximum of the lift, bracketed to ``width`` (a fraction of
+    the step) like :func:`locate_switch`. ``dense``: the step's dense output."""
+    lo, hi = 0.0, 1.0
+    f_lo, f_hi = -dense[5], -dense_state(dense, 1.0)[1]
+    side = 0
+    last_width = 1.0
+    for iteration in range(MAX_LOCATE_ITERATIONS):
+        if hi - lo <= width:
+            break
+        s, last_width = _bracket_trial(lo, hi, f_lo, f_hi, iteration, last_width)
+        if not lo < s < hi:
+            break
+        lo, hi, f_lo, f_hi, side = _bracket_narrow(
+            lo, hi, f_lo, f_hi, side, s, -dense_state(dense, s)[1]
+        )
+    return 0.5 * (lo + hi)

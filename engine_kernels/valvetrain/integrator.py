@@ -47,10 +47,12 @@ from engine_kernels.valvetrain.layout import (
     S_SWITCH_AWARE,
     VALVE_CURVE_NAMES,
 )
+from engine_kernels.valvetrain.located import jerk_at
 from engine_kernels.valvetrain.model import (
     case_coefficients,
     drive_push,
     excitation_lift_slope,
+    lash_clip,
     specific_point,
     valve_coefficients,
 )
@@ -67,18 +69,28 @@ from engine_kernels.valvetrain.switching import switch_aware_step
 
 
 @jit_inline
-def _observe_substep(record, prev_lift, prev_velocity, prev_acc, lift, past_nose):
+def _observe_substep(record, excitation, table_step, prev, lift, past_nose):
     """Seat phase at an RK4 sub-step point inside a grid step (``observe_closure``).
 
     A contact with a stiff seat can begin and end between two grid points, but it lasts
     about half a period of the seat mode, π/ω, longer than a sub-step (the stability guard
     keeps h·ω ≤ 2): following the phase at every sub-step point sees every landing, so a
-    rebound counts as a bounce, not as a jump. ``prev_*`` is the state at the previous
-    sub-step point (lift [m], velocity [m/s], acceleration [m/s²]); ``past_nose``: this one
-    is at or past the cam's nose.
+    rebound counts as a bounce, not as a jump. ``prev`` is the previous sub-step point:
+    (table position [-], lift [m], velocity [m/s], acceleration [m/s²]); ``past_nose``: this
+    one is at or past the cam's nose.
     """
     if observe_closure(record, 0, 1, lift, past_nose):
-        record_closure_events(record, 0, 1, prev_lift, prev_velocity, prev_acc)
+        _record_closure(record, excitation, table_step, prev)
+
+
+@jit
+def _record_closure(record, excitation, table_step, prev):
+    """``record_closure_events`` with the previous point ``prev`` (see :func:`_observe_substep`)."""
+    position, lift, velocity, acc = prev
+    jerk = jerk_at(
+        excitation, table_step, position, lift, velocity, acc, case_coefficients(record, 0, 1)
+    )
+    record_closure_events(record, 0, 1, lift, velocity, acc, jerk)
 
 
 @jit
@@ -113,15 +125,14 @@ def _integrate(
     depth = c[K_SEAT_DEPTH]
     lift = params[P_INITIAL_LIFT]
     velocity = params[P_INITIAL_VELOCITY]
-    prev_lift, prev_velocity, prev_acc = lift, velocity, 0.0  # set before they are read
+    prev = (0.0, lift, velocity, 0.0)  # set before it is read
     nose = nose_position(excitation)
     store = curves.shape[1] > 0
     record_trace = trace.shape[0] > 0
     difference = 0.0
     for n in range(n_steps + 1):
         node = 2 * half * n
-        drive_lift = excitation[0, node]
-        slope = excitation[1, node]
+        drive_lift, slope = lash_clip(excitation[0, node], excitation[1, node])
         drive_velocity = speed * slope
         drive, seat, acc = specific_point(lift, velocity, drive_lift, slope, c)
         angle = table_start + n * grid_step
@@ -143,7 +154,7 @@ def _integrate(
             seat,
             node >= nose,
         ):
-            record_closure_events(record, 0, 1, prev_lift, prev_velocity, prev_acc)
+            _record_closure(record, excitation, table_step, prev)
         if n % ENERGY_INTERVAL == 0 or n == n_steps:
             observe_energy(record, 0, 1, lift, velocity, drive_lift, drive_velocity, drive)
         if store:
@@ -160,29 +171,23 @@ def _integrate(
                 trace[n] = lift
         if n == n_steps:
             break
-        prev_lift, prev_velocity, prev_acc = lift, velocity, acc
+        prev = (float(node), lift, velocity, acc)
         if switch_aware:
             for j in range(substeps):
                 start = node + 2.0 * half * j / substeps
                 if j > 0:
                     y0, s0 = excitation_lift_slope(excitation, table_step, start)
-                    _observe_substep(
-                        record, prev_lift, prev_velocity, prev_acc, lift, start >= nose
-                    )
-                    prev_lift, prev_velocity = lift, velocity
-                    _, _, prev_acc = specific_point(lift, velocity, y0, s0, c)
+                    _observe_substep(record, excitation, table_step, prev, lift, start >= nose)
+                    prev = (start, lift, velocity, specific_point(lift, velocity, y0, s0, c)[2])
                 stop = node + 2.0 * half * (j + 1) / substeps
                 lift, velocity, _ = switch_aware_step(
                     excitation, table_step, start, stop, lift, velocity, params
                 )
         elif substeps == 1:
+            ym, sm = lash_clip(excitation[0, node + half], excitation[1, node + half])
+            y1, s1 = lash_clip(excitation[0, node + 2 * half], excitation[1, node + 2 * half])
             lift, velocity = rk4_valve_step(
-                lift,
-                velocity,
-                acc,
-                drive_push(excitation[0, node + half], excitation[1, node + half], c),
-                drive_push(excitation[0, node + 2 * half], excitation[1, node + 2 * half], c),
-                c,
+                lift, velocity, acc, drive_push(ym, sm, c), drive_push(y1, s1, c), c
             )
         else:
             for j in range(substeps):
@@ -196,10 +201,8 @@ def _integrate(
                 )
                 _, _, a0 = specific_point(lift, velocity, y0, s0, c)
                 if j > 0:
-                    _observe_substep(
-                        record, prev_lift, prev_velocity, prev_acc, lift, position >= nose
-                    )
-                    prev_lift, prev_velocity, prev_acc = lift, velocity, a0
+                    _observe_substep(record, excitation, table_step, prev, lift, position >= nose)
+                    prev = (position, lift, velocity, a0)
                 lift, velocity = rk4_valve_step(
                     lift,
                     velocity,

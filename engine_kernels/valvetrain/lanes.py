@@ -30,7 +30,7 @@ error (tests/engine_kernels/test_valve_lanes.py).
 
 from __future__ import annotations
 
-from engine_kernels._jit import jit, jit_inline
+from engine_kernels._jit import jit, jit_inline, jit_lanes
 from engine_kernels.valvetrain.energy_balance import ENERGY_INTERVAL, observe_energy
 from engine_kernels.valvetrain.layout import (
     K_SPEED,
@@ -38,10 +38,12 @@ from engine_kernels.valvetrain.layout import (
     P_INITIAL_LIFT,
     P_INITIAL_VELOCITY,
 )
+from engine_kernels.valvetrain.located import jerk_at
 from engine_kernels.valvetrain.model import (
     case_coefficients,
     drive_push,
     excitation_lift_slope,
+    lash_clip,
     specific_point,
 )
 from engine_kernels.valvetrain.observations import (
@@ -103,7 +105,7 @@ def _start_lanes(data, angle, drive_lift, slope):
         )
 
 
-@jit
+@jit_lanes
 def _observe_lanes(data, angle, drive_lift, slope, past_nose):
     """Grid point of every lane: acceleration into ``R_ACC``, observations updated.
 
@@ -133,18 +135,20 @@ def _observe_lanes(data, angle, drive_lift, slope, past_nose):
 
 
 @jit
-def _record_events_lanes(data, prev_drive_lift, prev_slope):
+def _record_events_lanes(data, excitation, table_step, prev_position):
     """Record closure and bounce events of every lane (scalar; only after an event).
 
-    prev_drive_lift, prev_slope : Y [m] and Y' [m/rad] at the previous (sub-)step point,
-    where the state in ``_PREV_*`` was.
+    prev_position : Table position [-] of the previous (sub-)step point, where the state in
+    ``_PREV_*`` was.
     """
+    prev_drive_lift, prev_slope = excitation_lift_slope(excitation, table_step, prev_position)
     for l in range(LANES):
         lift = data[R_PREV_LIFT * LANES + l]
         velocity = data[R_PREV_VELOCITY * LANES + l]
         c = case_coefficients(data, l, LANES)
         _, _, acc = specific_point(lift, velocity, prev_drive_lift, prev_slope, c)
-        record_closure_events(data, l, LANES, lift, velocity, acc)
+        jerk = jerk_at(excitation, table_step, prev_position, lift, velocity, acc, c)
+        record_closure_events(data, l, LANES, lift, velocity, acc, jerk)
 
 
 @jit
@@ -229,12 +233,11 @@ def lane_pass(excitation, table_step, table_start, compare, substeps, params, ca
         data[R_LIFT * LANES + l] = params[cases[l], P_INITIAL_LIFT]
         data[R_VELOCITY * LANES + l] = params[cases[l], P_INITIAL_VELOCITY]
         data[R_DIFFERENCE * LANES + l] = 0.0
-    prev_drive_lift, prev_slope = excitation[0, 0], excitation[1, 0]  # read once n > 0
+    prev_position = 0.0  # read once n > 0
     nose = nose_position(excitation)
     for n in range(n_steps + 1):
         node = 2 * half * n
-        drive_lift = excitation[0, node]
-        slope = excitation[1, node]
+        drive_lift, slope = lash_clip(excitation[0, node], excitation[1, node])
         data[R_ANGLE * LANES] = table_start + n * grid_step
         angle = data[R_ANGLE * LANES]  # in the block's precision
         if record:
@@ -242,28 +245,26 @@ def lane_pass(excitation, table_step, table_start, compare, substeps, params, ca
         if n == 0:
             _start_lanes(data, angle, drive_lift, slope)
         elif _observe_lanes(data, angle, drive_lift, slope, node >= nose):
-            _record_events_lanes(data, prev_drive_lift, prev_slope)
+            _record_events_lanes(data, excitation, table_step, prev_position)
         if n % ENERGY_INTERVAL == 0 or n == n_steps:
             _energy_lanes(data, drive_lift, slope)
         if n == n_steps:
             break
-        prev_drive_lift, prev_slope = drive_lift, slope
+        prev_position = float(node)
         if substeps == 1:
-            _step_lanes(
-                data,
-                excitation[0, node + half],
-                excitation[1, node + half],
-                excitation[0, node + 2 * half],
-                excitation[1, node + 2 * half],
-            )
+            # names of their own: the sub-step branch's are float64, these keep the table's
+            # precision (one name for both would promote a float32 block's step to double)
+            y_mid, s_mid = lash_clip(excitation[0, node + half], excitation[1, node + half])
+            y_end, s_end = lash_clip(excitation[0, node + 2 * half], excitation[1, node + 2 * half])
+            _step_lanes(data, y_mid, s_mid, y_end, s_end)
             continue
         for j in range(substeps):
             position = node + 2.0 * half * j / substeps
             ya, sa = excitation_lift_slope(excitation, table_step, position)
             if j > 0:
                 if _observe_seat_lanes(data, position >= nose):
-                    _record_events_lanes(data, prev_drive_lift, prev_slope)
-                prev_drive_lift, prev_slope = ya, sa
+                    _record_events_lanes(data, excitation, table_step, prev_position)
+                prev_position = position
             ym, sm = excitation_lift_slope(
                 excitation, table_step, node + 2.0 * half * (j + 0.5) / substeps
             )

@@ -11,7 +11,12 @@ Parameter rows and the other data layouts (``P_*``, ``O_*``, ``C_*``, ``S_*``) a
 :mod:`engine_kernels.valvetrain.layout`; the integrators use the coefficients per unit mass,
 written once per case into the ``K_*`` rows of its record by :func:`valve_coefficients`. The
 excitation is a table of the theoretical valve lift Y(θ) and its angle derivatives (rows Y [m],
-Y' [m/rad], Y'' [m/rad²]) read by :func:`excitation_at`. Reference: SPEC §4 and the motorcycle OHC valve-train thesis data quoted there.
+Y' [m/rad], Y'' [m/rad²]) read by :func:`excitation_at`. The table may hold the lift before the
+lash is taken up (smooth, negative on the base circle): every read clips it (:func:`lash_clip`),
+so the kink at lash take-up sits where the smooth lift crosses zero between nodes, instead of
+being smeared over a table interval by the interpolation of a clipped table (an error of
+5–50 nm in Y and up to the whole jump in Y' there, that did not shrink regularly with the
+spacing). Reference: SPEC §4 and the motorcycle OHC valve-train thesis data quoted there.
 """
 
 from __future__ import annotations
@@ -278,6 +283,17 @@ def valve_energy(lift, velocity, drive_lift, c):
     )
 
 
+@jit_inline
+def lash_clip(drive_lift, slope):
+    """The excitation the valve feels: (max(0, Y) [m], Y' [m/rad] where Y > 0 else 0).
+
+    Applied at every read of an excitation table (a table of lift after the lash take-up,
+    never negative, is unchanged by it). Also clips Y'' when given (Y', Y'') with Y's sign
+    test done by the caller (see :func:`engine_kernels.valvetrain.located.jerk_at`).
+    """
+    return (max(ZERO, drive_lift)), (slope if drive_lift > ZERO else ZERO)
+
+
 @jit
 def excitation_lift_slope(excitation, table_step, position):
     """Excitation (Y, Y') at a fractional table position by cubic Hermite interpolation.
@@ -286,8 +302,9 @@ def excitation_lift_slope(excitation, table_step, position):
     table_step : float      Table spacing [rad].
     position   : float      Position in table intervals from the first node [-].
 
-    Returns Y [m] and Y' [m/rad]; at a node (integer position) exactly the table values.
-    Reference: de Boor, *A Practical Guide to Splines*, ch. IV (cubic Hermite).
+    Returns Y [m] and Y' [m/rad] (:func:`lash_clip`); at a node (integer position) exactly
+    the clipped table values. Reference: de Boor, *A Practical Guide to Splines*, ch. IV
+    (cubic Hermite).
     """
     last = excitation.shape[1] - 1
     index = min(int(position), last - 1)
@@ -308,7 +325,7 @@ def excitation_lift_slope(excitation, table_step, position):
         table_step,
         s,
     )
-    return lift, slope
+    return lash_clip(lift, slope)
 
 
 @jit

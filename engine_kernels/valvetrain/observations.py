@@ -38,6 +38,7 @@ from engine_kernels.valvetrain.layout import (
     K_BAND,
     K_MASS,
     K_SEAT_DEPTH,
+    K_SPEED,
     N_RECORD,
     O_BOUNCE_COUNT,
     O_BOUNCE_HEIGHT,
@@ -63,6 +64,7 @@ from engine_kernels.valvetrain.layout import (
     ST_CONTACT,
     ST_ENERGY0,
     ST_EXCESS,
+    ST_INVERSE_SPEED,
     ST_JUMP_GAP,
     ST_JUMP_START,
     ST_JUMP_STEPS,
@@ -78,6 +80,7 @@ from engine_kernels.valvetrain.layout import (
     ST_REST_ENERGY,
     ST_REST_RISE,
     ST_SEAT_A0,
+    ST_SEAT_J0,
     ST_SEAT_V0,
     ST_SEAT_Y0,
     ST_SEATED,
@@ -85,6 +88,12 @@ from engine_kernels.valvetrain.layout import (
     STATUS_NONFINITE,
     STATUS_OK,
     STATUS_UNSTABLE,
+)
+from engine_kernels.valvetrain.located import (
+    observe_peak,
+    remember_point,
+    seating_speed,
+    separation_angle,
 )
 from engine_kernels.valvetrain.model import (
     INF,
@@ -136,6 +145,7 @@ def start_observations(
     record[at + ST_EXCESS * w] = -INF
     record[at + ST_REST_ENERGY * w] = NAN
     record[at + ST_REST_RISE * w] = -INF
+    record[at + ST_INVERSE_SPEED * w] = ONE / record[at + K_SPEED * w]
     record[at + ST_PHASE * w] = PHASE_OPEN if lift > seat_depth else PHASE_SEATED
     record[at + ST_CONTACT * w] = ONE if drive > ZERO else ZERO
     seat = seat if lift < seat_depth else -INF
@@ -145,6 +155,7 @@ def start_observations(
     record[at + ST_POWER_FIRST * w] = power
     observe_extremes(record, at, w, lift, velocity, acceleration, drive)
     observe_separation(record, at, w, angle, lift, drive_lift, drive)
+    remember_point(record, at, w, angle, lift, velocity, drive)
 
 
 @jit_inline
@@ -173,10 +184,13 @@ def observe_valve(
     Other arguments as in :func:`start_observations`.
     """
     observe_extremes(record, at, w, lift, velocity, acceleration, drive)
-    observe_separation(record, at, w, angle, lift, drive_lift, drive)
+    observe_peak(record, at, w, angle, lift, velocity)
+    start = separation_angle(record, at, w, angle, drive)
+    observe_separation(record, at, w, start, lift, drive_lift, drive)
     event = observe_closure(record, at, w, lift, past_nose)
     observe_transitions(record, at, w, lift, drive, seat)
     record[at + ST_POWER_SUM * w] += drive_power(drive, drive_velocity)
+    remember_point(record, at, w, angle, lift, velocity, drive)
     return event
 
 
@@ -192,8 +206,12 @@ def observe_extremes(record, at, w, lift, velocity, acceleration, drive):
 
 
 @jit_inline
-def observe_separation(record, at, w, angle, lift, drive_lift, drive):
+def observe_separation(record, at, w, start, lift, drive_lift, drive):
     """Jump: drive force ≤ 0 while the valve is off its seat before its first closure.
+
+    ``start`` [rad] is where the drive force reached zero, located between the previous point
+    and this one (:func:`engine_kernels.valvetrain.located.separation_angle`): the jump start
+    when this point is the first separated one.
 
     After the first closure the cam is on its base circle and leaving the seat is a bounce
     (:func:`observe_closure`), not a jump: counting it here would turn the jump speed into a
@@ -201,7 +219,7 @@ def observe_separation(record, at, w, angle, lift, drive_lift, drive):
     """
     not_closed = record[at + ST_PHASE * w] < PHASE_CLOSED
     separated = (lift > record[at + K_SEAT_DEPTH * w]) & (drive <= ZERO) & not_closed
-    start = angle if separated else INF
+    start = start if separated else INF
     record[at + ST_JUMP_START * w] = smaller(record[at + ST_JUMP_START * w], start)
     record[at + ST_JUMP_STEPS * w] += ONE if separated else ZERO
     gap = lift - drive_lift if separated else ZERO
@@ -240,11 +258,13 @@ def nose_position(excitation):
 
 
 @jit
-def record_closure_events(record, at, w, prev_lift, prev_velocity, prev_acceleration):
+def record_closure_events(record, at, w, prev_lift, prev_velocity, prev_acceleration, prev_jerk):
     """Record first closure and count bounces after :func:`observe_closure` flagged an event.
 
     prev_lift, prev_velocity : float  State at the previous (sub-)step point [m], [m/s].
     prev_acceleration        : float  ÿ there [m/s²].
+    prev_jerk                : float  ⃛y there [m/s³] (off the seat,
+                                      :func:`engine_kernels.valvetrain.located.specific_jerk`).
     The point before the first closure gives the seating velocity (see
     :func:`finish_observations`); a bounce is the phase turning to bouncing from on the seat.
     Harmless on points without an event.
@@ -254,6 +274,7 @@ def record_closure_events(record, at, w, prev_lift, prev_velocity, prev_accelera
         record[at + ST_SEAT_Y0 * w] = prev_lift
         record[at + ST_SEAT_V0 * w] = prev_velocity
         record[at + ST_SEAT_A0 * w] = prev_acceleration
+        record[at + ST_SEAT_J0 * w] = prev_jerk
         record[at + ST_CAPTURED * w] = ONE
     if phase == PHASE_BOUNCING and not prev_lift > record[at + K_SEAT_DEPTH * w]:
         record[at + ST_BOUNCES * w] += ONE
@@ -300,17 +321,19 @@ def finish_observations(record, at, w, step_angle, lift, velocity, out):
     out[O_JUMP_GAP] = record[at + ST_JUMP_GAP * w]
     out[O_BOUNCE_COUNT] = record[at + ST_BOUNCES * w]
     out[O_BOUNCE_HEIGHT] = record[at + ST_BOUNCE_HEIGHT * w]
-    # Speed where the lift reaches δ0, at constant acceleration from the last point above the
-    # seat: no seat force acts before the crossing, while after it a stiff seat reverses the
-    # valve within a step, so interpolating towards the next point would understate the
-    # speed (tests/engine_kernels/test_valve.py measures it against the scipy reference).
+    # Speed where the lift reaches δ0, from the last point above the seat along the motion
+    # there (engine_kernels.valvetrain.located.seating_speed): no seat force acts before the
+    # crossing, while after it a stiff seat reverses the valve within a step, so
+    # interpolating towards the next point would understate the speed
+    # (tests/engine_kernels/test_valve.py measures it against the scipy reference).
     out[O_SEATING_VELOCITY] = math.nan
     if record[at + ST_CAPTURED * w] == 1.0:
-        y0 = record[at + ST_SEAT_Y0 * w]
-        v0 = record[at + ST_SEAT_V0 * w]
-        depth = record[at + K_SEAT_DEPTH * w]
-        squared = v0 * v0 + 2.0 * record[at + ST_SEAT_A0 * w] * (depth - y0)
-        out[O_SEATING_VELOCITY] = math.sqrt(max(squared, 0.0))
+        out[O_SEATING_VELOCITY] = seating_speed(
+            record[at + ST_SEAT_Y0 * w] - record[at + K_SEAT_DEPTH * w],
+            record[at + ST_SEAT_V0 * w],
+            record[at + ST_SEAT_A0 * w],
+            record[at + ST_SEAT_J0 * w],
+        )
     out[O_MAX_CONTACT_FORCE] = record[at + K_MASS * w] * record[at + ST_MAX_FORCE * w]
     out[O_TRANSITIONS] = record[at + ST_TRANSITIONS * w]
     status = STATUS_OK

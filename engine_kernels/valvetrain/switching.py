@@ -5,7 +5,8 @@ steps. Here the contact and seat modes are held fixed within a step; at the step
 switching function's sign is compared with the current mode, and a cubic Hermite of the
 switching function through its values and time derivatives looks inside the step for a dip
 past zero; the earliest crossing is located (seeded on the Hermite, refined by re-taking the
-RK4 sub-step to it, aiming just past the root so it is not found again), the mode switches
+RK4 sub-step to it, aiming just past the root so it is not found again; both stop at a stated
+angle, ``SWITCH_ANGLE_TOLERANCE``, not at an iteration count), the mode switches
 and the step is finished (the motion in a fixed mode is in
 :mod:`engine_kernels.valvetrain.modes`). This restores fourth order (SPEC §4, "Integrators and the
 speed–accuracy trade") and makes step halving a usable error estimate.
@@ -16,6 +17,7 @@ from __future__ import annotations
 import math
 
 from engine_kernels._jit import jit
+from engine_kernels.valvetrain.dopri_step import SWITCH_ANGLE_TOLERANCE
 from engine_kernels.valvetrain.layout import (
     P_DRIVE_DAMPING,
     P_DRIVE_STIFFNESS,
@@ -29,6 +31,9 @@ from engine_kernels.valvetrain.rk4 import hermite_value
 
 SWITCH_OVERSHOOT = 1e-9
 SWITCHES_PER_STEP = 8
+MAX_LOCATE_ITERATIONS = 200
+"""A guard only: the bisection halves its bracket every iteration and stops at
+``SWITCH_ANGLE_TOLERANCE``; Newton's method stops there too."""
 
 
 @jit
@@ -65,10 +70,12 @@ def _guards(
 
 
 @jit
-def _cubic_root(g0, d0, g1, d1):
+def _cubic_root(g0, d0, g1, d1, width):
     """First root in (0, 1] of the cubic Hermite through (g0, d0) and (g1, d1), or −1.
 
-    Values at both ends, slopes per unit of the step fraction; g0 ≥ 0 at the start.
+    Values at both ends, slopes per unit of the step fraction; g0 ≥ 0 at the start. The root
+    is bracketed by bisection to ``width`` (a fraction of the step) and the bracket's far end
+    returned.
     """
     end = 1.0
     if g1 > 0.0:
@@ -91,7 +98,9 @@ def _cubic_root(g0, d0, g1, d1):
             return -1.0
     lo = 0.0
     hi = end
-    for _ in range(60):
+    for _ in range(MAX_LOCATE_ITERATIONS):
+        if hi - lo <= width:
+            break
         mid = 0.5 * (lo + hi)
         if hermite_value(g0, d0, g1, d1, 1.0, mid) > 0.0:
             lo = mid
@@ -107,11 +116,8 @@ def _guard_values(excitation, table_step, position, lift, velocity, contact, sea
     drive_lift, drive_velocity = excitation_at(excitation, table_step, position, speed)
     index = min(int(position), excitation.shape[1] - 2)
     s = position - index
-    drive_acc = (
-        speed
-        * speed
-        * (excitation[2, index] + s * (excitation[2, index + 1] - excitation[2, index]))
-    )
+    curvature = excitation[2, index] + s * (excitation[2, index + 1] - excitation[2, index])
+    drive_acc = speed * speed * curvature if drive_lift > 0.0 else 0.0  # clipped at the lash
     acc = mode_acceleration(lift, velocity, drive_lift, drive_velocity, contact, seated, params)
     return _guards(
         lift, velocity, acc, drive_lift, drive_velocity, drive_acc, contact, seated, params
@@ -141,6 +147,7 @@ def switch_aware_step(excitation, table_step, start, stop, lift, velocity, param
     for _ in range(SWITCHES_PER_STEP + 1):
         span = stop - position
         tau = span * table_step / speed
+        width = SWITCH_ANGLE_TOLERANCE / (span * table_step)  # of the step
         new_lift, new_velocity = mode_step(
             excitation, table_step, position, stop, lift, velocity, contact, seated, params
         )
@@ -161,14 +168,14 @@ def switch_aware_step(excitation, table_step, start, stop, lift, velocity, param
         ):
             if math.isinf(g0):
                 continue
-            root = _cubic_root(max(g0, 0.0), d0 * tau, g1, d1 * tau)
+            root = _cubic_root(max(g0, 0.0), d0 * tau, g1, d1 * tau, width)
             if 0.0 <= root < first:
                 first = root
                 which = label
         if which < 0:
             return new_lift, new_velocity, switches
         fraction = min(first + SWITCH_OVERSHOOT, 1.0)
-        for _newton in range(4):
+        for _newton in range(MAX_LOCATE_ITERATIONS):
             target = position + fraction * span
             trial_lift, trial_velocity = mode_step(
                 excitation, table_step, position, target, lift, velocity, contact, seated, params
@@ -178,7 +185,7 @@ def switch_aware_step(excitation, table_step, start, stop, lift, velocity, param
             )
             g = guards[2 * which]
             dg = guards[2 * which + 1] * tau
-            if g < 0.0 or dg >= 0.0 or fraction >= 1.0:
+            if g < 0.0 or dg >= 0.0 or fraction >= 1.0 or -g / dg <= width:
                 break
             fraction = min(fraction - g / dg + SWITCH_OVERSHOOT, 1.0)
         position = target

@@ -167,6 +167,15 @@ def expected_lanes(dtype: type) -> int:
     return host_lanes(dtype) if "+avx" in target_features() else 1
 
 
+def fresh_compilation(loop: str):
+    """A lane loop compiled afresh (uncached) with the kernel's own options: the fastmath
+    contract and its error model (NumPy's for ``jit_lanes`` loops, whose divisions must not
+    branch on a zero divisor)."""
+    kernel = getattr(lane_loops, loop)
+    error_model = kernel.targetoptions.get("error_model", "python")
+    return numba.njit(fastmath=FASTMATH, error_model=error_model)(kernel.py_func)
+
+
 @pytest.mark.parametrize(
     "loop", ["_observe_lanes", "_step_lanes", "_substep_lanes", "_observe_seat_lanes"]
 )
@@ -174,8 +183,7 @@ def test_lane_loops_vectorise(loop):
     # The point of the lane kernel (STYLE, "Hot integrators"): each loop over lanes must
     # compile to vector arithmetic. A call or a load under a branch in the loop body stops
     # that silently, so look at the LLVM IR of a fresh (uncached) compilation.
-    function = getattr(lane_loops, loop).py_func
-    compiled = numba.njit(fastmath=FASTMATH)(function)
+    compiled = fresh_compilation(loop)
     data = np.zeros(lane_loops.N_LANE_ROWS * lane_loops.LANES)
     arguments = {
         "_observe_lanes": (0.0, 0.0, 0.0, True),
@@ -305,7 +313,7 @@ def test_single_precision_loops_fill_the_host_vectors(loop, arguments):
     # double arithmetic or narrower vectors without notice. The width is the host's, never
     # pinned to one instruction set (expected_lanes: 8 on AVX2, 16 or 8 on AVX-512).
     lanes = expected_lanes(np.float32)
-    function = numba.njit(fastmath=FASTMATH)(getattr(lane_loops, loop).py_func)
+    function = fresh_compilation(loop)
     data = np.zeros(lane_loops.N_LANE_ROWS * lane_loops.LANES, np.float32)
     function(data, *(np.float32(a) if isinstance(a, float) else a for a in arguments))
     llvm = function.inspect_llvm(function.signatures[0])

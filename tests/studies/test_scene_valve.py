@@ -21,7 +21,7 @@ from studies.plan import plan_study, plan_text
 from studies.runner import evaluate
 from studies.scenes.valve import accuracy_reference as acc
 from studies.scenes.valve.figures import jump_speed_map_figure
-from studies.scenes.valve.parameters import STATUS_NOT_RUN
+from studies.scenes.valve.parameters import INTEGRATORS, STATUS_NOT_RUN
 from studies.scenes.valve.scene import valve_rows
 from studies.study_run import run_plan
 from study_text import recorded_stages, run, scene_study
@@ -168,7 +168,7 @@ def test_tolerance_picks_a_step_whose_error_is_within_it() -> None:
     tolerance = 1e-3  # mm
     plan = plan_text(
         study(
-            '["angle_step_used", "tolerance_met", "error_estimate"]',
+            '["angle_step_used", "tolerance_met", "error_estimate", "integrator_used"]',
             '["actual_lift"]',
             settings=f"angle_step = 1.0\ntolerance = {tolerance}",
         )
@@ -178,11 +178,13 @@ def test_tolerance_picks_a_step_whose_error_is_within_it() -> None:
     assert (ev.scalars["tolerance_met"] == 1).all()
     assert (ev.scalars["error_estimate"] <= tolerance).all()
     assert np.all(np.log2(1.0 / used) == np.round(np.log2(1.0 / used)))
-    assert used.min() < 1.0
+    # at 1 deg plain RK4 misses 1e-3 mm somewhere: that point went on to dopri or a halving
+    lanes = ev.scalars["integrator_used"] == INTEGRATORS.index("lanes")
+    assert ((used < 1.0) | ~lanes).any()
     scene = plan.scene
     ctx = scene.context(plan.points, plan.settings, [], [])
     ((key, idx),) = ctx["groups"].items()
-    fine = scene.excitation(ctx, key, 2.0 * acc.REFERENCE_TABLE_DEG)
+    fine = scene.excitation(ctx, key, 2.0 * acc.REFERENCE_TABLE_DEG, unclipped=True)
     start, stop = scene.window(ctx, key)
     axis = scene.curve_coordinate(plan.settings)
     inside = (axis >= start) & (axis <= stop)
@@ -196,7 +198,7 @@ def test_tolerance_picks_a_step_whose_error_is_within_it() -> None:
 # --- kernels, stages, flags -----------------------------------------------------------------
 def test_lanes_one_case_and_curve_runs_agree() -> None:
     # The same plain RK4 three ways: SIMD lanes, one case per prange iteration, and one
-    # valve_response call per point (the curve path); the curve's maximum is the max lift.
+    # valve_response call per point (the curve path).
     names = '["max_lift", "seating_velocity", "max_contact_force", "jump_max_gap"]'
     factors = "[factors.cam_speed]\nlevels = [3000.0, 4500.0, 6000.0]"
     lanes = run(study(names, factors=factors, settings='integrator = "lanes"'))
@@ -205,9 +207,12 @@ def test_lanes_one_case_and_curve_runs_agree() -> None:
     for name in lanes.scalars:
         np.testing.assert_allclose(lanes.scalars[name], one_case.scalars[name], rtol=1e-9)
         np.testing.assert_allclose(curves.scalars[name], one_case.scalars[name], rtol=1e-9)
-    np.testing.assert_allclose(
-        np.nanmax(curves.curves["actual_lift"], axis=1), one_case.scalars["max_lift"], rtol=1e-12
-    )
+    # max lift is located between grid points (tests/engine_kernels/test_valve.py checks where
+    # against a brute-force maximum of the cubic through them): at least the curve's largest
+    # point, above it by far less than the lift a grid step travels (here ≤ 0.24 µm)
+    on_grid = np.nanmax(curves.curves["actual_lift"], axis=1)
+    assert (on_grid <= one_case.scalars["max_lift"]).all()
+    np.testing.assert_allclose(on_grid, one_case.scalars["max_lift"], rtol=1e-4)
 
 
 @pytest.mark.parametrize(

@@ -1,178 +1,217 @@
-"""The valve error bar and the tolerance mode against scipy's reference (issue #15).
+"""The valve error bars and the tolerance mode against scipy's reference (issues #15, #26).
 
-Expected values: scipy's event-restarted DOP853 (studies.scenes.valve.reference.valve_ivp:
-a terminal event at every drive and seat switch, rtol 1e-10) on the same model and on the
-chain's valve lift tabulated every ``acc.REFERENCE_TABLE_DEG`` (1/512 deg, finer than the
-finest table the tolerance ladder uses). Its own floor, measured on eight points of this
-sample at 1/64 deg: ≤ 1e-4 µm against rtol 1e-12 and against Radau, ≤ 0.023 µm against a
-1/128 deg table; in violent separation the 1/64 deg table error grew to 0.1–0.3 µm and made 7
-of the 200 points seem to miss 1e-4 mm (against 1/512 deg one does).
-The true error of a point is max |y − y_ref| over the stored curve (every 0.5 deg).
-
-The sample (fixed seed): camshaft 500…8000 rpm, seat stiffness 1e4…1e7 N/mm (log-uniform),
-spring preload and drive stiffness ±30 % around the thesis values (205.8 N, 1.17e4 N/mm).
+Expected values: scipy's event-restarted DOP853 at rtol 1e-10 on two random samples of 200
+design points (tests/valve_samples.py: ``A``, the six-segment cam with speed, seat,
+preload and drive stiffness varied; ``B``, every lift law with lash, damping, mass, spring and
+drive varied, 500…9000 rpm), solved once and kept in
+tests/studies/data/valve_error_bar_reference.nc (made by refresh_error_bar_reference.py, which
+records how; ``test_the_reference_file_is_reproduced`` solves some of its points again). The
+true error of a point's lift is max |y − y_ref| over the stored curve (every 0.5 deg); of an
+output, |output − reference output| (0 where neither has the event, inf where only one has it).
 """
 
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
+import xarray as xr
+from valve_samples import OUTPUTS, points_digest, reference_of, sample_plan, sample_points
 
 from engine_kernels import valvetrain as valve
-from studies.plan import plan_text
 from studies.scenes.valve import accuracy_reference as acc
 from studies.scenes.valve.parameters import INTEGRATORS
 from studies.scenes.valve.scene import valve_rows
-from study_text import scene_study
 
-SAMPLE = 200
-SEED = 15
+REFERENCE = Path(__file__).parent / "data" / "valve_error_bar_reference.nc"
 RPM = math.pi / 30.0
-RESPONSES = '["error_estimate", "status", "angle_step_used", "tolerance_met", "integrator_used"]'
-
-
-def sample_plan(integrator: str, tolerance: float, speeds: list[float], seats: list[float]) -> Any:
-    """A valve study over the given camshaft speeds [rpm] and seat stiffnesses [N/mm]."""
-    text = scene_study(
-        "valve",
-        responses=RESPONSES,
-        curves='["actual_lift"]',
-        settings=f'integrator = "{integrator}"\ntolerance = {tolerance}',
-        factors=(
-            f"[factors.cam_speed]\nlevels = {speeds}\n[factors.seat_stiffness]\nlevels = {seats}"
-        ),
-    )
-    return plan_text(text)
-
-
-def random_points(plan: Any) -> dict[str, np.ndarray]:
-    """The plan's first point repeated SAMPLE times with the issue's factors drawn at random."""
-    rng = np.random.default_rng(SEED)
-    points = {k: np.repeat(v[:1], SAMPLE, axis=0) for k, v in plan.points.items()}
-    points["cam_speed"] = rng.uniform(500.0, 8000.0, SAMPLE) * RPM
-    points["seat_stiffness"] = 10.0 ** rng.uniform(4.0, 7.0, SAMPLE) * 1e3
-    points["spring_preload"] = points["spring_preload"] * rng.uniform(0.7, 1.3, SAMPLE)
-    points["drive_stiffness"] = points["drive_stiffness"] * rng.uniform(0.7, 1.3, SAMPLE)
-    return points
-
-
-def reference_lifts(
-    plan: Any, points: dict[str, np.ndarray], table_deg: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """The curve points inside the integration window, and the reference lift [m] there
-    (the chain's valve lift tabulated every ``table_deg`` for the reference)."""
-    scene = plan.scene
-    ctx = scene.context(points, plan.settings, [], [])
-    ((key, idx),) = ctx["groups"].items()
-    fine = scene.excitation(ctx, key, 2.0 * table_deg)
-    start, stop = scene.window(ctx, key)
-    axis = scene.curve_coordinate(plan.settings)
-    inside = (axis >= start) & (axis <= stop)
-    theta = np.radians(axis[inside])
-    rows = valve_rows(points, idx)
-    return inside, np.array([acc.reference_lift(fine, row, theta, "DOP853", 1e-10) for row in rows])
-
-
-def run_modes(
-    modes: tuple[tuple[str, float], ...],
-    speeds: list[float],
-    seats: list[float],
-    randomise: bool,
-    table_deg: float = acc.REFERENCE_TABLE_DEG,
-) -> list[tuple[dict[str, np.ndarray], np.ndarray]]:
-    """Each (integrator, tolerance [mm]) on the same points: its responses and true errors
-    [mm]; the points are the factorial of speeds × seats, or the random sample."""
-    results = []
-    reference: tuple[np.ndarray, np.ndarray] | None = None
-    for integrator, tolerance in modes:
-        plan = sample_plan(integrator, tolerance, speeds, seats)
-        points = random_points(plan) if randomise else plan.points
-        output = plan.scene.evaluate(points, plan.settings, list(plan.responses), ["actual_lift"])
-        if reference is None:
-            reference = reference_lifts(plan, points, table_deg)
-        inside, lift = reference
-        curve = output.curves["actual_lift"][:, inside] * 1e-3
-        results.append((output.scalars, np.max(np.abs(curve - lift), axis=1) * 1e3))
-    return results
+BARS = {f"{name}_error": name for name in OUTPUTS}
+"""Error bar response -> the output it bounds."""
+RESPONSES = [
+    "error_estimate",
+    "status",
+    "angle_step_used",
+    "tolerance_met",
+    "integrator_used",
+    *OUTPUTS,
+    *BARS,
+]
+TO_RESPONSE_UNITS = {"max_lift": 1e3, "jump_start": math.degrees(1.0), "seating_velocity": 1.0}
+TO_RESPONSE_UNITS["bounce_height"] = 1e3
+MODES = {
+    "lanes": ("lanes", 0.0),
+    "rk4_switch_aware": ("rk4_switch_aware", 0.0),
+    "dopri": ("dopri", 0.0),
+    "1e-3": ("lanes", 1e-3),
+    "1e-4": ("lanes", 1e-4),
+}
+"""Integrator and tolerance [mm] of each checked mode (the tolerance mode starts from lanes)."""
 
 
 @pytest.fixture(scope="module")
-def sample() -> dict[str, tuple[dict[str, np.ndarray], np.ndarray]]:
-    """The default lanes, switch-aware RK4 at 0.5 deg and dopri with their error bars, and
-    the tolerance mode at 1e-3 and 1e-4 mm, on the same random points."""
-    modes = {
-        "lanes": ("lanes", 0.0),
-        "rk4_switch_aware": ("rk4_switch_aware", 0.0),
-        "dopri": ("dopri", 0.0),
-        "1e-3": ("lanes", 1e-3),
-        "1e-4": ("lanes", 1e-4),
-    }
-    results = run_modes(tuple(modes.values()), [3500.0], [5e4], randomise=True)
-    return dict(zip(modes, results, strict=True))
+def reference() -> xr.Dataset:
+    """The stored reference, after checking it belongs to the samples of valve_samples.py."""
+    with xr.open_dataset(REFERENCE) as stored:
+        ds = stored.load()
+    plan = sample_plan(RESPONSES, "lanes", 0.0)
+    digests = dict(item.split(":") for item in ds.attrs["points_digest"].split(","))
+    for name in ds["sample"].values:
+        assert digests[name] == points_digest(sample_points(plan, name)), (
+            f"{REFERENCE.name} was made for other points of sample {name}: run "
+            "tests/studies/refresh_error_bar_reference.py"
+        )
+    return ds
+
+
+def output_errors(run: np.ndarray, true: np.ndarray) -> np.ndarray:
+    """|run − true|: 0 where neither has the event (NaN), inf where only one has it."""
+    both, one = np.isnan(run) & np.isnan(true), np.isnan(run) ^ np.isnan(true)
+    return np.where(both, 0.0, np.where(one, np.inf, np.abs(run - true)))
+
+
+def run_modes(reference: xr.Dataset, name: str) -> dict[str, dict[str, Any]]:
+    """Every mode on sample ``name``: its responses, and the true error of its lift [mm] and
+    of each output (response units), with the points where that output exists."""
+    true = reference.sel(sample=name)
+    results = {}
+    for mode, (integrator, tolerance) in MODES.items():
+        plan = sample_plan(RESPONSES, integrator, tolerance)
+        points = sample_points(plan, name)
+        output = plan.scene.evaluate(points, plan.settings, RESPONSES, ["actual_lift"])
+        scalars = output.scalars
+        lift = true["lift"].values * 1e3
+        errors = {"error_estimate": np.nanmax(np.abs(output.curves["actual_lift"] - lift), axis=1)}
+        present = {"error_estimate": np.isfinite(lift).any(axis=1)}
+        for output_name in OUTPUTS:
+            exact = true[output_name].values * TO_RESPONSE_UNITS[output_name]
+            reported = scalars[output_name]
+            errors[f"{output_name}_error"] = output_errors(reported, exact)
+            happens = np.isfinite(reported) | np.isfinite(exact)
+            if output_name == "bounce_height":
+                happens = (reported > 0.0) | (exact > 0.0)
+            present[f"{output_name}_error"] = happens
+        finished = scalars["status"] == 0
+        results[mode] = {"scalars": scalars, "errors": errors, "present": present, "ok": finished}
+    return results
+
+
+@pytest.fixture(scope="module", params=["A", "B"])
+def sample(request: pytest.FixtureRequest, reference: xr.Dataset) -> dict[str, dict[str, Any]]:
+    return run_modes(reference, request.param)
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("mode", ["lanes", "rk4_switch_aware", "dopri"])
-def test_error_bar_is_never_nan_bounds_the_error_and_is_useful(
-    sample: dict[str, tuple[dict[str, np.ndarray], np.ndarray]], mode: str
+@pytest.mark.parametrize("mode", list(MODES))
+def test_every_error_bar_bounds_its_true_error(
+    sample: dict[str, dict[str, Any]], mode: str
 ) -> None:
-    scalars, errors = sample[mode]
-    finished = scalars["status"] == 0
-    assert finished.mean() > 0.95
-    bar = scalars["error_estimate"][finished]
-    error = errors[finished]
-    assert np.isfinite(bar).all()
-    bound = error <= bar
-    print(
-        f"{mode}: bound {bound.mean():.3f}, within 10x {(bound & (bar <= 10 * error)).mean():.3f}"
-    )
-    assert bound.mean() >= 0.95
-    assert (bound & (bar <= 10.0 * error)).mean() >= 0.90
+    # Issue #26: every *_error bar bounds its output's true error in >= 95 % of both samples
+    # and is within 10x of it in >= 90 %; never NaN for a finished point.
+    result = sample[mode]
+    assert result["ok"].mean() > 0.95
+    report = []
+    for bar_name, errors in result["errors"].items():
+        points = result["ok"] & result["present"][bar_name]
+        bar, error = result["scalars"][bar_name][points], errors[points]
+        assert not np.isnan(bar).any(), bar_name
+        bound = error <= bar
+        useful = bound & (bar <= 10.0 * error)
+        report.append(f"{bar_name} n={points.sum()} {bound.mean():.3f} {useful.mean():.3f}")
+        assert bound.mean() >= 0.95, report[-1]
+        assert useful.mean() >= 0.90, report[-1]
+    print(f"{mode}: " + "; ".join(report))
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(("mode", "share"), [("1e-3", 0.99), ("1e-4", 0.95)])
-def test_tolerance_is_met_by_the_true_error(
-    sample: dict[str, tuple[dict[str, np.ndarray], np.ndarray]], mode: str, share: float
+@pytest.mark.parametrize("mode", ["1e-3", "1e-4"])
+def test_tolerance_met_is_never_claimed_above_the_tolerance(
+    sample: dict[str, dict[str, Any]], mode: str
 ) -> None:
-    scalars, errors = sample[mode]
+    # tolerance_met is a promise: no point says 1 with a true error above the tolerance; and
+    # the tolerance is met by the true error on at least 99 % of the points.
+    result = sample[mode]
     tolerance = float(mode)
-    finished = scalars["status"] == 0
-    met = scalars["tolerance_met"][finished] == 1.0
-    within = errors[finished] <= tolerance
-    print(f"tolerance {mode} mm: met {met.mean():.3f}, true error within {within.mean():.3f}")
-    assert within.mean() >= share
-    # tolerance_met is a promise: where it is 1 the bar, and so far the error, is within it
-    assert (scalars["error_estimate"][finished][met] <= tolerance).all()
-    used = scalars["integrator_used"]
+    scalars, error = result["scalars"], result["errors"]["error_estimate"]
+    finished = result["ok"]
+    met = (scalars["tolerance_met"] == 1.0) & finished
     print(
-        f"integrators used: { {m: int((used == INTEGRATORS.index(m)).sum()) for m in INTEGRATORS} }"
+        f"tolerance {mode} mm: met {met[finished].mean():.3f}, true error within "
+        f"{(error[finished] <= tolerance).mean():.3f}, largest {error[finished].max():.3g} mm"
     )
-    assert set(np.unique(used)) <= {
-        INTEGRATORS.index("lanes"),
-        INTEGRATORS.index("dopri"),
-        INTEGRATORS.index("rk4_switch_aware"),
-    }
+    assert (error[met] <= tolerance).all()
+    assert (scalars["error_estimate"][met] <= tolerance).all()
+    assert (error[finished] <= tolerance).mean() >= 0.99
+    used = {m: int((scalars["integrator_used"] == INTEGRATORS.index(m)).sum()) for m in INTEGRATORS}
+    print(f"integrators used: {used}")
+    assert used["lanes_f32"] == used["rk4"] == 0
+
+
+@pytest.mark.slow
+def test_the_reference_file_is_reproduced(reference: xr.Dataset) -> None:
+    # The stored reference is what valve_samples.py solves today: two points of each sample
+    # (one of them separating) solved again, lift within 0.1 nm over the curve and outputs to
+    # 1e-9 relative (the file stores the lift to 0.01 nm; the solver repeats itself far closer).
+    plan = sample_plan(RESPONSES, "lanes", 0.0)
+    for name, which in (("A", np.array([0, 9])), ("B", np.array([0, 1]))):
+        points = sample_points(plan, name)
+        lift, outputs = reference_of(plan, points, which)
+        stored = reference.sel(sample=name, point=which)
+        np.testing.assert_allclose(lift, stored["lift"].values, rtol=0, atol=1e-10)
+        for j, output_name in enumerate(OUTPUTS):
+            np.testing.assert_allclose(outputs[:, j], stored[output_name].values, rtol=1e-9)
+
+
+def factorial_errors(
+    modes: tuple[tuple[str, float], ...], speeds: list[float], seats: list[float], table_deg: float
+) -> list[tuple[dict[str, np.ndarray], np.ndarray]]:
+    """Each (integrator, tolerance [mm]) on the factorial of speeds [rpm] × seats [N/mm]: its
+    responses and the true error of its lift [mm] against a reference on a ``table_deg`` table."""
+    results = []
+    for integrator, tolerance in modes:
+        plan = sample_plan(RESPONSES, integrator, tolerance)
+        points = {k: v.copy() for k, v in plan.points.items()}
+        pairs = [(n, kz) for n in speeds for kz in seats]
+        points = {k: np.repeat(v[:1], len(pairs), axis=0) for k, v in points.items()}
+        points["cam_speed"] = np.array([n for n, _ in pairs]) * RPM
+        points["seat_stiffness"] = np.array([kz for _, kz in pairs]) * 1e3
+        output = plan.scene.evaluate(points, plan.settings, RESPONSES, ["actual_lift"])
+        lift = reference_lifts(plan, points, table_deg)
+        errors = np.nanmax(np.abs(output.curves["actual_lift"] - lift * 1e3), axis=1)
+        results.append((output.scalars, errors))
+    return results
+
+
+def reference_lifts(plan: Any, points: dict[str, np.ndarray], table_deg: float) -> np.ndarray:
+    """Reference lift [m] on the curve axis (NaN outside the window) on a ``table_deg`` table."""
+    scene = plan.scene
+    ctx = scene.context(points, plan.settings, [], [])
+    axis = scene.curve_coordinate(plan.settings)
+    lift = np.full((len(points["cam_speed"]), axis.size), np.nan)
+    for key, idx in ctx["groups"].items():
+        fine = scene.excitation(ctx, key, 2.0 * table_deg, unclipped=True)
+        start, stop = scene.window(ctx, key)
+        inside = (axis >= start) & (axis <= stop)
+        theta = np.radians(axis[inside])
+        for i, row in zip(idx, valve_rows(points, idx), strict=True):
+            lift[i, inside] = acc.reference_lift(fine, row, theta, "DOP853", 1e-10)
+    return lift
 
 
 @pytest.mark.slow
 def test_error_converges_with_the_tolerance_on_a_stiff_seat() -> None:
     # Issue #15: on the 1e6 N/mm seat the error did not shrink with the step (each contact
-    # lasts about one sub-step and the guard kept the sub-step). The tolerance mode now
-    # answers these points with the adaptive Dormand–Prince rung (switches located inside
-    # its steps, its table refined with the tolerance), and the true error follows the
-    # tolerance down. The reference's own table is 1/1024 deg here (at 1/64 deg its floor,
-    # ~0.01–0.03 µm, is as large as the errors at 1e-4 mm). Measured at 2500 and 7000 rpm:
-    # 0.017 and 0.154 µm at 1e-3 mm, 0.0021 and 0.0152 µm at 1e-4 mm: 8.0× and 10.1× for the
-    # tenfold tolerance (the issue asks ≥ 5×; with the switch-aware RK4 ladder alone it was
-    # 2.7× at 2500 rpm, the order of the excitation table's error).
+    # lasts about one sub-step and the guard kept the sub-step). The tolerance mode answers
+    # these points with the adaptive Dormand–Prince rung (switches located inside its steps,
+    # its table refined with the tolerance), and the true error follows the tolerance down.
+    # The reference's own table is 1/1024 deg here.
     modes = (("lanes", 1e-3), ("lanes", 1e-4))
-    (loose, loose_error), (tight, tight_error) = run_modes(
-        modes, [2500.0, 7000.0], [1e6], randomise=False, table_deg=1.0 / 1024.0
+    (loose, loose_error), (tight, tight_error) = factorial_errors(
+        modes, [2500.0, 7000.0], [1e6], table_deg=1.0 / 1024.0
     )
+    print(f"true errors: {loose_error} mm at 1e-3, {tight_error} mm at 1e-4")
     assert (loose["status"] == 0).all()
     assert (tight["status"] == 0).all()
     assert (loose_error <= 1e-3).all()
@@ -190,13 +229,13 @@ def test_extremes_get_a_bar_that_holds_or_a_status_that_says_why() -> None:
     speeds, seats = [50.0, 500.0, 3500.0, 10000.0], [1e4, 1e6, 1e7]
     dampings = [(0.0, 0.0), (5000.0, 1e5)]
     combos = [(n, kz, b) for n in speeds for kz in seats for b in dampings]
-    plan = sample_plan("lanes", 0.0, [3500.0], [5e4])
+    plan = sample_plan(RESPONSES, "lanes", 0.0)
     points = {k: np.repeat(v[:1], len(combos), axis=0) for k, v in plan.points.items()}
     points["cam_speed"] = np.array([c[0] for c in combos]) * RPM
     points["seat_stiffness"] = np.array([c[1] for c in combos]) * 1e3
     points["drive_damping"] = np.array([c[2][0] for c in combos])
     points["seat_damping"] = np.array([c[2][1] for c in combos])
-    output = plan.scene.evaluate(points, plan.settings, list(plan.responses), ["actual_lift"])
+    output = plan.scene.evaluate(points, plan.settings, RESPONSES, ["actual_lift"])
     status, bar = output.scalars["status"], output.scalars["error_estimate"]
     finished = status == 0
     assert np.isfinite(bar[finished]).all()
@@ -205,9 +244,8 @@ def test_extremes_get_a_bar_that_holds_or_a_status_that_says_why() -> None:
     assert set(refused) == {"substep_limit"}
     assert finished.sum() >= len(combos) // 2
     checked = np.array([c[0] >= 3500.0 and c[1] <= 1e6 for c in combos])
-    inside, reference = reference_lifts(
+    lift = reference_lifts(
         plan, {k: v[checked] for k, v in points.items()}, acc.REFERENCE_TABLE_DEG
     )
-    curve = output.curves["actual_lift"][checked][:, inside] * 1e-3
-    error = np.max(np.abs(curve - reference), axis=1) * 1e3
+    error = np.nanmax(np.abs(output.curves["actual_lift"][checked] - lift * 1e3), axis=1)
     assert (error <= bar[checked]).all()

@@ -168,7 +168,7 @@ class ValveAccuracyScene(ValveScene):
         for key, idx in ctx["groups"].items():
             if not self.chain_valid(ctx, key):
                 continue
-            fine = self.excitation(ctx, key, 2.0 * acc.REFERENCE_TABLE_DEG)
+            fine = self.excitation(ctx, key, 2.0 * acc.REFERENCE_TABLE_DEG, unclipped=True)
             window = self.window(ctx, key)
             theta = np.radians(grid_deg(window[0], spacing, window[1]))
             solver = (settings["reference_method"], settings["reference_rtol"])
@@ -229,12 +229,13 @@ class ValveAccuracyScene(ValveScene):
         """The tolerance ladder of the dynamics stage on ``rows`` (for its timing)."""
         settings = ctx["settings"]
         return tolerance_rungs(
-            lambda step: self.excitation(ctx, key, step),
+            lambda step, unclipped: self.excitation(ctx, key, step, unclipped=unclipped),
             rows,
             lambda method: kernel_settings(settings, method, False),
             settings["integrator"],
             step_deg(settings["angle_step"]),
             settings["tolerance"],
+            False,
             False,
         )
 

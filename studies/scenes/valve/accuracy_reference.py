@@ -2,8 +2,8 @@
 
 The error of a fixed-step run is measured against scipy's event-restarted ``solve_ivp``
 (:mod:`studies.scenes.valve.reference.valve_ivp`, DOP853 or Radau at rtol ~1e-10) on the same model and
-the same excitation: the chain's valve lift sampled every ``REFERENCE_TABLE_DEG`` and
-interpolated as the kernels do. The error is the largest ``|y − y_ref|`` over the run's grid
+the same excitation: the chain's valve lift before the lash take-up sampled every
+``REFERENCE_TABLE_DEG``, interpolated and clipped as the kernels do. The error is the largest ``|y − y_ref|`` over the run's grid
 points (the whole integration window). The reference is evaluated on one grid holding the
 nodes of every step of a chunk and of the ``REFERENCE_TABLE_DEG`` grid, so for the usual steps
 (2°/2^k) it is solved once per design point whatever the chunking. The lane kernel integrates exactly the plain RK4 scheme

@@ -112,6 +112,7 @@ def integrate_dopri(
                 grid,
                 rows[j],
                 tolerance,
+                0.0,
                 DOPRI_MAX_STEPS,
                 out[j],
                 trace[j],
@@ -119,21 +120,27 @@ def integrate_dopri(
         return out, trace
     none = np.empty((rows.shape[0], 0))
     valve_dopri.dopri_batch(
-        table, table_step, start, grid, rows, tolerance, DOPRI_MAX_STEPS, out, none
+        table, table_step, start, grid, rows, tolerance, 0.0, DOPRI_MAX_STEPS, out, none
     )
     return out, None
 
 
 def dopri_lifts(
-    excitation: tuple[np.ndarray, float, float], rows: np.ndarray, grid_deg: float, tolerance: float
+    excitation: tuple[np.ndarray, float, float],
+    rows: np.ndarray,
+    grid_deg: float,
+    tolerance: float,
+    max_step_deg: float,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """``dopri`` outputs (n, O_*) and lift [m] at every grid point (see :func:`integrate_dopri`)."""
+    """``dopri`` outputs (n, O_*) and lift [m] at every grid point (see :func:`integrate_dopri`),
+    its steps at most ``max_step_deg`` [deg] of cam (0: no limit)."""
     table, table_step, start = excitation
     grid = math.radians(grid_deg)
     out = np.empty((rows.shape[0], N_OUT))
     lifts = np.empty((rows.shape[0], valve_dopri.grid_points(table, table_step, grid)))
+    longest = math.radians(max_step_deg)
     valve_dopri.dopri_batch(
-        table, table_step, start, grid, rows, tolerance, DOPRI_MAX_STEPS, out, lifts
+        table, table_step, start, grid, rows, tolerance, longest, DOPRI_MAX_STEPS, out, lifts
     )
     return out, lifts
 

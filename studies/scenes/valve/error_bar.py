@@ -1,4 +1,4 @@
-"""Error bars of the valve dynamics and the tolerance ladder (SPEC §4, issue #15).
+"""Error bars of the valve dynamics and the tolerance ladder (SPEC §4, issues #15, #26).
 
 A run at angle step h takes n RK4 sub-steps per grid step on an excitation table of spacing
 h/2. Its **companion** halves every length: step h/2, table h/4 and the same n sub-steps per
@@ -14,25 +14,23 @@ halves: the integration error (fourth order with located switches, about 1.6 for
 not monotone) and the excitation error (the cubic Hermite interpolation of the chain's table
 between nodes, where the cam law's acceleration jumps: about second order). The factor
 1/(1 − 2⁻¹) = 2 turns the difference into an error for any order ≥ 1, and a safety factor
-1.5 covers the non-monotone convergence of plain RK4: on 200 random points against the scipy
-reference (``tests/studies/test_valve_error_bar.py``) factor 2 bounded the true error of
-``lanes`` at 0.5° in 95.5 % of points, 3 in 98.5 % (within 10×: 93.5 %, 94 %); switch-aware
-RK4 99 % and 99.5 %. The same factor on the difference of a derived output between the two
-runs gives its bar (``seating_velocity_error`` ...). Those bars are weaker: the outputs are
-read off the grid (the largest grid value, the seat crossing extrapolated from the last grid
-point), a sampling error that need not shrink with the step. On 40 random points against the
-reference's located seat event the seating-velocity bar held in 33 (``lanes``) and 35
-(switch-aware); the max-lift bar, against the reference's maximum on a 1/64° grid, in 33 and
-32. The runs come from the one-case kernel in
-double precision (``lanes`` computes the same numbers; ``lanes_f32`` round-off is not in the
-bar).
+1.5 covers the non-monotone convergence of plain RK4. The runs come from the one-case kernel
+in double precision (``lanes`` computes the same numbers; ``lanes_f32`` round-off is not in
+the bar).
+
+**Derived outputs** (max lift, jump start, seating velocity, bounce height) are located
+between the grid points by the kernels (:mod:`engine_kernels.valvetrain.located`), but their
+step-halving difference still missed their error: the kinks of the excitation (lash take-up,
+the cam law's segment ends) make plain RK4's error in them jump from one step to the next (on
+the random samples the jump-start bar held in 89–92 %). Their bars (``DERIVED_BARS``) for the
+points a fixed-step rung reports therefore come from a ``dopri`` companion that is far more
+accurate and independent of the run (:func:`companion_bars`: ``COMPANION_TOLERANCE`` per step
+on an unclipped table every ``COMPANION_TABLE_DEG``, its steps at most the grid step), times
+``COMPANION_BAR_FACTOR``; computed only when a study asks for one of those bars.
 
 The **budget** splits the bar: a third run at step h with the table of h/2 and 2n sub-steps
 differs from the run only by the integration (``integration_error``) and from the companion
-only by the excitation table and the grid (``excitation_error``). The third part, the scipy
-reference's own error, was measured apart (``tests/studies/test_valve_error_bar.py``): its
-table of the chain every 1/64° put it at 0.005–0.03 µm (up to 0.3 µm in violent separation,
-so the reference now tabulates every 1/512°), its rtol 1e-10 at 1e-4 µm.
+only by the excitation table and the grid (``excitation_error``).
 
 **Tolerance**: starting at ``angle_step``, each level halves every length as above; a point
 stops at the first level whose bar is within the tolerance (that level's results are reported
@@ -40,15 +38,22 @@ with that bar, ``tolerance_met`` = 1), or at ``MAX_HALVINGS`` with the last bar 
 
 **dopri** (adaptive Dormand–Prince 5(4), :mod:`engine_kernels.valvetrain.dopri`) has no step
 to halve: its companion runs at a tenth of the lift tolerance per step on a table of half the
-spacing (``dopri_table_deg``), so the difference sees both the integration and the table
-error, and the bar is ``DOPRI_BAR_FACTOR`` times the largest lift difference over the grid.
-Measured on 48 points of the random sample against the scipy reference: at 1e-6 m per step
-factor 3 bounded the true error in 100 % of points (within 10×: 100 %), at 1e-7 m in 100 %
-(98 %), at 1e-8 m in 94 % (94 %): there the table and the event location set a floor of
-~0.1–0.5 µm that a tighter tolerance does not move. Under a tolerance, points the first rung
-leaves above it run ``dopri`` at tolerance/``DOPRI_SAFETY`` per step; the points its bar
-still leaves above go down the switch-aware ladder. The budget is not split for ``dopri``
+spacing (``dopri_table_deg``) with its steps capped at the grid step, so the difference sees
+the integration and the table error and shares neither the run's long steps over a resting
+valve nor a switch found in one of them; the bar is ``DOPRI_BAR_FACTOR`` times the largest
+lift difference over the grid, and the same factor on each derived output's difference (both
+runs locate them on their dense output). Under a tolerance, points the first rung leaves
+above it run ``dopri`` at tolerance/``DOPRI_SAFETY`` per step; the points its bar still leaves
+above go down the switch-aware ladder. The budget is not split for ``dopri``
 (``integration_error`` is its bar, ``excitation_error`` NaN).
+
+Measured against the scipy reference on two samples of 200 random points
+(``tests/studies/test_valve_error_bar.py``: the six-segment cam with speed, seat, preload and
+drive varied; every lift law with lash, damping, mass, spring and drive varied too): the lift
+bar bounds the true error in 98.5/99.5 % (``lanes`` at 0.5°), 99.5/99.5 % (switch-aware),
+99.5/100 % (``dopri``), 99/100 % (tolerance 1e-3 mm) and 100/99.5 % (1e-4 mm) of the points;
+every derived bar in at least 95.9 %, and every bar is within 10× of the true error in at
+least 90.6 %. No point reports ``tolerance_met`` = 1 above its tolerance.
 """
 
 from __future__ import annotations
@@ -68,6 +73,9 @@ from studies.scenes.valve.parameters import (
 )
 
 Excitation = tuple[np.ndarray, float, float]
+ExcitationAt = Callable[[float, bool], Excitation]
+"""(angle step [deg], unclipped) -> the excitation table at half that step (the scene's
+``excitation``: clipped for RK4, unclipped for ``dopri``)."""
 SWITCH_AWARE = "rk4_switch_aware"
 BAR_FACTOR = 3.0
 """Error bar per unit of step-halving difference: 1/(1 − 2⁻¹) for first order × 1.5 [-]."""
@@ -82,6 +90,13 @@ DOPRI_BAR_FACTOR = 3.0
 """Error bar of ``dopri`` per unit of its companion difference [-] (see the module docstring)."""
 DOPRI_TIGHTENING = 10.0
 """The ``dopri`` companion runs at the tolerance per step / DOPRI_TIGHTENING [-]."""
+COMPANION_TOLERANCE = 1e-10
+"""Lift tolerance per step [m] of the ``dopri`` companion of fixed-step derived outputs."""
+COMPANION_TABLE_DEG = 1.0 / 256.0
+"""Excitation table spacing [deg] of that companion."""
+COMPANION_BAR_FACTOR = 2.0
+"""Bar of a fixed-step derived output per unit of its difference from the companion:
+1/(1 − 1/2), the companion's own error allowed up to half the run's [-]."""
 
 
 @dataclass
@@ -142,7 +157,7 @@ def output_difference(coarse: np.ndarray, fine: np.ndarray) -> np.ndarray:
 
 
 def halving_ladder(
-    excitation_at: Callable[[float], Excitation],
+    excitation_at: ExcitationAt,
     rows: np.ndarray,
     flags: np.ndarray,
     coarse_deg: float,
@@ -152,13 +167,15 @@ def halving_ladder(
 ) -> Ladder:
     """Run the points ``rows`` down the ladder (see the module docstring).
 
-    excitation_at : angle step [deg] -> its excitation table (spacing half the step).
+    excitation_at : (angle step [deg], unclipped) -> its excitation table (``ExcitationAt``).
     flags         : kernel settings row (``S_*``) of the integrator.
     tolerance     : [m]; 0 stops every point at the first level (the error bar only).
     budget        : also estimate the integration and excitation parts of the bar.
     """
     n = rows.shape[0]
-    out, lifts = lift_runs(excitation_at(coarse_deg), rows, flags, np.zeros(n, dtype=np.int64))
+    out, lifts = lift_runs(
+        excitation_at(coarse_deg, False), rows, flags, np.zeros(n, dtype=np.int64)
+    )
     finished = out[:, valve.O_STATUS] == valve.STATUS_OK
     forced = np.where(np.isfinite(out[:, valve.O_SUBSTEPS]), out[:, valve.O_SUBSTEPS], 0)
     forced = forced.astype(np.int64)
@@ -177,19 +194,15 @@ def halving_ladder(
         if pending.size == 0:
             break
         step = coarse_deg / 2**level
-        fine = excitation_at(step / 2.0)
+        fine = excitation_at(step / 2.0, False)
         fine_out, fine_lifts = lift_runs(fine, rows[pending], flags, forced[pending])
         bar = BAR_FACTOR * halving_difference(lifts, fine_lifts)
         done = (bar <= tolerance) | (level == max_halvings) | (tolerance <= 0.0)
         take = pending[done]
         ladder.out[take], ladder.level[take], ladder.bar[take] = out[done], level, bar[done]
         ladder.met[take] = (bar[done] <= tolerance).astype(float)
-        for name, column in DERIVED_BARS.items():
-            ladder.derived[name][take] = BAR_FACTOR * output_difference(
-                out[done, column], fine_out[done, column]
-            )
         if budget and take.size:
-            middle = lift_runs(excitation_at(step), rows[take], flags, 2 * forced[take])[1]
+            middle = lift_runs(excitation_at(step, False), rows[take], flags, 2 * forced[take])[1]
             ladder.budget["integration_error"][take] = BAR_FACTOR * np.max(
                 np.abs(lifts[done] - middle), axis=1
             )
@@ -201,7 +214,7 @@ def halving_ladder(
 
 
 def dopri_ladder(
-    excitation_at: Callable[[float], Excitation],
+    excitation_at: ExcitationAt,
     rows: np.ndarray,
     coarse_deg: float,
     tolerance: float,
@@ -211,9 +224,9 @@ def dopri_ladder(
     its bar from the companion (see the module docstring). Level 0, no forced sub-steps."""
     atol = dopri_tolerance(tolerance)
     spacing = dopri_table_deg(tolerance)
-    out, lifts = dopri_lifts(excitation_at(2.0 * spacing), rows, coarse_deg, atol)
+    out, lifts = dopri_lifts(excitation_at(2.0 * spacing, True), rows, coarse_deg, atol, 0.0)
     fine_out, fine_lifts = dopri_lifts(
-        excitation_at(spacing), rows, coarse_deg, atol / DOPRI_TIGHTENING
+        excitation_at(spacing, True), rows, coarse_deg, atol / DOPRI_TIGHTENING, coarse_deg
     )
     finished = (out[:, valve.O_STATUS] == valve.STATUS_OK) & (
         fine_out[:, valve.O_STATUS] == valve.STATUS_OK
@@ -242,14 +255,48 @@ def dopri_ladder(
     )
 
 
+def companion_bars(
+    excitation_at: ExcitationAt,
+    rows: np.ndarray,
+    out: np.ndarray,
+    coarse_deg: float,
+    tolerance: float,
+) -> dict[str, np.ndarray]:
+    """Bars of the derived outputs of fixed-step runs (``out``, (n, O_*)) of ``rows``: the
+    factor ``COMPANION_BAR_FACTOR`` times their difference from a ``dopri`` companion at
+    ``COMPANION_TOLERANCE`` per step (or the tolerance mode's companion, if tighter) on an
+    unclipped table every ``COMPANION_TABLE_DEG`` (or finer), its steps at most the grid step
+    (see the module docstring). NaN where either run did not finish."""
+    atol = COMPANION_TOLERANCE
+    spacing = COMPANION_TABLE_DEG
+    if tolerance > 0.0:
+        atol = min(atol, dopri_tolerance(tolerance) / DOPRI_TIGHTENING)
+        spacing = min(spacing, dopri_table_deg(tolerance) / 2.0)
+    companion = dopri_lifts(excitation_at(2.0 * spacing, True), rows, coarse_deg, atol, coarse_deg)[
+        0
+    ]
+    finished = (out[:, valve.O_STATUS] == valve.STATUS_OK) & (
+        companion[:, valve.O_STATUS] == valve.STATUS_OK
+    )
+    return {
+        name: np.where(
+            finished,
+            COMPANION_BAR_FACTOR * output_difference(out[:, column], companion[:, column]),
+            np.nan,
+        )
+        for name, column in DERIVED_BARS.items()
+    }
+
+
 def tolerance_rungs(
-    excitation_at: Callable[[float], Excitation],
+    excitation_at: ExcitationAt,
     rows: np.ndarray,
     flags_of: Callable[[str], np.ndarray],
     integrator: str,
     coarse_deg: float,
     tolerance: float,
     budget: bool,
+    derived: bool,
 ) -> list[tuple[np.ndarray, str, Ladder]]:
     """The rungs a study's points go down: (row positions, method, its ladder) each.
 
@@ -259,7 +306,8 @@ def tolerance_rungs(
     (:func:`dopri_ladder`: it met 1e-3 mm on a random sample at about 1/80 of the ladder's
     cost), and those still above go down the ladder of switch-aware RK4 (plain RK4 left 12 %
     of a random sample above 1e-3 mm after six halvings). ``flags_of``: kernel settings of a
-    method.
+    method; ``derived``: bars of the derived outputs (``DERIVED_BARS``) are wanted, which for
+    the points a fixed-step rung reports come from :func:`companion_bars`.
     """
     rungs = [(integrator, MAX_HALVINGS if tolerance > 0.0 else 0)]
     if tolerance > 0.0 and integrator == DOPRI:
@@ -283,7 +331,15 @@ def tolerance_rungs(
                 halvings,
                 budget,
             )
-        taken.append((pending, method, ladder))
         finished = ladder.out[:, valve.O_STATUS] == valve.STATUS_OK
-        pending = pending[finished & (ladder.met == 0.0)]
+        passed_on = finished & (ladder.met == 0.0) & ((method, halvings) != rungs[-1])
+        if derived and method != DOPRI and (~passed_on).any():
+            kept = np.flatnonzero(~passed_on)
+            bars = companion_bars(
+                excitation_at, rows[pending[kept]], ladder.out[kept], coarse_deg, tolerance
+            )
+            for name, values in bars.items():
+                ladder.derived[name][kept] = values
+        taken.append((pending, method, ladder))
+        pending = pending[passed_on]
     return taken

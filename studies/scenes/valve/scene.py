@@ -52,6 +52,7 @@ from studies.scenes.valve.batches import (
     valve_rows,
 )
 from studies.scenes.valve.error_bar import BAR_FACTOR, DERIVED_BARS, Ladder, tolerance_rungs
+from studies.scenes.valve.excitation import unclipped_valve_lift
 from studies.scenes.valve.parameters import (
     CURVES,
     DOPRI,
@@ -185,12 +186,29 @@ class ValveScene(ChainScene):
         key: tuple,
         step: float,
         span: tuple[float, float] | None = None,
+        unclipped: bool = False,
     ) -> tuple[np.ndarray, float, float]:
         """(Y, Y', Y'') table at half the RK4 ``step`` [deg] over the integration window (or
-        over ``span`` = (start, stop) [deg]), its step [rad] and start [rad]."""
+        over ``span`` = (start, stop) [deg]), its step [rad] and start [rad].
+
+        The chain's valve lift, clipped at zero where the lash is open: interpolated, its kink
+        at lash take-up is smeared over a table interval, and fixed-step RK4 converges
+        regularly as its table halves with its step (so its step-halving bar holds). With
+        ``unclipped``, the lift before the take-up, which the kernels clip exactly at its zero
+        (:mod:`studies.scenes.valve.excitation`): for ``dopri``, whose table does not follow
+        its steps, and for the scipy reference.
+        """
         start, stop = self.window(ctx, key) if span is None else span
-        chain = self.chain(ctx, key, (start, step / 2.0, stop))
-        table = np.ascontiguousarray(chain.curves[: rocker.ROW_VALVE_ACCELERATION + 1])
+        grid = (start, step / 2.0, stop)
+        if unclipped:
+            i = int(ctx["groups"][key][0])
+            table = self.chain_cache.get(
+                ("unclipped", key, step_deg(ctx["settings"]["tappet_step"]), grid),
+                lambda: unclipped_valve_lift(ctx["points"], i, self.tappet_table(ctx, key), grid),
+            )
+        else:
+            chain = self.chain(ctx, key, grid)
+            table = np.ascontiguousarray(chain.curves[: rocker.ROW_VALVE_ACCELERATION + 1])
         return table, math.radians(step / 2.0), math.radians(start)
 
     def chain_valid(self, ctx: dict[str, Any], key: tuple) -> bool:
@@ -242,13 +260,14 @@ class ValveScene(ChainScene):
                 self.store_traces(ctx, key, idx, trace, coarse, 0)
             return
         rungs = tolerance_rungs(
-            lambda step: self.excitation(ctx, key, step),
+            lambda step, unclipped: self.excitation(ctx, key, step, unclipped=unclipped),
             rows,
             lambda method: kernel_settings(settings, method, False),
             integrator,
             coarse,
             tolerance,
             bool(ctx["responses"] & BUDGET_RESPONSES),
+            bool(ctx["responses"] & DERIVED_BARS.keys()),
         )
         for pending, method, ladder in rungs:
             at = idx[pending]
@@ -295,7 +314,7 @@ class ValveScene(ChainScene):
         """``dopri`` on its own excitation table (``dopri_table_deg``), reported on the
         grid every ``grid_deg`` [deg], at the per-step tolerance of the study's tolerance."""
         tolerance = ctx["settings"]["tolerance"]
-        excitation = self.excitation(ctx, key, 2.0 * dopri_table_deg(tolerance))
+        excitation = self.excitation(ctx, key, 2.0 * dopri_table_deg(tolerance), unclipped=True)
         atol = dopri_tolerance(tolerance)
         return integrate_dopri(excitation, rows, grid_deg, atol, curves)
 

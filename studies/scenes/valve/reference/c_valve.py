@@ -115,11 +115,11 @@ def valve_response_c(
 ) -> None:
     """Run ``kernel`` ("valve_lanes" or "valve_one_case") of ``lib`` on the scene's inputs.
 
-    excitation : (≥2, nodes) array  Rows Y [m], Y' [m/rad], in the precision ``lib`` was built
-                                    for; table_step, table_start [rad]. params: (n, 11) ``P_*``
+    excitation : (3, nodes) array  Rows Y [m], Y' [m/rad], Y'' [m/rad²], in the precision
+                                   ``lib`` was built for; table_step, table_start [rad]. params: (n, 11) ``P_*``
                                     rows; out: (n, 17) ``O_*`` rows, written.
     """
-    table = np.ascontiguousarray(excitation[:2])
+    table = np.ascontiguousarray(excitation[:3])
     rows = np.ascontiguousarray(params, dtype=np.float64)
     if out.dtype != np.float64 or not out.flags.c_contiguous:
         raise ValueError("out must be a C-contiguous float64 array")

@@ -13,10 +13,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
-from scipy.integrate import solve_ivp
+from scipy.integrate import OdeSolution, solve_ivp
 from scipy.interpolate import CubicHermiteSpline
+from scipy.optimize import brentq
 
 from engine_kernels import valvetrain as valve
 
@@ -24,29 +26,57 @@ Excitation = Callable[[float | np.ndarray], tuple[np.ndarray, np.ndarray, np.nda
 
 MAX_SEGMENTS = 10_000
 HYSTERESIS = (1e-9, 1e-18, 1e-9)  # drive force [N], seat gap [m], seat force [N]
+SCAN_POINTS = 16
+"""Points of each solver step's dense output where the event functions are checked for a
+switch the solver stepped over (:func:`_missed_switch`)."""
+XTOL = 1e-13
+"""Angle [rad] to which such a switch is located."""
+
+
+@dataclass
+class Segment:
+    """One stretch of the solution in a fixed mode: from ``start`` to ``stop`` [rad], with
+    the drive contact and the seat contact on or off, and the solver's dense output
+    θ → (lift [m], velocity [m/s])."""
+
+    start: float
+    stop: float
+    contact: bool
+    seated: bool
+    dense: OdeSolution
 
 
 @dataclass
 class ReferenceSolution:
-    """Lift and velocity at the requested cam angles, and the located mode switches."""
+    """Lift and velocity at the requested cam angles, the located mode switches and the
+    segments between them (the whole solution, for outputs located between grid points)."""
 
     theta: np.ndarray
     lift: np.ndarray
     velocity: np.ndarray
     switches: list[tuple[float, str]] = field(default_factory=list)
+    segments: list[Segment] = field(default_factory=list)
 
 
 def table_excitation(excitation: np.ndarray, table_step: float, table_start: float) -> Excitation:
     """The cubic Hermite interpolant the kernels use, as a callable θ → (Y, Y', Y'').
 
-    Y is interpolated with slopes Y', Y' with slopes Y'', Y'' linearly (SI units, per rad).
+    Y is interpolated with slopes Y', Y' with slopes Y'', Y'' linearly (SI units, per rad),
+    then clipped at the lash take-up as the kernels do
+    (:func:`engine_kernels.valvetrain.model.lash_clip`): 0 wherever the interpolated Y ≤ 0.
     """
     nodes = table_start + table_step * np.arange(excitation.shape[1])
     lift = CubicHermiteSpline(nodes, excitation[0], excitation[1])
     slope = CubicHermiteSpline(nodes, excitation[1], excitation[2])
 
     def evaluate(theta):
-        return lift(theta), slope(theta), np.interp(theta, nodes, excitation[2])
+        raw = lift(theta)
+        taken_up = raw > 0.0
+        return (
+            np.where(taken_up, raw, 0.0),
+            np.where(taken_up, slope(theta), 0.0),
+            np.where(taken_up, np.interp(theta, nodes, excitation[2]), 0.0),
+        )
 
     return evaluate
 
@@ -63,6 +93,64 @@ def _functions(params, excitation, theta, state):
     gap = depth - lift
     seat = params[valve.P_SEAT_STIFFNESS] * gap - params[valve.P_SEAT_DAMPING] * velocity
     return float(drive), float(gap), float(seat)
+
+
+def _guards(params, excitation, theta, lift, velocity, signs):
+    """The event functions (drive force, seat gap, seat force, each with its hysteresis
+    offset) at the angles ``theta`` [rad] for the states there, times their sign at the
+    segment's start: negative once a function has crossed away from it."""
+    speed = params[valve.P_SPEED]
+    drive_lift, drive_slope, _ = excitation(theta)
+    depth = params[valve.P_PRELOAD] / params[valve.P_SEAT_STIFFNESS]
+    drive = params[valve.P_DRIVE_STIFFNESS] * (drive_lift - lift) + params[
+        valve.P_DRIVE_DAMPING
+    ] * (speed * drive_slope - velocity)
+    gap = depth - lift
+    seat = params[valve.P_SEAT_STIFFNESS] * gap - params[valve.P_SEAT_DAMPING] * velocity
+    return np.stack(
+        [
+            sign * (value + sign * hysteresis)
+            for sign, value, hysteresis in zip(signs, (drive, gap, seat), HYSTERESIS, strict=True)
+        ]
+    )
+
+
+def _missed_switch(
+    params: np.ndarray, excitation: Excitation, sol: Any, signs: list[float]
+) -> tuple[float, list[int]] | None:
+    """An earlier switch the solver stepped over: (angle [rad], [its index]) or None.
+
+    The solver sees an event only where its function changes sign between two step ends; a
+    contact shorter than a step (a grazing landing on a stiff seat, a rebound) can begin and
+    end inside one. Each step's dense output is sampled at ``SCAN_POINTS`` points, and the
+    first crossing before the segment's end is located on it (Brent's method to ``XTOL``).
+    """
+    steps = sol.t
+    fractions = np.linspace(0.0, 1.0, SCAN_POINTS + 1)[1:]
+    theta = (steps[:-1, None] + np.diff(steps)[:, None] * fractions).ravel()
+    lift, velocity = sol.sol(theta)
+    guards = _guards(params, excitation, theta, lift, velocity, signs)
+    crossed = np.flatnonzero((guards < 0.0).any(axis=0))
+    if crossed.size == 0:
+        return None
+    first = int(crossed[0])
+    if theta[first] >= steps[-1] - XTOL:
+        return None  # the segment's own terminal event
+    index = int(np.flatnonzero(guards[:, first] < 0.0)[0])
+    low = theta[first - 1] if first > 0 else steps[0]
+
+    def guard(th: float) -> float:
+        at = np.array([th])
+        y, v = sol.sol(at)
+        return float(_guards(params, excitation, at, y, v, signs)[index, 0])
+
+    if guard(low) < 0.0:
+        return None
+    root = brentq(guard, low, theta[first], xtol=XTOL, rtol=4 * np.finfo(float).eps)
+    # step just past the root, so the restart is on the new side
+    while guard(root) >= 0.0 and root < theta[first]:
+        root = min(root + XTOL, theta[first])
+    return root, [index]
 
 
 def _modes(signs):
@@ -102,6 +190,7 @@ def valve_reference(
     lift = np.empty_like(theta_eval)
     velocity = np.empty_like(theta_eval)
     switches: list[tuple[float, str]] = []
+    segments: list[Segment] = []
 
     for _ in range(MAX_SEGMENTS):
         contact, seated = _modes(signs)
@@ -139,14 +228,18 @@ def valve_reference(
         if not sol.success:
             raise RuntimeError(f"valve reference failed at {theta:.6f} rad: {sol.message}")
         stop = float(sol.t[-1])
+        fired = [i for i in range(3) if sol.t_events[i].size]
+        missed = _missed_switch(params, excitation, sol, signs)
+        if missed is not None:
+            stop, fired = missed
+        segments.append(Segment(theta, stop, contact, seated, sol.sol))
         inside = (theta_eval >= theta) & (theta_eval <= stop)
         if inside.any():
             values = sol.sol(theta_eval[inside])
             lift[inside], velocity[inside] = values[0], values[1]
-        if sol.status == 0:
-            return ReferenceSolution(theta_eval, lift, velocity, switches)
-        fired = [i for i in range(3) if sol.t_events[i].size]
-        state = sol.y[:, -1]
+        if sol.status == 0 and missed is None:
+            return ReferenceSolution(theta_eval, lift, velocity, switches, segments)
+        state = sol.sol(stop)
         theta = stop
         values = _functions(params, excitation, theta, state)
         signs = [1.0 if f > 0 else -1.0 for f in values]

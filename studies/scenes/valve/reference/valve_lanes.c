@@ -4,8 +4,9 @@
  * The same work as engine_kernels/valvetrain/lanes.py with one RK4 sub-step per grid step: model
  * [V2] per unit mass, classic RK4 over the cam-angle grid from a shared excitation table,
  * branch-free contact switches, and the same running observations (extremes, jump, seat
- * phase, bounces, mode transitions, energy balance every ENERGY_INTERVAL grid points) and
- * outputs. Cases run in blocks of LANES in `omp simd` loops, blocks in an `omp parallel for`;
+ * phase, bounces, mode transitions, energy balance every ENERGY_INTERVAL grid points; maxima,
+ * jump start and seating velocity located between grid points as in located.py) and outputs.
+ * The table may hold the lift before the lash take-up: every read clips it (clip_lift). Cases run in blocks of LANES in `omp simd` loops, blocks in an `omp parallel for`;
  * `valve_one_case` runs the same code one case at a time (one lane per block). REAL is the
  * precision of the lanes (double or float, set when compiling); coefficients are computed in
  * double, as in the Numba kernel. No stability guard and no parameter validation: the bench
@@ -23,6 +24,8 @@
 #define ENERGY_REST_RISE 0.25
 #define ENERGY_FLOOR_FRACTION 1e-3
 #define TRANSITION_BAND 1e-6
+#define SEATING_NEWTON_TOLERANCE 1e-12
+#define MAX_SEATING_ITERATIONS 50
 
 enum { P_SPEED, P_MASS, P_DRIVE_STIFFNESS, P_DRIVE_DAMPING, P_SPRING_RATE, P_PRELOAD,
        P_SEAT_STIFFNESS, P_SEAT_DAMPING, P_EXTERNAL_DAMPING, P_INITIAL_LIFT,
@@ -45,11 +48,16 @@ typedef struct {
     REAL seat_y0[LANES], seat_v0[LANES], seat_a0[LANES], captured[LANES];
     REAL bounces[LANES], energy0[LANES], excess[LANES], work_max[LANES];
     REAL rest_energy[LANES], rest_rise[LANES];
+    REAL point_angle[LANES], point_y[LANES], point_v[LANES], point_drive[LANES];
+    REAL inv_speed[LANES], seat_j0[LANES];
 } Block;
 
 static inline REAL pos(REAL x) { return x > 0 ? x : 0; }
 static inline REAL larger(REAL a, REAL b) { return b > a ? b : a; }
 static inline REAL smaller(REAL a, REAL b) { return b < a ? b : a; }
+/* the excitation the valve feels: zero until the lash is taken up */
+static inline REAL clip_lift(REAL y) { return y > 0 ? y : 0; }
+static inline REAL clip_slope(REAL y, REAL slope) { return y > 0 ? slope : 0; }
 
 static inline REAL acceleration(const Block *s, int l, REAL y, REAL v, REAL push,
                                 REAL *drive, REAL *seat) {
@@ -86,11 +94,31 @@ static inline int observe(Block *s, int l, REAL angle, REAL y, REAL v, REAL a,
     s->min_a[l] = smaller(s->min_a[l], a);
     s->max_force[l] = larger(s->max_force[l], drive);
     REAL phase = s->phase[l];
+    REAL y0 = s->point_y[l], v0 = s->point_v[l], f0 = s->point_drive[l];
+    REAL previous_angle = s->point_angle[l];
+    if (!first) { /* the lift's maximum between the previous grid point and this one */
+        REAL span = (angle - previous_angle) * s->inv_speed[l];
+        int turning = (v0 > 0) & (v <= 0);
+        REAL f = turning ? v0 / (v0 - v) : 0, f2 = f * f, f3 = f2 * f;
+        REAL peak = (2 * f3 - 3 * f2 + 1) * y0 + (f3 - 2 * f2 + f) * span * v0
+                    + (3 * f2 - 2 * f3) * y + (f3 - f2) * span * v;
+        peak = turning ? larger(peak, y) : y;
+        s->max_lift[l] = larger(s->max_lift[l], peak);
+        int bounced = phase >= CLOSED;
+        s->bounce_height[l] = larger(s->bounce_height[l], bounced & (peak > depth) ? peak - depth : 0);
+    }
+    int crossing = (f0 >= 0) & (f0 > drive);
+    REAL fraction = crossing ? f0 / (f0 - drive) : 1;
+    REAL start = first ? angle : previous_angle + fraction * (angle - previous_angle);
     int off_seat = y > depth;
     int separated = off_seat & (drive <= 0) & (phase < CLOSED);
-    s->jump_start[l] = smaller(s->jump_start[l], separated ? angle : INFINITY);
+    s->jump_start[l] = smaller(s->jump_start[l], separated ? start : INFINITY);
     s->jump_steps[l] += separated ? 1 : 0;
     s->jump_gap[l] = larger(s->jump_gap[l], separated ? y - drive_lift : 0);
+    s->point_angle[l] = angle;
+    s->point_y[l] = y;
+    s->point_v[l] = v;
+    s->point_drive[l] = drive;
     if (first) return 0;
     int closed = phase >= CLOSED;
     int closing = (phase == OPEN) & !off_seat & past_nose;
@@ -110,15 +138,22 @@ static inline int observe(Block *s, int l, REAL angle, REAL y, REAL v, REAL a,
     return closing | ((phase == CLOSED) & off_seat);
 }
 
-/* prev_drive_lift, prev_slope: excitation at the previous grid point (state prev_y, prev_v). */
-static inline void record_events(Block *s, int l, REAL prev_drive_lift, REAL prev_slope) {
+/* prev_drive_lift, prev_slope, prev_curvature: clipped excitation Y, Y', Y'' at the previous
+ * grid point (state prev_y, prev_v). */
+static inline void record_events(Block *s, int l, REAL prev_drive_lift, REAL prev_slope,
+                                 REAL prev_curvature) {
     REAL phase = s->phase[l];
     if (phase >= CLOSED && s->captured[l] == 0) {
         REAL drive, seat;
         REAL push = s->k[l] * prev_drive_lift + s->b_speed[l] * prev_slope;
-        s->seat_y0[l] = s->prev_y[l];
-        s->seat_v0[l] = s->prev_v[l];
-        s->seat_a0[l] = acceleration(s, l, s->prev_y[l], s->prev_v[l], push, &drive, &seat);
+        REAL y = s->prev_y[l], v = s->prev_v[l];
+        REAL a = acceleration(s, l, y, v, push, &drive, &seat);
+        REAL speed = s->speed[l];
+        REAL rate = s->k[l] * (speed * prev_slope - v) + s->b[l] * (speed * speed * prev_curvature - a);
+        s->seat_y0[l] = y;
+        s->seat_v0[l] = v;
+        s->seat_a0[l] = a;
+        s->seat_j0[l] = -(s->ks[l] * v + s->gamma[l] * a) + (drive > 0 ? rate : 0);
         s->captured[l] = 1;
     }
     if (phase == BOUNCING && !(s->prev_y[l] > s->depth[l])) s->bounces[l] += 1;
@@ -140,6 +175,26 @@ static inline void observe_energy(Block *s, int l, REAL y, REAL v, REAL drive_li
     s->rest_energy[l] = resting ? e : NAN;
 }
 
+/* Speed at the seat plane from `height` above it along the cubic Taylor polynomial of the
+ * motion (seating_speed of located.py). */
+static double seating_speed(double height, double v, double a, double j) {
+    double squared = v * v - 2.0 * a * height;
+    double fallback = sqrt(squared > 0 ? squared : 0);
+    if (!(v < 0 && squared > 0 && height >= 0)) return fallback;
+    double tau = 2.0 * height / (-v + fallback);
+    for (int i = 0; i < MAX_SEATING_ITERATIONS; i++) {
+        double rate = v + tau * (a + 0.5 * tau * j);
+        if (!(rate < 0)) return fallback;
+        double value = height + tau * (v + tau * (0.5 * a + tau * j / 6.0));
+        double change = value / rate;
+        tau -= change;
+        if (fabs(change) <= SEATING_NEWTON_TOLERANCE * tau) break;
+    }
+    double rate = v + tau * (a + 0.5 * tau * j);
+    if (!(tau >= 0 && rate < 0)) return fallback;
+    return -rate;
+}
+
 static inline void finish(const Block *s, int l, double step_angle, double *out) {
     for (int i = 0; i < N_OUT; i++) out[i] = NAN;
     out[O_MAX_LIFT] = s->max_lift[l];
@@ -152,11 +207,9 @@ static inline void finish(const Block *s, int l, double step_angle, double *out)
     out[O_JUMP_GAP] = s->jump_gap[l];
     out[O_BOUNCE_COUNT] = s->bounces[l];
     out[O_BOUNCE_HEIGHT] = s->bounce_height[l];
-    if (s->captured[l] == 1) {
-        double y0 = s->seat_y0[l], v0 = s->seat_v0[l];
-        double squared = v0 * v0 + 2.0 * s->seat_a0[l] * (s->depth[l] - y0);
-        out[O_SEATING_VELOCITY] = sqrt(squared > 0 ? squared : 0);
-    }
+    if (s->captured[l] == 1)
+        out[O_SEATING_VELOCITY] = seating_speed(s->seat_y0[l] - s->depth[l], s->seat_v0[l],
+                                                s->seat_a0[l], s->seat_j0[l]);
     out[O_MAX_CONTACT_FORCE] = s->mass[l] * s->max_force[l];
     out[O_SUBSTEPS] = 1;
     out[O_TRANSITIONS] = s->transitions[l];
@@ -191,6 +244,7 @@ static inline void start_block(Block *s, int width, const double *params, const 
         s->time_step[l] = tau;
         s->y[l] = p[P_INITIAL_LIFT];
         s->v[l] = p[P_INITIAL_VELOCITY];
+        s->inv_speed[l] = 1.0 / p[P_SPEED];
         s->max_lift[l] = s->max_v[l] = s->max_a[l] = s->excess[l] = s->rest_rise[l] = -INFINITY;
         s->min_v[l] = s->min_a[l] = s->jump_start[l] = INFINITY;
         s->energy0[l] = s->rest_energy[l] = NAN;
@@ -205,12 +259,13 @@ static inline __attribute__((always_inline)) void run_block(
     long n_steps = (nodes - 1) / 2;
     double grid_step = 2.0 * table_step;
     start_block(&s, width, params, cases, grid_step);
-    const REAL *lift_row = exc, *slope_row = exc + nodes;
+    const REAL *lift_row = exc, *slope_row = exc + nodes, *curvature_row = exc + 2 * nodes;
     long nose = 0; /* first maximum of the theoretical lift */
     for (long i = 1; i < nodes; i++)
         if (lift_row[i] > lift_row[nose]) nose = i;
     for (long n = 0; n <= n_steps; n++) {
-        REAL drive_lift = lift_row[2 * n], slope = slope_row[2 * n];
+        REAL drive_lift = clip_lift(lift_row[2 * n]);
+        REAL slope = clip_slope(lift_row[2 * n], slope_row[2 * n]);
         REAL angle = (REAL)(table_start + n * grid_step);
         int event = 0;
 #pragma omp simd reduction(| : event)
@@ -222,9 +277,12 @@ static inline __attribute__((always_inline)) void run_block(
             event |= observe(&s, l, angle, s.y[l], s.v[l], a, drive_lift, s.speed[l] * slope,
                              drive, seat, n == 0, 2 * n >= nose);
         }
-        if (event)
+        if (event) {
+            REAL y_prev = lift_row[2 * n - 2];
             for (int l = 0; l < width; l++)
-                record_events(&s, l, lift_row[2 * n - 2], slope_row[2 * n - 2]);
+                record_events(&s, l, clip_lift(y_prev), clip_slope(y_prev, slope_row[2 * n - 2]),
+                              clip_slope(y_prev, curvature_row[2 * n - 2]));
+        }
         if (n % ENERGY_INTERVAL == 0 || n == n_steps) {
 #pragma omp simd
             for (int l = 0; l < width; l++) {
@@ -235,8 +293,8 @@ static inline __attribute__((always_inline)) void run_block(
             }
         }
         if (n == n_steps) break;
-        REAL ym = lift_row[2 * n + 1], sm = slope_row[2 * n + 1];
-        REAL y1 = lift_row[2 * n + 2], s1 = slope_row[2 * n + 2];
+        REAL ym = clip_lift(lift_row[2 * n + 1]), sm = clip_slope(lift_row[2 * n + 1], slope_row[2 * n + 1]);
+        REAL y1 = clip_lift(lift_row[2 * n + 2]), s1 = clip_slope(lift_row[2 * n + 2], slope_row[2 * n + 2]);
 #pragma omp simd
         for (int l = 0; l < width; l++) {
             REAL y = s.y[l], v = s.v[l], a = s.acc[l], h = s.tau[l], hh = s.half_tau[l];
@@ -258,7 +316,7 @@ static inline __attribute__((always_inline)) void run_block(
     for (int l = 0; l < width; l++) finish(&s, l, grid_step, out + cases[l] * N_OUT);
 }
 
-/* exc: rows Y [m], Y' [m/rad] of `nodes` values at spacing table_step [rad] from table_start
+/* exc: rows Y [m], Y' [m/rad], Y'' [m/rad^2] of `nodes` values at spacing table_step [rad] from table_start
  * [rad]; params: n_cases × N_PARAMS; out: n_cases × N_OUT (written). */
 void valve_lanes(const REAL *exc, long nodes, double table_step, double table_start,
                  const double *params, long n_cases, double *out) {
