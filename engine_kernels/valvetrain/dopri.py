@@ -1,4 +1,4 @@
-"""Adaptive Dormand–Prince 5(4) for the valve model [V2] with located switches (SPEC §4).
+"""Adaptive Dormand–Prince 5(4) for the valve model [V2] with located switches (physics §4).
 
 One case at a time: the pair of :mod:`engine_kernels.valvetrain.dopri_step` steps in time
 with the drive contact and the seat contact held fixed inside each step; its step size
@@ -14,7 +14,7 @@ followed at every step end. No stability guard is needed: the error estimate of 
 keeps the steps inside its stability region.
 
 Reference: Hairer, Nørsett & Wanner, *Solving ODEs I*, §II.4 (step-size control), §II.6
-(dense output); SPEC §4.
+(dense output); physics §4.
 """
 
 from __future__ import annotations
@@ -132,7 +132,7 @@ def dopri_response(
 
     Outputs stay NaN when the case does not finish (``STATUS_INVALID_INPUT``, the step limit
     ``STATUS_SUBSTEP_LIMIT``, ``STATUS_NONFINITE`` when the step size collapses on a
-    non-finite state). Reference: SPEC §4.
+    non-finite state). Reference: physics §4.
     """
     out[:] = math.nan
     if not (valid_valve_parameters(params, excitation) and tolerance > 0.0 and grid_step > 0.0):

@@ -1,4 +1,4 @@
-"""Observations of a Dormand–Prince valve run on its grid of cam angles (SPEC §4).
+"""Observations of a Dormand–Prince valve run on its grid of cam angles (physics §4).
 
 The adaptive steps of :mod:`engine_kernels.valvetrain.dopri` do not fall on the study's grid;
 its dense output gives the state at every grid point, and these helpers feed it to the

@@ -1,5 +1,5 @@
 """One Dormand–Prince 5(4) step of the valve model [V2] in a fixed mode, its dense output and
-the location of a contact or seat switch on it (SPEC §4, "Integrators and the speed–accuracy
+the location of a contact or seat switch on it (physics §4, "Integrators and the speed–accuracy
 trade").
 
 Within a step the drive contact and the seat contact are held on or off

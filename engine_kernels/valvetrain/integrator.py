@@ -1,4 +1,4 @@
-"""Valve-train dynamics: single-DOF valve driven through a compliant rocker (SPEC §4).
+"""Valve-train dynamics: single-DOF valve driven through a compliant rocker (physics §4).
 
 The model [V1], [V2] is in :mod:`engine_kernels.valvetrain.model`, its data layout (``P_*``
 parameters, ``O_*`` outputs, ``C_*`` curves, ``S_*`` settings, status codes) in
@@ -7,7 +7,7 @@ package :mod:`engine_kernels.valvetrain` re-exports the public API of the valve 
 it is the one import a caller needs.
 
 Integration is fixed-step classic RK4 over a cam-angle grid: the excitation table holds the
-theoretical valve lift Y(θ) and its angle derivatives at half-step spacing (SPEC §9: RK4 step
+theoretical valve lift Y(θ) and its angle derivatives at half-step spacing (physics §9: RK4 step
 0.5° cam, excitation every 0.25°), the time step is ``Δθ/ω`` and ``Ẏ = ω Y'``. The valve
 starts at the initial lift and velocity of the parameter row (normally at rest on the seat).
 The stability guard (:mod:`engine_kernels.valvetrain.guard`) sub-steps or refuses a case before
@@ -20,7 +20,7 @@ turns it into an error bar (:mod:`studies.scenes.valve.error_bar`).
 
 :mod:`engine_kernels.valvetrain.lanes` runs the same plain-RK4 integration, with the same
 arithmetic and results, for blocks of cases in SIMD lanes: about 4× more cases per CPU-second
-at the SPEC §9 step. Reference: SPEC §4 and the thesis data quoted there.
+at the physics §9 step. Reference: physics §4 and the thesis data quoted there.
 """
 
 from __future__ import annotations
@@ -217,7 +217,7 @@ def _integrate(
 
 @jit
 def valve_response(excitation, table_step, table_start, params, settings, out, curves):
-    """Valve dynamics of one case: fixed-step RK4 of [V2] with outputs ``O_*`` (SPEC §4).
+    """Valve dynamics of one case: fixed-step RK4 of [V2] with outputs ``O_*`` (physics §4).
 
     excitation  : 2-D array  (3, n) rows Y [m], Y' [m/rad], Y'' [m/rad²] of the theoretical
                              valve lift at spacing ``table_step`` (half the RK4 step).
@@ -230,7 +230,7 @@ def valve_response(excitation, table_step, table_start, params, settings, out, c
 
     Outputs stay NaN when the case is not integrated (``STATUS_INVALID_INPUT``,
     ``STATUS_SUBSTEP_LIMIT``); ``O_SUBSTEPS`` and ``O_STEP_RATIO`` are always filled once the
-    inputs are valid. Reference: SPEC §4.
+    inputs are valid. Reference: physics §4.
     """
     substeps = prepare_case(excitation, table_step, params, settings, out)
     if substeps == 0:

@@ -1,4 +1,4 @@
-"""Valve dynamics [V2] stepped for a block of cases in SIMD lanes (SPEC §4, STYLE "Hot integrators").
+"""Valve dynamics [V2] stepped for a block of cases in SIMD lanes (physics §4, STYLE "Hot integrators").
 
 Same model, plain fixed-step RK4, observations and arithmetic as
 :func:`engine_kernels.valvetrain.integrator.valve_response` (no switch location, no curves),

@@ -1,4 +1,4 @@
-"""Data layout of the valve kernels: parameter, output, curve and settings rows (SPEC §4).
+"""Data layout of the valve kernels: parameter, output, curve and settings rows (physics §4).
 
 Parameters are rows indexed by the ``P_*`` constants (SI units, ``VALVE_PARAM_UNITS``),
 outputs by the ``O_*`` constants, curves by the ``C_*`` constants, integer settings by the

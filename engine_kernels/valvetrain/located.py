@@ -1,4 +1,4 @@
-"""Outputs of a valve run located between its observed points (SPEC §4).
+"""Outputs of a valve run located between its observed points (physics §4).
 
 A run is observed at points: the grid points of every kernel, and in
 :mod:`engine_kernels.valvetrain.dopri` also at its located contact and seat switches. An output

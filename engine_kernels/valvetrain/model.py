@@ -1,4 +1,4 @@
-"""Valve-train model [V1], [V2]: forces, energy, stiffest mode, excitation (SPEC §4).
+"""Valve-train model [V1], [V2]: forces, energy, stiffest mode, excitation (physics §4).
 
 Model [V2], in time, with the valve lift y measured from the closed position where the seat
 is pre-compressed by ``δ0 = Ps0/kz``::
@@ -16,7 +16,7 @@ lash is taken up (smooth, negative on the base circle): every read clips it (:fu
 so the kink at lash take-up sits where the smooth lift crosses zero between nodes, instead of
 being smeared over a table interval by the interpolation of a clipped table (an error of
 5–50 nm in Y and up to the whole jump in Y' there, that did not shrink regularly with the
-spacing). Reference: SPEC §4 and the motorcycle OHC valve-train thesis data quoted there.
+spacing). Reference: physics §4 and the motorcycle OHC valve-train thesis data quoted there.
 """
 
 from __future__ import annotations
@@ -248,7 +248,7 @@ def valve_spectral_radius(params):
     """Largest eigenvalue modulus over the four linear modes of [V2] [1/s].
 
     Modes: contact+seat ``(k + kz + ks, b + bz + γ)``, contact ``(k + ks, b + γ)``, seat
-    ``(kz + ks, bz + γ)``, free ``(ks, γ)`` (SPEC §4, stability).
+    ``(kz + ks, bz + γ)``, free ``(ks, γ)`` (physics §4, stability).
     params : 1-D array  Parameter row (``P_*``, SI units).
     """
     mass = params[P_MASS]

@@ -1,4 +1,4 @@
-"""Switch-aware RK4 for the valve model: located contact and seat switches (SPEC §4).
+"""Switch-aware RK4 for the valve model: located contact and seat switches (physics §4).
 
 Plain fixed-step RK4 loses its order on [V2]: the one-sided drive and seat switch inside
 steps. Here the contact and seat modes are held fixed within a step; at the step end each
@@ -8,7 +8,7 @@ past zero; the earliest crossing is located (seeded on the Hermite, refined by r
 RK4 sub-step to it, aiming just past the root so it is not found again; both stop at a stated
 angle, ``SWITCH_ANGLE_TOLERANCE``, not at an iteration count), the mode switches
 and the step is finished (the motion in a fixed mode is in
-:mod:`engine_kernels.valvetrain.modes`). This restores fourth order (SPEC §4, "Integrators and the
+:mod:`engine_kernels.valvetrain.modes`). This restores fourth order (physics §4, "Integrators and the
 speed–accuracy trade") and makes step halving a usable error estimate.
 """
 

@@ -1,6 +1,6 @@
 """Valve-train dynamics [V2]: limits, separation, bounce, convergence order, stability guard.
 
-Reference parameter set (SPEC §4 thesis data plus values the source does not give, chosen
+Reference parameter set (physics §4 thesis data plus values the source does not give, chosen
 here and stated in the report): equivalent mass [V1] 0.033 kg valve group + 15 g spring / 3
 + 5e-6 kg m² rocker inertia / lb² = 0.0425 kg; drive stiffness 1.17e4 N/mm; drive damping
 150 N s/m (damping ratio 0.11); spring rate 30 N/mm; preload 205.8 N; seat stiffness
@@ -40,7 +40,7 @@ def cosine_event(theta):
 
 
 def table(function, step_deg, start_deg=-100.0, stop_deg=110.0):
-    """Excitation table at half the RK4 step (SPEC §9: 0.5 deg step, table every 0.25 deg)."""
+    """Excitation table at half the RK4 step (physics §9: 0.5 deg step, table every 0.25 deg)."""
     theta = np.radians(np.arange(start_deg, stop_deg + step_deg / 4, step_deg / 2))
     return np.stack(function(theta)), math.radians(step_deg / 2), theta[0]
 
@@ -188,7 +188,7 @@ def test_rk4_is_fourth_order_without_switches():
 
 
 def test_switch_aware_rk4_restores_fourth_order():
-    # Contact and seat switch inside steps: plain RK4 loses its order (SPEC §4 measured ~1.6),
+    # Contact and seat switch inside steps: plain RK4 loses its order (physics §4 measured ~1.6),
     # locating the switches restores ~4 and makes sub-step halving a usable error estimate.
     steps = (0.5, 0.25, 0.125)
     plain, _ = errors_against_reference(cosine_event, PARAMS, steps, -100.0, 110.0)
@@ -387,7 +387,7 @@ def test_landings_before_the_nose_are_not_the_closure():
     ],
 )
 def test_acceleration_is_the_one_sided_force_law(lift, velocity, drive_lift, drive_velocity):
-    # [V2] written out term by term in SI units (SPEC §4).
+    # [V2] written out term by term in SI units (physics §4).
     mass, k, b, ks, ps0, kz, bz, gamma = PARAMS[1:9]
     depth = ps0 / kz
     drive = max(0.0, k * (drive_lift - lift) + b * (drive_velocity - velocity))
@@ -426,7 +426,7 @@ def test_curves_agree_with_scalar_outputs():
 
 
 def rocker_table(step_deg):
-    """Theoretical valve lift of the SPEC §3 rocker on the synthetic law of test_rocker.py."""
+    """Theoretical valve lift of the physics §3 rocker on the synthetic law of test_rocker.py."""
     path = Path(__file__).with_name("test_rocker.py")
     spec = importlib.util.spec_from_file_location("rocker_case", path)
     case = importlib.util.module_from_spec(spec)
@@ -437,7 +437,7 @@ def rocker_table(step_deg):
 
 
 def test_thesis_reference_speeds():
-    # SPEC §4 (thesis, 125 cc OHC): max lift 7.785 mm at 7000 rpm engine (3500 cam) with no
+    # physics §4 (thesis, 125 cc OHC): max lift 7.785 mm at 7000 rpm engine (3500 cam) with no
     # bounce; separation on the rise at higher speed. The cam here is the synthetic law, so
     # only the lift (set by the drive compliance at the nose) is compared closely.
     excitation, step, start = rocker_table(0.5)

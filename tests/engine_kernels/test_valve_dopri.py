@@ -4,7 +4,7 @@ Expected values come from scipy's event-restarted ``solve_ivp`` (DOP853, rtol 1e
 studies.scenes.valve.reference.valve_ivp) on the same model and the same excitation: the
 cubic Hermite of the very table the kernel reads (``table_excitation``), so the comparison
 measures the integrator alone. The parameter set is that of tests/engine_kernels/test_valve.py
-(SPEC §4 thesis values plus stated assumptions) on its 1 − cos cam event.
+(physics §4 thesis values plus stated assumptions) on its 1 − cos cam event.
 """
 
 from __future__ import annotations

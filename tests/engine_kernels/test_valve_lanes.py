@@ -3,7 +3,7 @@
 The expected values come from the one-case kernel (``valve.valve_response_batch``): the same
 model, arithmetic and observations integrated one case at a time with plain loops and
 branches, an independent second implementation of the block-and-lane bookkeeping. Reference
-valve train as in test_valve.py (SPEC §4 thesis data plus stated assumptions).
+valve train as in test_valve.py (physics §4 thesis data plus stated assumptions).
 
 Single precision (integrator ``lanes_f32``, a float32 table): expected values from the
 double-precision kernels and the float32 round-off bound. Each grid step rounds the state
@@ -38,7 +38,7 @@ HEIGHT, HALF = 4e-3, 1.4  # 1 - cos event: Y = HEIGHT (1 + cos(pi theta / HALF))
 
 
 def cosine_event_table(step_deg, start_deg=-100.0, stop_deg=110.0):
-    """Excitation table at half the RK4 step (SPEC §9): rows Y, Y', Y''."""
+    """Excitation table at half the RK4 step (physics §9): rows Y, Y', Y''."""
     theta = np.radians(np.arange(start_deg, stop_deg + step_deg / 4, step_deg / 2))
     wave = math.pi / HALF
     inside = np.abs(theta) < HALF

@@ -68,7 +68,7 @@ def test_ohc125_dynamics_runs_and_separates_on_the_rise(tmp_path: Path) -> None:
     assert (result.folder / "main_effects_jump_max_gap.png").stat().st_size > 10_000
     assert (ds["run_ok"] == 1).all()
     thesis = (ds["spring_preload"] == 205.8) & (ds["drive_stiffness"] == 11700.0)
-    # SPEC §4 (thesis): no separation at engine 7000 rpm (camshaft 3500), slight separation on
+    # physics §4 (thesis): no separation at engine 7000 rpm (camshaft 3500), slight separation on
     # the rise at engine 12000 rpm (camshaft 6000); the study's 3000 rpm lies below the former.
     slow = ds.where(thesis & (ds["cam_speed"] == 3000.0), drop=True)
     fast = ds.where(thesis & (ds["cam_speed"] == 6000.0), drop=True)
@@ -99,7 +99,7 @@ def test_jump_speed_map_runs_and_falls_with_mass(tmp_path: Path) -> None:
 
 def test_jump_speed_map_takes_a_lift_law_factor(tmp_path: Path) -> None:
     # A categorical factor (the lift law) gets equal cells labelled with its names; the 3-4-5
-    # law is concave at ±70° (SPEC §3), so its cells did not run and read "none".
+    # law is concave at ±70° (physics §3), so its cells did not run and read "none".
     text = study(
         '["jump_speed"]',
         factors='[factors.law]\nlevels = ["six_segment", "poly345"]\n'
@@ -231,7 +231,7 @@ def test_responses_run_only_the_stages_they_need(responses: str, stages: set[str
 
 
 def test_invalid_chain_and_separation_are_results() -> None:
-    # SPEC §3: a 3-4-5 law of 6.30 mm is concave at ±65° (convex from about ±83°).
+    # physics §3: a 3-4-5 law of 6.30 mm is concave at ±65° (convex from about ±83°).
     ev = run(
         study(
             '["status", "run_ok", "follows_cam", "jump_speed_status", "cam_convex"]',
@@ -249,7 +249,7 @@ def test_invalid_chain_and_separation_are_results() -> None:
 
 def test_status_is_stored_to_tell_no_jump_from_not_run(tmp_path: Path) -> None:
     # jump_start is NaN where nothing separates and where the dynamics never ran (a concave
-    # 3-4-5 cam at ±65°, SPEC §3): the status responses are stored unasked to tell them apart,
+    # 3-4-5 cam at ±65°, physics §3): the status responses are stored unasked to tell them apart,
     # and analysis.txt lists the points that did not run and why.
     text = study(
         '["jump_start"]',
@@ -273,7 +273,7 @@ def test_status_is_stored_to_tell_no_jump_from_not_run(tmp_path: Path) -> None:
 def test_status_codes_are_integers_with_cf_flags_and_are_counted_not_averaged(
     tmp_path: Path,
 ) -> None:
-    # Two concave 3-4-5 cams (±60°, ±65°, SPEC §3) and two convex ones (±85°, ±90°): the
+    # Two concave 3-4-5 cams (±60°, ±65°, physics §3) and two convex ones (±85°, ±90°): the
     # chain is invalid at the first two, so their dynamics and jump search do not run.
     text = study(
         '["status", "jump_speed_status", "chain_status", "max_lift"]',
@@ -408,7 +408,7 @@ def test_results_do_not_depend_on_the_chunk_size() -> None:
 
 
 def test_a_bounce_after_closure_is_not_a_jump() -> None:
-    # SPEC §4: jump = separation from the drive during the event; bounce = leaving the seat
+    # physics §4: jump = separation from the drive during the event; bounce = leaving the seat
     # again after the first closure. At camshaft 3500 rpm and 150 N preload the valve follows
     # the cam but bounces once after closing at 73 deg: it must not be reported as a jump
     # (a jump starting after the closing angle would make the jump speed a bounce speed).

@@ -1,7 +1,7 @@
 """Scene ``valve_accuracy``: the ``valve`` scene with its integrator and step as factors.
 
 In the ``valve`` scene the integrator and the RK4 step are accuracy settings, fixed for a
-study. To measure the speed–accuracy trade (SPEC §4) they must vary between design points, so
+study. To measure the speed–accuracy trade (physics §4) they must vary between design points, so
 this scene declares them as parameters (``integrator``, ``angle_step``) and adds two stages:
 
 * ``reference`` — the error of each run against scipy's event-restarted reference

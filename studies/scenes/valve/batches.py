@@ -1,5 +1,5 @@
 """How the ``valve`` scene calls the valve kernels: parameter and settings rows, one batch
-integration on one excitation table, and the checks of a design before it runs (SPEC §4)."""
+integration on one excitation table, and the checks of a design before it runs (physics §4)."""
 
 from __future__ import annotations
 
@@ -161,7 +161,7 @@ def stability_problems(
     points: dict[str, np.ndarray], settings: dict[str, Any], steps: np.ndarray
 ) -> list[str]:
     """Points whose RK4 step [rad] (one per point) needs more sub-steps than
-    ``max_substeps`` (SPEC §4); checked by a compiled batch over blocks of points, so the
+    ``max_substeps`` (physics §4); checked by a compiled batch over blocks of points, so the
     parameter rows of a 10⁷-point design never sit in memory at once."""
     found = PointProblems()
     limit = int(settings["max_substeps"])

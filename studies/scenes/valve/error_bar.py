@@ -1,4 +1,4 @@
-"""Error bars of the valve dynamics and the tolerance ladder (SPEC §4, issues #15, #26).
+"""Error bars of the valve dynamics and the tolerance ladder (physics §4, issues #15, #26).
 
 A run at angle step h takes n RK4 sub-steps per grid step on an excitation table of spacing
 h/2. Its **companion** halves every length: step h/2, table h/4 and the same n sub-steps per

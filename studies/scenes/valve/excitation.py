@@ -1,5 +1,5 @@
 """The excitation table of the valve dynamics: the chain's valve lift before the lash is taken
-up (SPEC §3 [R6], §4).
+up (physics §3 [R6], §4).
 
 The rocker chain reports the valve lift clipped at zero, ``Y = max(0, lb (sin β0 − sin β) − Δ)``:
 the lift has a kink where the lash is taken up (and where it opens again), between two nodes of

@@ -1,6 +1,6 @@
 """Declarations of the ``valve`` scene: the rocker scene's plus dynamics, settings, responses.
 
-Dynamics defaults are the SPEC §4 thesis values (drive stiffness 1.17e4 N/mm, preload 205.8 N,
+Dynamics defaults are the physics §4 thesis values (drive stiffness 1.17e4 N/mm, preload 205.8 N,
 camshaft 3500 rpm = 7000 rpm engine) plus values the source does not give, chosen as in the
 kernel tests and marked ``assumption``: equivalent mass [V1] 0.033 kg valve group + 15 g
 spring / 3 + 5e-6 kg m² rocker inertia / lb² = 0.04252 kg, drive damping 150 N s/m, spring
@@ -60,7 +60,7 @@ from studies.scenes.valve.spring_parameters import (
     SURGE_RESPONSES,
 )
 
-THESIS, ASSUMED = "SPEC §4 thesis", "assumption"
+THESIS, ASSUMED = "physics §4 thesis", "assumption"
 INTEGRATORS = ("lanes", "lanes_f32", "rk4", "rk4_switch_aware", "dopri")
 DOPRI = "dopri"
 DOPRI_TABLE_DEG = 1.0 / 32.0
@@ -73,7 +73,7 @@ DOPRI_TOLERANCE = 1e-7
 grid ≤ 1 µm on all 48 measured points, 95th percentile 0.34 µm)."""
 DOPRI_SAFETY = 10.0
 """Under a study tolerance, ``dopri`` runs at tolerance / DOPRI_SAFETY per step [-]: the
-per-step tolerance is local, the global error collects over the event (SPEC §4: 30–100×)."""
+per-step tolerance is local, the global error collects over the event (physics §4: 30–100×)."""
 
 
 DOPRI_TABLE_TOLERANCE = 1e-6

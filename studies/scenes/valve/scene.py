@@ -1,4 +1,4 @@
-"""Scene ``valve``: single-DOF valve-train dynamics driven through the rocker (SPEC §4).
+"""Scene ``valve``: single-DOF valve-train dynamics driven through the rocker (physics §4).
 
 The excitation is the theoretical valve lift Y(θ) of the ``rocker`` scene's chain, so this
 scene extends :class:`~studies.scenes.chain.ChainScene` and adds two stages:

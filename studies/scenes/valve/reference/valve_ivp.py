@@ -1,4 +1,4 @@
-"""Accuracy reference for the valve model [V2]: event-restarted scipy ``solve_ivp`` (SPEC §4).
+"""Accuracy reference for the valve model [V2]: event-restarted scipy ``solve_ivp`` (physics §4).
 
 The model is piecewise linear: the drive acts while ``k(Y − y) + b(Ẏ − ẏ) > 0`` and the
 seat while ``y < δ0`` and ``kz(δ0 − y) − bz ẏ > 0``. Within one mode the right-hand side is

@@ -1,4 +1,4 @@
-"""The derived outputs of the valve model [V2] read off the scipy reference (SPEC §4).
+"""The derived outputs of the valve model [V2] read off the scipy reference (physics §4).
 
 The kernels report max lift, jump start, seating velocity and bounce height from their
 observations (:mod:`engine_kernels.valvetrain.observations`); these are the same quantities
