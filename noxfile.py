@@ -28,6 +28,9 @@ nox.options.sessions = ["tests", "lint"]
 PYTHON = None  # the interpreter nox itself runs on
 HERE = Path(__file__).parent
 SHARED = HERE / ".nox" / "run"  # the environment the user-facing sessions share
+PARALLEL = ("-n", "auto", "--maxprocesses", "4", "--dist", "loadfile")
+"""The whole suite in up to 4 processes (one per core), each test file in one of them (its
+module fixtures built once); a run with arguments (``nox -s tests -- FILE``) is one process."""
 
 
 def _install_once(session: nox.Session, python: Path, target: str) -> None:
@@ -58,7 +61,7 @@ def _shared_python(session: nox.Session) -> str:
 def tests(session: nox.Session) -> None:
     """Run the test-suite."""
     _install_once(session, _own_python(session), ".[test]")
-    session.run("pytest", *session.posargs)
+    session.run("pytest", *(session.posargs or PARALLEL))
 
 
 @nox.session(python=PYTHON)

@@ -85,7 +85,7 @@ def test_valve_step_accuracy_runs_with_one_reference_per_pair(
     np.testing.assert_allclose(error[follows], double[follows], rtol=0.005)
     np.testing.assert_allclose(error[~follows], double[~follows], rtol=0.10)
     # The adaptive pair (its own fine table and located switches) is within 1 µm of the
-    # reference at every step, speed and seat of the study (README: ≤ 0.52 µm on 48 random
+    # reference at every step, speed and seat of the study (docs/accuracy.md: ≤ 0.52 µm on 48 random
     # points at its default 1e-7 m per step).
     dopri = ds.where(ds["integrator"] == "dopri", drop=True)
     assert (dopri["reference_error"] <= 1e-3).all()
