@@ -10,6 +10,7 @@ and the mean over them (:mod:`studies.analysis_optimum`).
 from __future__ import annotations
 
 import json
+import math
 from typing import Any
 
 import numpy as np
@@ -167,37 +168,62 @@ def _computed(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, shown: str) -> li
     ]
     if an.sizes["condition"] == 1:
         run = int(r.optimum_run.values[0])
-        lines += [
-            (
-                f"Best {md_escape(shown)}: **{num(float(r.optimum_value))}{units}** in "
-                f"{_run(run)} (grand "
-                f"mean {num(float(r.grand_mean))}{units})."
-            ),
-            "",
-        ]
+        lines += [_best_line(view, r, run, shown, units), ""]
     else:
         lines += [_over_conditions(an, r, units, "Chosen for the best mean"), ""]
         lines += _conditions(view, an, r, units)
     return lines + _neighbours(view, an, r, units)
 
 
+def _bound_mark(view: xr.Dataset, name: str, run: int) -> str:
+    """``: no value, counted at the bound`` when ``run`` has no value of ``name`` of its own
+    (its response's ``none_means`` counted it at the best or worst value seen)."""
+    own = float(view[name].values[run]) if name in view else math.nan
+    return "" if np.isfinite(own) else ": no value, counted at the bound"
+
+
+def _best_line(view: xr.Dataset, r: xr.Dataset, run: int, shown: str, units: str) -> str:
+    """The best run's value, or, when that run has no value of its own, what it was counted
+    as (``none_means``): a bound, never a computed value."""
+    name = str(r.response.values)
+    best = num(float(r.optimum_value))
+    grand = f"grand mean {num(float(r.grand_mean))}{units}"
+    if not _bound_mark(view, name, run):
+        return f"Best {md_escape(shown)}: **{best}{units}** in {_run(run)} ({grand})."
+    meaning = str(view[name].attrs.get("none_means", "unknown"))
+    counted = (
+        f"counted as at least as good as the best value computed, {best}{units}"
+        if meaning == "best"
+        else f"counted at the bound {best}{units}"
+    )
+    return (
+        f"Best {md_escape(shown)}: {_run(run)}, which has **no value** of it (none_means = "
+        f"{md_escape(meaning)}: {counted}; {grand}). Runs without a value tie with each "
+        "other: the first in grid order is shown."
+    )
+
+
 def _neighbours(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, units: str) -> list[str]:
     levels = optimum_levels(an, str(r.response.values))
     if not levels:
         return []
+    name = str(r.response.values)
     rows, edges = [], []
     for f, level in levels.items():
         cells = []
         for s, step in enumerate((-1, 1)):
             value = float(r.neighbour_value.sel(term=f).values[s])
             run = int(r.neighbour_run.sel(term=f).values[s])
-            if not np.isfinite(value):
+            if not 0 <= level + step < len(levels_of(an, f)):
                 cells.append("— (edge of the grid)")
                 if len(levels_of(an, f)) > 1:
                     edges.append(f)
                 continue
+            if not np.isfinite(value):
+                cells.append("— (no value there)")
+                continue
             at = value_text(levels_of(an, f)[level + step], units_of(view, f))
-            ran = f" ({_run(run)})" if run >= 0 else ""
+            ran = f" ({_run(run)}{_bound_mark(view, name, run)})" if run >= 0 else ""
             cells.append(Markup(f"{num(value)}{units} at {at}{ran}"))
         rows.append([f, *cells])
     what = "" if an.sizes["condition"] == 1 else " (mean over the operating conditions)"

@@ -84,7 +84,8 @@ def _report(
     ds: xr.Dataset, an: xr.Dataset, responses: list[str], figures: set[str]
 ) -> tuple[str, str]:
     analysed = json.loads(an.attrs.get("analysed", "[]"))
-    lines = _header(ds, responses, analysed)
+    status = json.loads(an.attrs.get("status_responses", "[]"))
+    lines = _header(ds, responses, analysed, status)
     without = int(an.attrs.get("points_without_value", 0))
     if without:
         note = (
@@ -93,7 +94,6 @@ def _report(
             "below use the others."
         )
         lines += [note, ""]
-    status = json.loads(an.attrs.get("status_responses", "[]"))
     if status:
         lines += [f"- {md_escape(status_line(an, r))}" for r in status] + [""]
     listed = [r for r in responses if r not in status and _has_value(ds, r)]
@@ -166,7 +166,9 @@ def _next_study(
     return toml, [title, "", intro, "", f"{fence(toml)}toml", toml.rstrip(), fence(toml), ""]
 
 
-def _header(ds: xr.Dataset, responses: list[str], analysed: list[str]) -> list[str]:
+def _header(
+    ds: xr.Dataset, responses: list[str], analysed: list[str], status: list[str]
+) -> list[str]:
     a = ds.attrs
     title = a.get("title") or a.get("study_name") or "Study results"
     commit = str(a.get("git_commit", ""))[:10]
@@ -188,6 +190,8 @@ def _header(ds: xr.Dataset, responses: list[str], analysed: list[str]) -> list[s
             + (
                 ""
                 if taguchi.mean_name(ds, r) in analysed
+                else ", a status code: counted below, never averaged"
+                if r in status
                 else f", {nothing_to_analyse(y)}: not analysed"
             )
             + ")"

@@ -57,7 +57,7 @@ def _range_rows(view: xr.Dataset, an: xr.Dataset, name: str) -> tuple[list[str],
     nlevels = int(np.isfinite(r.k.sel(term=factors).values).any(axis=0).sum())
     if nlevels > MAX_LEVEL_COLUMNS:
         header = ["factor", "levels", "R", "rank", "best level"]
-        rows = [[f, nlevels, num(float(r.sel(term=f).R)), int(r.sel(term=f)["rank"]),
+        rows = [[f, len(levels_of(an, f)), num(float(r.sel(term=f).R)), int(r.sel(term=f)["rank"]),
                  _best(an, r.sel(term=f), f)] for f in factors]  # fmt: skip
         return header, rows
     header = ["factor", *[f"k{i + 1}" for i in range(nlevels)], "R", "rank", "best level"]

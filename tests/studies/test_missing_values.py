@@ -8,6 +8,7 @@ Expected level means are recomputed here from the results with numpy.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -99,3 +100,20 @@ def test_inf_is_a_value_beyond_every_finite_one(tmp_path: Path) -> None:
     assert int(r.optimum_run.values[0]) == 0  # the best computed point is finite
     text = report_text(ds, an, ["stress"])
     assert "| 3 | 2 | 5 | inf |" in text
+
+
+@pytest.mark.parametrize("name", [NAME, "first_crossing_speed"])
+def test_the_best_computed_point_never_shows_a_bound_as_a_computed_value(
+    reed: xr.Dataset, name: str
+) -> None:
+    """The run the report names as best: when it has no value of its own (no crossing), the
+    report says so and gives the bound as a bound, not as that run's value (read against the
+    results file itself)."""
+    report = report_text(reed, analyze(reed), [name])
+    line = next(x for x in report.splitlines() if x.startswith(f"Best {name}"))
+    run = int(re.search(r"run (\d+)", line).group(1)) - 1
+    own = float(reed[name].values[run])
+    if np.isnan(own):
+        assert "**no value**" in line and "none_means = best" in line
+    else:
+        assert f"**{own:.4g}" in line or f"**{own:g}" in line
