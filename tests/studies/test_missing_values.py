@@ -111,9 +111,12 @@ def test_the_best_computed_point_never_shows_a_bound_as_a_computed_value(
     results file itself)."""
     report = report_text(reed, analyze(reed), [name])
     line = next(x for x in report.splitlines() if x.startswith(f"Best {name}"))
-    run = int(re.search(r"run (\d+)", line).group(1)) - 1
+    found = re.search(r"run (\d+)", line)
+    assert found, line
+    run = int(found.group(1)) - 1
     own = float(reed[name].values[run])
     if np.isnan(own):
-        assert "**no value**" in line and "none_means = best" in line
+        assert "**no value**" in line
+        assert "none_means = best" in line
     else:
         assert f"**{own:.4g}" in line or f"**{own:g}" in line
