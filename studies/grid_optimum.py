@@ -5,7 +5,8 @@ is the best run. Factors have a role (:mod:`studies.definition_values`): only **
 factors are chosen; **operating** factors (speed, load) are conditions the design must meet at
 every level. With operating factors, the design points form a table of control combinations ×
 conditions (the operating-level combinations); the chosen control combination is the one with
-the best mean over the conditions (ties: the first in grid order), and the table gives its value
+the best mean over the conditions (ties: the one whose levels have the best main effects,
+then the first in grid order), and the table gives its value
 in each condition, the worst of them, and the best run of each condition on its own.
 Neighbours: the control combinations one level below and above the chosen one in each control
 factor, others fixed (their mean over the conditions), which shows whether the optimum is flat
@@ -97,7 +98,7 @@ class Grid:
             mean = signed.mean(axis=1)
         if not np.isfinite(mean).any():
             return None
-        row = int(np.nanargmin(mean))
+        row = self._tie_break(mean)
         codes = np.unravel_index(row, self.control_counts) if self.control else ()
         levels = {f: int(c) for f, c in zip(self.control, codes, strict=True)}
         best_values = np.full(values.shape[1], np.nan)
@@ -116,6 +117,26 @@ class Grid:
             for f in self.control
         }
         return GridOptimum(levels, values[row], self.runs[row], best_values, best_runs, neighbours)
+
+    def _tie_break(self, mean: np.ndarray) -> int:
+        """The best row of ``mean`` (smaller is better); among exact ties, the one whose
+        levels have the best main effects (mean of ``mean`` over each factor's level, summed),
+        so a flat optimum agrees with the range analysis instead of the grid order."""
+        best = np.nanmin(mean)
+        tied = np.flatnonzero(mean == best)
+        if tied.size == 1 or not self.control:
+            return int(tied[0])
+        grid = mean.reshape(self.control_counts)
+        score = np.zeros(tied.size)
+        for axis, _ in enumerate(self.control):
+            others = tuple(a for a in range(len(self.control)) if a != axis)
+            finite = np.isfinite(grid)
+            total = np.where(finite, grid, 0.0).sum(axis=others)
+            count = finite.sum(axis=others)
+            effect = np.where(count > 0, total / np.maximum(count, 1), np.nan)
+            codes = np.unravel_index(tied, self.control_counts)[axis]
+            score += effect[codes]
+        return int(tied[int(np.nanargmin(score))]) if np.isfinite(score).any() else int(tied[0])
 
     def _neighbour(
         self, mean: np.ndarray, levels: Mapping[str, int], factor: str, step: int

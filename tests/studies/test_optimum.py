@@ -168,3 +168,18 @@ def test_an_array_predicts_per_operating_condition() -> None:
     assert "Operating conditions, not chosen: seg2_width" in text
     assert "seg6_amplitude at level" in text  # the runs it rests on
     assert "(runs " in text
+
+
+def test_a_tied_optimum_takes_the_levels_with_the_best_main_effects() -> None:
+    """Five control combinations tie at 0 (smaller is better). Brute force: the main effect of
+    each level is the mean of its row or column; among the tied cells the one with the smallest
+    sum of its two main effects is (a=1, b=0) — not the first tied cell in grid order (0, 0)."""
+    from studies.grid_optimum import Grid
+
+    y = np.array([[0.0, 5.0, 9.0], [0.0, 0.0, 0.0], [7.0, 6.0, 0.0]])
+    tied = [(i, j) for i in range(3) for j in range(3) if y[i, j] == y.min()]
+    score = {(i, j): y[i].mean() + y[:, j].mean() for i, j in tied}
+    expected = min(score, key=score.__getitem__)
+    found = Grid(["a", "b"], [3, 3], np.arange(9), []).optimum(y.ravel(), "smaller")
+    assert found is not None
+    assert (found.levels["a"], found.levels["b"]) == expected == (1, 0)
