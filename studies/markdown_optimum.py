@@ -331,6 +331,8 @@ def tradeoff_section(
     """The trade-off of several responses (control factors only) and the chosen levels."""
     shown = {taguchi.mean_name(view, r): r for r in json.loads(an.attrs["responses"])}
     factors = _control(an)
+    if not factors:  # every factor an operating condition: nothing to trade
+        return [], {}
     operating = _operating(an)
     lines = [
         "## Trade-off summary",
@@ -369,8 +371,7 @@ def tradeoff_section(
     rows.append(
         ["conflict", "", *["yes" if c else "no" for c in an["conflict"].sel(term=factors).values]]
     )
-    if factors:
-        lines += [table(header, rows), ""]
+    lines += [table(header, rows), ""]
     grid = computed(an)
     several = an.sizes["condition"] > 1
     rows = []

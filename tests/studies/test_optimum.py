@@ -183,3 +183,15 @@ def test_a_tied_optimum_takes_the_levels_with_the_best_main_effects() -> None:
     found = Grid(["a", "b"], [3, 3], np.arange(9), []).optimum(y.ravel(), "smaller")
     assert found is not None
     assert (found.levels["a"], found.levels["b"]) == expected == (1, 0)
+
+
+def test_a_study_of_operating_conditions_only_has_no_trade_off_section() -> None:
+    """luffing_sizing: every factor is an operating condition, so there is nothing to choose
+    and no trade-off to print (the section used to print its sentence with no table)."""
+    from studies.plan import plan_study
+
+    plan = plan_study("luffing_sizing")
+    ds = build_dataset(plan, evaluate(plan, progress=False), {})
+    report = report_text(ds, analyze(ds), plan.definition.responses)
+    assert "no levels to choose" in report
+    assert "## Trade-off summary" not in report
