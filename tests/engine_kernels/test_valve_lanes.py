@@ -83,8 +83,10 @@ def test_lanes_match_one_case_kernel():
     assert (single[:, valve.O_BOUNCE_COUNT] > 0).any()
     assert np.isfinite(single[:, valve.O_ERROR_ESTIMATE]).any()
     np.testing.assert_array_equal(lanes[:, valve.O_STATUS], status)
-    # Same arithmetic in both kernels: agreement to round-off (here even bit for bit).
-    np.testing.assert_allclose(lanes, single, rtol=1e-12, atol=0.0)
+    # Same arithmetic in both kernels: agreement to round-off, 1e-12 relative, or 1e-15 m
+    # where an output is a small difference of nearly equal lifts (the jump gap and the error
+    # estimate: measured 9e-17 m apart, from the order the lanes sum in).
+    np.testing.assert_allclose(lanes, single, rtol=1e-12, atol=1e-15)
 
 
 def test_lane_results_do_not_depend_on_block_neighbours():
