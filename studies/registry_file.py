@@ -114,7 +114,7 @@ def _create_whole(path: Path, create: Callable[[sqlite3.Connection], None]) -> N
         try:
             os.link(tmp, path)
         except FileExistsError:
-            pass
+            pass  # another process created it first: theirs is whole too, and it is used
         except OSError:
             if not path.exists():
                 with closing(_open(path)) as con:

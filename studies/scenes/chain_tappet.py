@@ -18,7 +18,7 @@ from engine_kernels.cam import kinematics as cb
 from engine_kernels.cam import lift_laws, multi_segment
 from engine_kernels.valvetrain import rocker
 from studies.scenes.cam_laws import LAW_CODES, SHAPE_CODES
-from studies.scenes.checks import PointProblems
+from studies.scenes.checks import PointProblems, more_concave_line
 
 HALF_TURN_DEG = 180.0
 ADVICE_STEP_DEG = 0.5
@@ -131,12 +131,7 @@ def concave_chains(points: dict[str, np.ndarray], chains: dict[tuple, np.ndarray
     rest = concave[LISTED_CHAINS:]
     if rest.size == 0:
         return found.messages()
-    count = sum(len(members[g]) for g in rest)
-    more = (
-        f"{rest.size} more concave cams at {count} more design points (smallest radius of "
-        f"curvature {radius[rest].min() * 1e3:.3g} … {radius[rest].max() * 1e3:.3g} mm): "
-        "these points will not run either"
-    )
+    more = more_concave_line(rest, members, radius * 1e3, "these points will not run either")
     return [*found.messages(), more]
 
 

@@ -7,7 +7,9 @@ bad fixed value gives one message instead of one per run.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
+
+import numpy as np
 
 
 def point_list(indices: Iterable[int]) -> str:
@@ -40,3 +42,16 @@ class PointProblems:
 
     def messages(self) -> list[str]:
         return [f"{point_list(idx)}: {msg}" for msg, idx in self._points.items()]
+
+
+def more_concave_line(
+    rest: np.ndarray, members: Sequence[np.ndarray], radius_mm: np.ndarray, consequence: str
+) -> str:
+    """One line counting the concave cam shapes ``rest`` (indices into ``members``, the design
+    points of each shape; ``radius_mm`` their smallest radius of curvature) that were not
+    warned one by one."""
+    count = sum(len(members[g]) for g in rest)
+    return (
+        f"{rest.size} more concave cams at {count} more design points (smallest radius of "
+        f"curvature {radius_mm[rest].min():.3g} … {radius_mm[rest].max():.3g} mm): {consequence}"
+    )

@@ -17,7 +17,7 @@ from studies.cli import main
 with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
     try:
         main(sys.argv[1:])
-    except SystemExit:
+    except SystemExit:  # argparse ends --help and usage errors this way: not what is measured
         pass
 print(" ".join(m for m in {heavy!r} if m in sys.modules))
 """

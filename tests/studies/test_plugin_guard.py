@@ -30,7 +30,7 @@ class {cls}(Scene):
     stage_order = ("s",)
 
     def stage_s(self, ctx):
-        pass
+        pass  # never run: these tests only load the plugin
 
     def evaluate(self, points, settings, responses, curves):
         return SceneOutput({{"y": np.asarray(points["x"], dtype=float)}})

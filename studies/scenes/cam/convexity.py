@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pandas as pd
 
-from studies.scenes.checks import PointProblems
+from studies.scenes.checks import PointProblems, more_concave_line
 
 if TYPE_CHECKING:
     from studies.scenes.base import Scene
@@ -74,13 +74,8 @@ def concave_cams(
     rest = concave[LISTED_CAMS:]
     if rest.size == 0:
         return found.messages()
-    count = sum(len(members[g]) for g in rest)
-    more = (
-        f"{rest.size} more concave cams at {count} more design points (smallest radius of "
-        f"curvature {radius[rest].min():.3g} … {radius[rest].max():.3g} mm): their "
-        "max_contact_stress is inf and their film thickness 0 too"
-    )
-    return [*found.messages(), more + scanned]
+    consequence = "their max_contact_stress is inf and their film thickness 0 too"
+    return [*found.messages(), more_concave_line(rest, members, radius, consequence) + scanned]
 
 
 def _scan_settings(settings: dict[str, Any], shapes: int) -> tuple[dict[str, Any], str]:
