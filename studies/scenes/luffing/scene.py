@@ -17,7 +17,6 @@ from engine_kernels.luffing import sizing as lf
 from studies.scenes.base import Scene, SceneOutput
 from studies.scenes.checks import PointProblems
 from studies.scenes.luffing.parameters import CHECKS, KERNEL_NAMES, NEEDS, PARAMETERS, RESPONSES
-from studies.scenes.luffing.summaries import luffing_summary
 from studies.units import UNITS
 
 if TYPE_CHECKING:
@@ -62,6 +61,8 @@ class LuffingScene(Scene):
         return {"pass_fail_map": pass_fail_map_figure, "motor_power": motor_power_figure}
 
     def summaries(self, ds: xr.Dataset) -> list[str]:
+        from studies.scenes.luffing.summaries import luffing_summary  # noqa: PLC0415  (xarray on use)
+
         return luffing_summary(ds)
 
     def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:

@@ -40,7 +40,6 @@ import numpy as np
 from engine_kernels import reed as rd
 from studies.scenes.base import Curve, CurveAxis, Parameter, Response, Scene, SceneOutput
 from studies.scenes.checks import PointProblems
-from studies.scenes.reed.summaries import reed_summary
 from studies.units import UNITS
 
 if TYPE_CHECKING:
@@ -303,6 +302,8 @@ class ReedScene(Scene):
         }
 
     def summaries(self, ds: xr.Dataset) -> list[str]:
+        from studies.scenes.reed.summaries import reed_summary  # noqa: PLC0415  (xarray on use)
+
         return reed_summary(ds)
 
     def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray:
