@@ -2,54 +2,25 @@
 
 Every check runs over all distinct chains at once (numpy masks, one kernel call for the nose
 lifts and one for the segment widths); a message is formatted once per distinct set of the
-values it shows and names every design point it concerns. The messages come in the order a
-loop over the chains would give them: by the first chain that has them, then in the order of
-the checks of one chain (geometry, nose, segments, ramp, polydyne, event width).
+values it shows and names every design point it concerns, in the order a loop over the
+chains gives (:class:`~studies.scenes.checks.LoopOrder`; the checks of one chain: geometry,
+nose, segments, ramp, polydyne, event width).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
 
 import numpy as np
 
 from engine_kernels.cam import multi_segment
 from studies.scenes.cam_laws import polydyne_problems
 from studies.scenes.chain_tappet import nose_tappet_lifts, shape_codes
-from studies.scenes.checks import PointProblems, groups_of
+from studies.scenes.checks import LoopOrder, fixed, groups_of
 
 MM = 1e3
 MAX_EVENT_HALF_DEG = 150.0
 """Largest event half-width (rise + ramp) that leaves room for the closing window."""
-
-
-class _Found:
-    """Messages with the rank of their check and their design points, in loop order."""
-
-    def __init__(self, chain: np.ndarray) -> None:
-        self.chain = chain
-        self.entries: dict[str, tuple[float, list[np.ndarray]]] = {}
-
-    def add(
-        self,
-        rank: float,
-        where: np.ndarray,
-        columns: Sequence[np.ndarray],
-        message: Callable[[int], str],
-    ) -> None:
-        """``message(i)`` (text from ``columns`` at design point i) at the points ``where``."""
-        for i, members in groups_of(np.flatnonzero(where), columns):
-            text = message(i)
-            self.entries.setdefault(text, (rank, []))[1].append(members)
-
-    def messages(self) -> list[str]:
-        found = PointProblems()
-        merged = {text: np.concatenate(parts) for text, (_, parts) in self.entries.items()}
-        order = sorted(merged, key=lambda t: (int(self.chain[merged[t].min()]), self.entries[t][0]))
-        for text in order:
-            found.add_all(merged[text], text)
-        return found.messages()
 
 
 def chain_point_problems(
@@ -59,7 +30,7 @@ def chain_point_problems(
     point, as :func:`studies.scenes.chain.chain_groups` gives them), grouped by design points
     (mm and deg shown)."""
     p = {name: np.asarray(values) for name, values in points.items()}
-    found = _Found(chain)
+    found = LoopOrder()
     arm = p["lash"] + p["ball_radius"] + p["stem_height"]
     bad_arm = ~(np.abs(arm) < p["valve_arm"])
     found.add(0, bad_arm, [arm, p["valve_arm"]], lambda i: _arm_message(p, i))
@@ -110,7 +81,7 @@ def _nose_problems(
     first: np.ndarray,
     chain: np.ndarray,
     closes: np.ndarray,
-    found: _Found,
+    found: LoopOrder,
 ) -> None:
     """The valve lift out of reach of the rocker, or a ramp above the tappet nose lift, at the
     points whose geometry closes (the nose lift of each distinct chain, one kernel call)."""
@@ -142,7 +113,7 @@ def _nose_problems(
     )
 
 
-def _six_segment_problems(p: dict[str, np.ndarray], six: np.ndarray, found: _Found) -> None:
+def _six_segment_problems(p: dict[str, np.ndarray], six: np.ndarray, found: LoopOrder) -> None:
     idx = np.flatnonzero(six)
     widths = np.stack([p[f"seg{k}_width"] for k in range(1, 7)], axis=1).astype(float)
     adjusted = np.zeros_like(widths)
@@ -190,7 +161,7 @@ def _six_segment_problems(p: dict[str, np.ndarray], six: np.ndarray, found: _Fou
     )
 
 
-def _polydyne_problems(p: dict[str, np.ndarray], found: _Found) -> None:
+def _polydyne_problems(p: dict[str, np.ndarray], found: LoopOrder) -> None:
     """The polydyne coefficients that are not a rise law, checked once per distinct set."""
     coefficients = np.asarray(p["polydyne_coefficients"], dtype=float)
     idx = np.flatnonzero(p["law"] == "polydyne")
@@ -198,9 +169,4 @@ def _polydyne_problems(p: dict[str, np.ndarray], found: _Found) -> None:
         where = np.zeros(p["law"].size, dtype=bool)
         where[members] = True
         for j, problem in enumerate(polydyne_problems(coefficients[i])):
-            found.add(7 + j / 100, where, [], _fixed(problem))
-
-
-def _fixed(text: str) -> Callable[[int], str]:
-    """A message that names no value of the design point."""
-    return lambda _: text
+            found.add(7 + j / 100, where, [], fixed(problem))

@@ -46,8 +46,70 @@ class PointProblems:
         for i, members in groups_of(points, columns):
             self.add_all(members, message(i))
 
+    def add_checked(
+        self, points: np.ndarray, columns: Sequence[np.ndarray], check: Callable[[int], list[str]]
+    ) -> None:
+        """Add the problems ``check(i)`` finds at design point i to the design points
+        ``points``, calling it once per distinct combination of ``columns`` (the values it
+        reads), as a loop over the points would add them (:func:`checked_groups`)."""
+        for message, members in checked_groups(points, columns, check):
+            self.add_all(members, message)
+
     def messages(self) -> list[str]:
         return [f"{point_list(np.concatenate(idx))}: {msg}" for msg, idx in self._points.items()]
+
+
+def checked_groups(
+    points: np.ndarray, columns: Sequence[np.ndarray], check: Callable[[int], list[str]]
+) -> list[tuple[str, np.ndarray]]:
+    """(message, design points) of each problem ``check(i)`` finds, ``check`` called once per
+    distinct combination of ``columns`` among ``points`` (at its first design point), in the
+    order a loop over the points meets them."""
+    return [(message, members) for i, members in groups_of(points, columns) for message in check(i)]
+
+
+class LoopOrder:
+    """Problems found by numpy masks over all design points, listed as a loop over the points
+    would list them: by ``phase`` (one loop after another), then by the first design point a
+    message names, then by ``rank`` (the order of the checks inside the loop). Each message is
+    formatted once per distinct combination of the values it shows."""
+
+    def __init__(self) -> None:
+        self.entries: dict[str, tuple[tuple[int, float], list[np.ndarray]]] = {}
+
+    def add(
+        self,
+        rank: float,
+        where: np.ndarray,
+        columns: Sequence[np.ndarray],
+        message: Callable[[int], str],
+        phase: int = 0,
+    ) -> None:
+        """``message(i)`` (its text from ``columns`` at design point i) at the points where
+        the mask ``where`` holds."""
+        for i, members in groups_of(np.flatnonzero(where), columns):
+            self.entries.setdefault(message(i), ((phase, rank), []))[1].append(members)
+
+    def into(self, found: PointProblems) -> None:
+        """Add the messages to ``found`` in loop order."""
+        merged = {text: np.concatenate(parts) for text, (_, parts) in self.entries.items()}
+
+        def key(text: str) -> tuple[int, int, float]:
+            phase, rank = self.entries[text][0]
+            return phase, int(merged[text].min()), rank
+
+        for text in sorted(merged, key=key):
+            found.add_all(merged[text], text)
+
+    def messages(self) -> list[str]:
+        found = PointProblems()
+        self.into(found)
+        return found.messages()
+
+
+def fixed(text: str) -> Callable[[int], str]:
+    """A message that shows no value of the design point (for :meth:`LoopOrder.add`)."""
+    return lambda _: text
 
 
 def groups_of(indices: np.ndarray, columns: Sequence[np.ndarray]) -> list[tuple[int, np.ndarray]]:
