@@ -344,7 +344,7 @@ def _report(result: RunResult) -> None:
 
 def _default_outputs() -> Path:
     """The outputs root (imported on use: ``check``, ``list`` and ``scenes`` need no tracking)."""
-    from studies.tracking import default_outputs  # noqa: PLC0415
+    from studies.tracking import default_outputs
 
     return default_outputs()
 
