@@ -139,8 +139,11 @@ class ChainScene(Scene):
         return ([problem] if problem else []) + self.chain_point_problems(points)
 
     def point_warnings(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
-        """The chains whose cam is concave: their points will not run (a result, not an error)."""
-        return concave_chains(points, *self.chain_groups(points))
+        """The chains whose cam is concave: their points will not run (a result, not an error).
+        The last user of the chains :meth:`check_points` found: they are forgotten here."""
+        groups = self.chain_groups(points)
+        self.groups_seen = None
+        return concave_chains(points, *groups)
 
     def chain_point_problems(self, points: dict[str, np.ndarray]) -> list[str]:
         """Input errors of the cam laws and rocker geometries, grouped by design points."""

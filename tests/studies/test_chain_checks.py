@@ -7,9 +7,10 @@ import math
 import re
 
 import numpy as np
+import pytest
 
 from studies.plan import plan_text
-from studies.scenes import chain_tappet
+from studies.scenes import chain, chain_tappet
 from studies.scenes.chain import chain_groups
 from studies.scenes.chain_checks import chain_point_problems
 from studies.scenes.chain_parameters import CONVEX_POLYDYNE
@@ -130,3 +131,25 @@ def test_rise_angle_advice_equals_a_bisection_one_chain_at_a_time() -> None:
             low, high = (low, middle) if convex(i, middle) else (middle, high)
         expected.append(f"it is convex from rise_angle = {math.ceil(high * 10) / 10:g} degree")
     assert chain_tappet._convex_from(points, idx) == expected
+
+
+def test_check_and_warnings_group_the_chains_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    calls = []
+
+    def counted(points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        calls.append(len(points["valve_lift"]))
+        return chain_groups(points)
+
+    monkeypatch.setattr(chain, "chain_groups", counted)
+    levels = np.linspace(6.0, 7.8, 30).round(6).tolist()
+    text = scene_study(
+        "rocker",
+        responses='["max_valve_lift"]',
+        parameters='law = "poly345"',
+        factors=f"[factors.valve_lift]\nlevels = {levels}",
+    )
+    plan = plan_text(text)  # check_points
+    plan.scene.point_warnings(plan.points, plan.settings)
+    assert calls == [30]
+    plan.scene.point_warnings(plan.points, plan.settings)  # forgotten after the warnings
+    assert calls == [30, 30]
