@@ -62,12 +62,10 @@ def main(argv: list[str] | None = None) -> int:
 
 def _main(argv: list[str] | None) -> int:
     """:func:`main` with user text on the terminal stripped of control characters."""
-    from studies.tracking import default_outputs
-
     parser = _parser()
     args = parser.parse_args(argv)
     if "outputs" in vars(args):  # absolute, so the registry never holds a relative folder
-        args.outputs = (args.outputs or default_outputs()).resolve()
+        args.outputs = (args.outputs or _default_outputs()).resolve()
     try:
         return int(args.func(args) or 0)
     except StudyError as exc:
@@ -85,7 +83,7 @@ def _main(argv: list[str] | None) -> int:
         sys.stderr.close()
         return 0
     except sqlite3.Error as exc:  # the registry, on a path that did not say it more precisely
-        outputs = getattr(args, "outputs", None) or default_outputs()
+        outputs = getattr(args, "outputs", None) or _default_outputs()
         print(f"error: {unusable(exc, outputs)}", file=sys.stderr)
         return EXIT_OUTPUT_ERROR
     except OSError as exc:  # full disk, read-only or unreadable files: one line, how to go on
@@ -342,6 +340,13 @@ def _report(result: RunResult) -> None:
             f"value for any response (they did not run; reasons in {r.folder}/analysis.txt)",
             file=sys.stderr,
         )
+
+
+def _default_outputs() -> Path:
+    """The outputs root (imported on use: ``check``, ``list`` and ``scenes`` need no tracking)."""
+    from studies.tracking import default_outputs
+
+    return default_outputs()
 
 
 def _cmd_check(args: argparse.Namespace) -> int:

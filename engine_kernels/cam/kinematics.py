@@ -202,6 +202,50 @@ def invalid_case(curves, i):
     return False
 
 
+@jit
+def cam_kinematics_case(params, shapes, coeffs, theta, curves_out, diag_out):
+    """Lift curves and profile diagnostics of one case (a row of :func:`cam_kinematics_batch`).
+
+    params    : array  (N_PARAMS,) case parameters, SI.
+    shapes    : array  (6,) int64 six-segment shape codes.
+    coeffs    : array  (NCOEF,) polydyne coefficients [-].
+    theta     : array  (m,) cam angles from the nose [rad].
+    curves_out: array  (4, m) output h [m], h' [m/rad], h'' [m/rad²], h''' [m/rad³].
+    diag_out  : array  (N_DIAG,) output, as in :func:`cam_kinematics_batch`.
+    """
+    law = int(params[P_LAW])
+    if law == LAW_SIX_SEGMENT:
+        widths = params[P_SEG_WIDTH0 : P_SEG_WIDTH0 + N_SEGMENTS].copy()
+        accels = params[P_SEG_ACCEL0 : P_SEG_ACCEL0 + N_SEGMENTS].copy()
+        amps = params[P_SEG_AMP0 : P_SEG_AMP0 + N_SEGMENTS].copy()
+        multi_segment_cam(
+            theta,
+            params[P_RISE_ANGLE],
+            widths,
+            shapes,
+            accels,
+            amps,
+            params[P_RAMP_HEIGHT],
+            params[P_RAMP_WIDTH],
+            params[P_RAMP_VELOCITY],
+            params[P_LIFT],
+            curves_out,
+            diag_out,
+        )
+    elif 0 <= law < N_RISE_LAWS and params[P_RISE_ANGLE] > 0.0:
+        rise_return_cam(law, params[P_LIFT], params[P_RISE_ANGLE], coeffs, theta, curves_out)
+        for c in range(N_DIAG):
+            diag_out[c] = 1.0
+        diag_out[D_CLOSURE_RESIDUAL] = 0.0
+        diag_out[D_RAW_NOSE_VELOCITY] = 0.0
+        diag_out[D_UNSCALED_WORKING_LIFT] = params[P_LIFT]
+        diag_out[D_EVENT_HALF_WIDTH] = params[P_RISE_ANGLE]
+    else:
+        curves_out[:, :] = np.nan
+        diag_out[:] = np.nan
+        diag_out[D_INPUT_VALID] = 0.0
+
+
 @batch
 def cam_kinematics_batch(params, shapes, coeffs, theta, curves_out, diag_out):
     """Lift curves and profile diagnostics for every case (physics §2).
@@ -218,39 +262,32 @@ def cam_kinematics_batch(params, shapes, coeffs, theta, curves_out, diag_out):
     An unknown law code or β ≤ 0 gives NaN curves with input_valid = 0.
     """
     for i in prange(params.shape[0]):
-        law = int(params[i, P_LAW])
-        if law == LAW_SIX_SEGMENT:
-            widths = params[i, P_SEG_WIDTH0 : P_SEG_WIDTH0 + N_SEGMENTS].copy()
-            accels = params[i, P_SEG_ACCEL0 : P_SEG_ACCEL0 + N_SEGMENTS].copy()
-            amps = params[i, P_SEG_AMP0 : P_SEG_AMP0 + N_SEGMENTS].copy()
-            multi_segment_cam(
-                theta,
-                params[i, P_RISE_ANGLE],
-                widths,
-                shapes[i],
-                accels,
-                amps,
-                params[i, P_RAMP_HEIGHT],
-                params[i, P_RAMP_WIDTH],
-                params[i, P_RAMP_VELOCITY],
-                params[i, P_LIFT],
-                curves_out[i],
-                diag_out[i],
-            )
-        elif 0 <= law < N_RISE_LAWS and params[i, P_RISE_ANGLE] > 0.0:
-            rise_return_cam(
-                law, params[i, P_LIFT], params[i, P_RISE_ANGLE], coeffs[i], theta, curves_out[i]
-            )
-            for c in range(N_DIAG):
-                diag_out[i, c] = 1.0
-            diag_out[i, D_CLOSURE_RESIDUAL] = 0.0
-            diag_out[i, D_RAW_NOSE_VELOCITY] = 0.0
-            diag_out[i, D_UNSCALED_WORKING_LIFT] = params[i, P_LIFT]
-            diag_out[i, D_EVENT_HALF_WIDTH] = params[i, P_RISE_ANGLE]
-        else:
-            curves_out[i, :, :] = np.nan
-            diag_out[i, :] = np.nan
-            diag_out[i, D_INPUT_VALID] = 0.0
+        cam_kinematics_case(params[i], shapes[i], coeffs[i], theta, curves_out[i], diag_out[i])
+
+
+@batch
+def min_radius_of_curvature_batch(params, shapes, coeffs, theta, out):
+    """Smallest radius of curvature ρ = r0 + h + h'' on the grid ``theta`` per case [C1]
+    (flat-faced tappet), without keeping the curves: O(n) memory whatever the grid.
+
+    params: array  (n, N_PARAMS) case parameters, SI (the base radius r0 among them).
+    shapes: array  (n, 6) int64 six-segment shape codes.
+    coeffs: array  (n, NCOEF) polydyne coefficients [-].
+    theta : array  (m,) cam angles from the nose [rad].
+    out   : array  (n,) output min ρ [m]; NaN where a curve value is NaN (invalid input).
+    """
+    for i in prange(params.shape[0]):
+        curves = np.empty((4, theta.shape[0]))
+        diag = np.empty(N_DIAG)
+        cam_kinematics_case(params[i], shapes[i], coeffs[i], theta, curves, diag)
+        smallest = math.inf
+        for j in range(theta.shape[0]):
+            rho = params[i, P_BASE_RADIUS] + curves[0, j] + curves[2, j]
+            if math.isnan(rho):
+                smallest = math.nan
+                break
+            smallest = min(smallest, rho)
+        out[i] = smallest
 
 
 @batch

@@ -29,7 +29,7 @@ import math
 
 import numpy as np
 
-from engine_kernels._jit import jit
+from engine_kernels._jit import batch, jit, prange
 
 SHAPE_LIN = 0
 SHAPE_SIN_FULL = 1
@@ -116,6 +116,20 @@ def segment_widths(widths, shapes, half_event, out):
         valid = valid and out[k] >= 0.0
         total += out[k]
     return valid and total > 0.0
+
+
+@batch
+def segment_widths_batch(widths, shapes, half_event, out, valid):
+    """:func:`segment_widths` for many profiles (one per prange row).
+
+    widths    : array  (n, 6) nominal widths w_k [rad].
+    shapes    : array  (n, 6) int64 shape codes [-].
+    half_event: array  (n,) working half-events [rad].
+    out       : array  (n, 6) adjusted widths [rad] (written).
+    valid     : array  (n,) bool, True where every adjusted width is ≥ 0 (written).
+    """
+    for i in prange(widths.shape[0]):
+        valid[i] = segment_widths(widths[i], shapes[i], half_event[i], out[i])
 
 
 @jit

@@ -398,3 +398,16 @@ def rocker_valve_lift_batch(
         status[i] = rocker_valve_lift(
             phi, lift, lift_velocity, lift_acceleration, geometry[i], side, theta, out[i]
         )
+
+
+@batch
+def tappet_lift_for_valve_lift_batch(valve_lift, geometry, out):
+    """:func:`tappet_lift_for_valve_lift` for many chains (one per prange row) [R3], [R6].
+
+    valve_lift : 1-D array  (n_cases,) theoretical valve lift Y [m].
+    geometry   : 2-D array  (n_cases, 8) rows indexed by the ``G_*`` constants [m].
+    out        : 1-D array  (n_cases,) tappet lift at the nose [m] (written; NaN where the
+                            valve arm cannot reach Y).
+    """
+    for i in prange(geometry.shape[0]):
+        out[i] = tappet_lift_for_valve_lift(valve_lift[i], geometry[i])

@@ -42,9 +42,9 @@ class BuiltInScenes(Mapping[str, type[Scene]]):
         "reed": "studies.scenes.reed:ReedScene",
         "luffing": "studies.scenes.luffing:LuffingScene",
         "rocker": "studies.scenes.rocker:RockerScene",
-        "valve": "studies.scenes.valve:ValveScene",
-        "valve_accuracy": "studies.scenes.valve:ValveAccuracyScene",
-        "valve_spring_ladder": "studies.scenes.valve:ValveSpringLadderScene",
+        "valve": "studies.scenes.valve.scene:ValveScene",
+        "valve_accuracy": "studies.scenes.valve.accuracy:ValveAccuracyScene",
+        "valve_spring_ladder": "studies.scenes.valve.ladder:ValveSpringLadderScene",
     }
 
     def __getitem__(self, name: str) -> type[Scene]:

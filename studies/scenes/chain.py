@@ -25,12 +25,10 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
-from engine_kernels.cam import multi_segment
 from engine_kernels.valvetrain import rocker
 from studies.scenes.base import CurveAxis, Scene, SceneOutput
-from studies.scenes.cam_laws import SHAPE_CODES, polydyne_problems
+from studies.scenes.chain_checks import chain_point_problems
 from studies.scenes.chain_parameters import (
     CAM_ANGLE,
     CURVES,
@@ -44,17 +42,14 @@ from studies.scenes.chain_tappet import (
     concave_chains,
     geometry_row,
     grid_deg,
-    nose_tappet_lift,
     step_deg,
     tappet_table,
 )
-from studies.scenes.checks import PointProblems
+from studies.scenes.checks import distinct
 
 MM = 1e3
 GRID_UNIT_DEG = 2.0
 """Every angle step must divide this, so grids of different steps share their nodes."""
-MAX_EVENT_HALF_DEG = 150.0
-"""Largest event half-width (rise + ramp) that leaves room for the closing window."""
 CACHE_SIZE = 64
 SIDES = {"ahead": rocker.PAD_AHEAD, "behind": rocker.PAD_BEHIND}
 KEY_NAMES = tuple(p.name for p in PARAMETERS if p.kind != "vector")
@@ -95,29 +90,24 @@ class ChainCurves:
     status: int
 
 
-def chain_keys(points: dict[str, np.ndarray]) -> dict[tuple, np.ndarray]:
-    """The design points of each distinct chain, keyed by the tuple of its chain parameters.
-
-    Vectorised (hash factorisation, column by column, skipping the columns that hold one
-    value): a 100 000-point study has few chains, and a Python loop over its points would cost
-    more than integrating them.
-    """
+def chain_groups(points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """The first design point of each distinct chain (its cam law and rocker parameters) and
+    the chain of each design point, numbered in order of first appearance. Vectorised (O(N log
+    N) over the parameters that vary): a 10⁶-point study may have 10⁶ chains."""
     coefficients = np.asarray(points["polydyne_coefficients"], dtype=float)
-    columns = [*coefficients.T, *(np.asarray(points[name]) for name in KEY_NAMES)]
-    group: np.ndarray | None = None
-    for column in columns:
-        if len(column) and bool((column == column[0]).all()):
-            continue
-        codes, uniques = pd.factorize(column)
-        group = codes if group is None else pd.factorize(group * len(uniques) + codes)[0]
-    if group is None:  # one chain for every point
-        members = [np.arange(len(coefficients))]
-    else:
-        order = np.argsort(group, kind="stable")
-        members = np.split(order, np.cumsum(np.bincount(group))[:-1])
+    return distinct([coefficients, *(np.asarray(points[name]) for name in KEY_NAMES)])
+
+
+def chain_keys(points: dict[str, np.ndarray]) -> dict[tuple, np.ndarray]:
+    """The design points of each distinct chain, keyed by the tuple of its chain parameters
+    (the keys of the scene's table caches, shared across chunks)."""
+    first, chain = chain_groups(points)
+    order = np.argsort(chain, kind="stable")
+    members = np.split(order, np.cumsum(np.bincount(chain, minlength=first.size))[:-1])
+    coefficients = np.asarray(points["polydyne_coefficients"], dtype=float)
     return {
-        (*(points[name][idx[0]] for name in KEY_NAMES), tuple(coefficients[idx[0]].tolist())): idx
-        for idx in members
+        (*(points[name][i] for name in KEY_NAMES), tuple(coefficients[i].tolist())): idx
+        for i, idx in zip(first.tolist(), members, strict=True)
     }
 
 
@@ -137,6 +127,7 @@ class ChainScene(Scene):
         super().__init__()
         self.tappet_cache = BoundedCache(CACHE_SIZE)
         self.chain_cache = BoundedCache(CACHE_SIZE)
+        self.groups_seen: tuple[tuple[np.ndarray, ...], tuple[np.ndarray, np.ndarray]] | None = None
 
     def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray:
         step = step_deg(settings["angle_step"])
@@ -148,17 +139,28 @@ class ChainScene(Scene):
         return ([problem] if problem else []) + self.chain_point_problems(points)
 
     def point_warnings(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
-        """The chains whose cam is concave: their points will not run (a result, not an error)."""
-        return concave_chains(points, chain_keys(points))
+        """The chains whose cam is concave: their points will not run (a result, not an error).
+        The last user of the chains :meth:`check_points` found: they are forgotten here."""
+        groups = self.chain_groups(points)
+        self.groups_seen = None
+        return concave_chains(points, *groups)
 
     def chain_point_problems(self, points: dict[str, np.ndarray]) -> list[str]:
         """Input errors of the cam laws and rocker geometries, grouped by design points."""
-        found = PointProblems()
-        groups = chain_keys(points)
-        for idx in groups.values():
-            for problem in chain_problems(points, int(idx[0])):
-                found.add_all(idx.tolist(), problem)
-        return found.messages()
+        return chain_point_problems(points, *self.chain_groups(points))
+
+    def chain_groups(self, points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        """:func:`chain_groups`, computed once for the points ``check`` and ``run`` plan with
+        (the same arrays: their checks and warnings share it)."""
+        arrays = tuple(points.values())
+        seen = self.groups_seen
+        if (
+            seen is None
+            or len(seen[0]) != len(arrays)
+            or any(a is not b for a, b in zip(seen[0], arrays, strict=True))
+        ):
+            seen = self.groups_seen = (arrays, chain_groups(points))
+        return seen[1]
 
     # --- evaluation -----------------------------------------------------------------------
     def context(
@@ -320,96 +322,3 @@ def angle_step_problem(step_rad: float, what: str) -> str | None:
         f"{what} = {step:g} deg is not allowed: it must divide {GRID_UNIT_DEG:g} deg (e.g. 1, "
         "0.5, 0.25, 0.2, 0.125, 0.1) so that grids of different steps share their nodes"
     )
-
-
-def chain_problems(points: dict[str, np.ndarray], i: int) -> list[str]:
-    """Input errors of one design point's cam law and rocker geometry (mm and deg shown)."""
-    p = {name: points[name][i] for name in KEY_NAMES}
-    out = _geometry_problems(p)
-    if not out:
-        nose = nose_tappet_lift(points, i)
-        out += _nose_problems(p, nose)
-    law = str(p["law"])
-    half = p["rise_angle"]
-    if law == "six_segment":
-        out += _six_segment_problems(points, i)
-        if p["ramp_height"] > 0.0:
-            half += p["ramp_width"]
-    if law == "polydyne":
-        out += polydyne_problems(np.asarray(points["polydyne_coefficients"][i], dtype=float))
-    if math.degrees(half) > MAX_EVENT_HALF_DEG:
-        out.append(
-            f"the event half-width rise_angle + ramp_width = {math.degrees(half):g} deg exceeds "
-            f"{MAX_EVENT_HALF_DEG:g} deg: the valve event and its closing window must fit in one "
-            "camshaft turn"
-        )
-    return out
-
-
-def _geometry_problems(p: dict[str, Any]) -> list[str]:
-    out = []
-    arm = p["lash"] + p["ball_radius"] + p["stem_height"]
-    if not abs(arm) < p["valve_arm"]:
-        out.append(
-            f"lash + ball_radius + stem_height = {arm * MM:g} mm must be smaller in size than "
-            f"valve_arm = {p['valve_arm'] * MM:g} mm: β0 = asin((Δ + ρb + z)/lb) [R6]"
-        )
-    reach = p["base_radius"] + p["pad_radius"]
-    low, high = abs(p["pad_arm"] - p["centre_distance"]), p["pad_arm"] + p["centre_distance"]
-    if not low < reach < high:
-        out.append(
-            f"base_radius + pad_radius = {reach * MM:g} mm must lie between |pad_arm − "
-            f"centre_distance| = {low * MM:g} mm and pad_arm + centre_distance = {high * MM:g} mm "
-            "for the rocker triangle O–Oc–A to close on the base circle [R3], [R5]"
-        )
-    return out
-
-
-def _nose_problems(p: dict[str, Any], nose: float) -> list[str]:
-    reach = p["base_radius"] + p["pad_radius"] + nose
-    high = p["pad_arm"] + p["centre_distance"]
-    if not (math.isfinite(nose) and nose > 0.0 and reach < high):
-        return [
-            (
-                f"valve_lift = {p['valve_lift'] * MM:g} mm is out of reach of this rocker: the "
-                "valve arm or the triangle O–Oc–A at the nose cannot close [R3], [R6] (use a "
-                "smaller valve_lift or a longer valve_arm)"
-            )
-        ]
-    if str(p["law"]) == "six_segment" and p["ramp_height"] >= nose:
-        return [
-            (
-                f"ramp_height = {p['ramp_height'] * MM:g} mm must be below the tappet nose lift "
-                f"{nose * MM:.4g} mm that valve_lift = {p['valve_lift'] * MM:g} mm needs"
-            )
-        ]
-    return []
-
-
-def _six_segment_problems(points: dict[str, np.ndarray], i: int) -> list[str]:
-    out = []
-    widths = np.array([points[f"seg{k}_width"][i] for k in range(1, 7)], dtype=float)
-    shapes = np.array([SHAPE_CODES[points[f"seg{k}_shape"][i]] for k in range(1, 7)])
-    half = float(points["rise_angle"][i])
-    adjusted = np.empty(6)
-    if not multi_segment.segment_widths(widths, shapes, half, adjusted):
-        out.append(
-            f"segment widths {np.round(np.degrees(widths), 3).tolist()} deg cannot be fitted to "
-            f"the rise_angle = {math.degrees(half):g} deg half-event: the fillet and segment 6 "
-            f"would need widths {np.round(np.degrees(adjusted), 3).tolist()} deg (must be ≥ 0)"
-        )
-    height, width = float(points["ramp_height"][i]), float(points["ramp_width"][i])
-    velocity = float(points["ramp_velocity"][i])
-    if height > 0.0:
-        if velocity <= 0.0 or width <= 0.0:
-            out.append(
-                f"ramp_height = {height * MM:g} mm needs ramp_width > 0 and ramp_velocity > 0"
-            )
-        elif not height / velocity <= width <= 2.0 * height / velocity:
-            out.append(
-                f"ramp_width = {math.degrees(width):g} deg cannot carry a {height * MM:g} mm ramp "
-                f"ending at {velocity * MM:g} mm/rad: constant acceleration then constant "
-                f"velocity needs {math.degrees(height / velocity):.4g} ≤ ramp_width ≤ "
-                f"{math.degrees(2.0 * height / velocity):.4g} deg"
-            )
-    return out

@@ -10,6 +10,7 @@ run which points will have one and from which rise angle their law is convex.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -28,6 +29,8 @@ ADVICE_LIMIT_DEG = 150.0
 LISTED_CHAINS = 10
 """At most this many concave chains are warned one by one, each with a rise-angle search; the
 others are counted in one line (a check of 10⁴ points stays short and fast)."""
+BISECT_DEPTH = 4
+"""Bisection steps of the rise-angle advice per kernel call (15 candidate angles per law)."""
 
 
 @dataclass(frozen=True)
@@ -53,118 +56,211 @@ def step_deg(step_rad: float) -> float:
 
 def geometry_row(points: dict[str, np.ndarray], i: int) -> np.ndarray:
     """Rocker geometry of design point ``i`` indexed by ``engine_kernels.valvetrain.rocker.G_*`` [m]."""
-    return np.array([float(points[name][i]) for name in rocker.ROCKER_GEOMETRY_NAMES])
+    return geometry_rows(points, np.array([i]))[0]
+
+
+def geometry_rows(points: dict[str, np.ndarray], idx: np.ndarray) -> np.ndarray:
+    """Rocker geometries of design points ``idx``, one row each (``rocker.G_*`` columns) [m]."""
+    names = rocker.ROCKER_GEOMETRY_NAMES
+    return np.stack([np.asarray(points[name], dtype=float)[idx] for name in names], axis=1)
 
 
 def nose_tappet_lift(points: dict[str, np.ndarray], i: int) -> float:
     """Tappet lift at the nose that gives the target valve lift [m] (NaN if unreachable)."""
-    return rocker.tappet_lift_for_valve_lift(
-        float(points["valve_lift"][i]), geometry_row(points, i)
-    )
+    return float(nose_tappet_lifts(points, np.array([i]))[0])
+
+
+def nose_tappet_lifts(points: dict[str, np.ndarray], idx: np.ndarray) -> np.ndarray:
+    """:func:`nose_tappet_lift` of design points ``idx`` in one kernel call [m]."""
+    out = np.empty(len(idx))
+    lift = np.ascontiguousarray(np.asarray(points["valve_lift"], dtype=float)[idx])
+    rocker.tappet_lift_for_valve_lift_batch(lift, geometry_rows(points, idx), out)
+    return out
+
+
+def codes(values: np.ndarray, table: dict[str, int]) -> np.ndarray:
+    """The kernel codes of the names ``values`` (each distinct name looked up once)."""
+    names, inverse = np.unique(np.asarray(values).astype(str), return_inverse=True)
+    return np.array([table[name] for name in names.tolist()], dtype=np.int64)[inverse.ravel()]
+
+
+def shape_codes(points: dict[str, np.ndarray], idx: np.ndarray) -> np.ndarray:
+    """Six-segment shape codes of design points ``idx``, shape (len(idx), 6)."""
+    columns = [codes(points[f"seg{k}_shape"][idx], SHAPE_CODES) for k in range(1, 7)]
+    return np.stack(columns, axis=1).reshape(len(idx), multi_segment.N_SEGMENTS)
 
 
 def tappet_parameters(
-    points: dict[str, np.ndarray], i: int, nose: float
+    points: dict[str, np.ndarray], idx: np.ndarray, nose: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """One row of ``cam_kinematics_batch`` inputs (params, shapes, coefficients) for point i."""
-    params = np.zeros((1, cb.N_PARAMS))
-    law = str(points["law"][i])
-    six = law == "six_segment"
-    params[0, cb.P_LAW] = LAW_CODES[law]
-    params[0, cb.P_CAM_SPEED] = 1.0
-    params[0, cb.P_BASE_RADIUS] = points["base_radius"][i]
-    params[0, cb.P_LIFT] = nose - (points["ramp_height"][i] if six else 0.0)
-    params[0, cb.P_RISE_ANGLE] = points["rise_angle"][i]
-    if six:
-        params[0, cb.P_RAMP_HEIGHT] = points["ramp_height"][i]
-        params[0, cb.P_RAMP_WIDTH] = points["ramp_width"][i]
-        params[0, cb.P_RAMP_VELOCITY] = points["ramp_velocity"][i]
+    """``cam_kinematics_batch`` inputs (params, shapes, coefficients) of design points ``idx``
+    whose tappet nose lifts are ``nose`` [m]."""
+    n = len(idx)
+
+    def column(name: str) -> np.ndarray:
+        return np.asarray(points[name], dtype=float)[idx]
+
+    params = np.zeros((n, cb.N_PARAMS))
+    six = np.asarray(points["law"])[idx] == "six_segment"
+    params[:, cb.P_LAW] = codes(points["law"][idx], LAW_CODES)
+    params[:, cb.P_CAM_SPEED] = 1.0
+    params[:, cb.P_BASE_RADIUS] = column("base_radius")
+    params[:, cb.P_LIFT] = nose - np.where(six, column("ramp_height"), 0.0)
+    params[:, cb.P_RISE_ANGLE] = column("rise_angle")
+    for name, where in (
+        ("ramp_height", cb.P_RAMP_HEIGHT),
+        ("ramp_width", cb.P_RAMP_WIDTH),
+        ("ramp_velocity", cb.P_RAMP_VELOCITY),
+    ):
+        params[:, where] = np.where(six, column(name), 0.0)
     for k in range(multi_segment.N_SEGMENTS):
-        params[0, cb.P_SEG_WIDTH0 + k] = points[f"seg{k + 1}_width"][i]
-        params[0, cb.P_SEG_ACCEL0 + k] = points[f"seg{k + 1}_accel"][i]
-        params[0, cb.P_SEG_AMP0 + k] = points[f"seg{k + 1}_amplitude"][i]
-    shapes = np.array(
-        [[SHAPE_CODES[points[f"seg{k}_shape"][i]] for k in range(1, 7)]], dtype=np.int64
-    )
-    coeffs = np.zeros((1, lift_laws.NCOEF))
-    given = np.asarray(points["polydyne_coefficients"][i], dtype=float)[: lift_laws.NCOEF]
-    coeffs[0, : given.size] = given
-    return params, shapes, coeffs
+        params[:, cb.P_SEG_WIDTH0 + k] = column(f"seg{k + 1}_width")
+        params[:, cb.P_SEG_ACCEL0 + k] = column(f"seg{k + 1}_accel")
+        params[:, cb.P_SEG_AMP0 + k] = column(f"seg{k + 1}_amplitude")
+    coeffs = np.zeros((n, lift_laws.NCOEF))
+    given = np.asarray(points["polydyne_coefficients"], dtype=float)[idx]
+    given = given.reshape(n, -1)[:, : lift_laws.NCOEF]
+    coeffs[:, : given.shape[1]] = given
+    return params, shape_codes(points, idx), coeffs
 
 
 def tappet_table(points: dict[str, np.ndarray], i: int, spacing: float) -> TappetTable:
     phi_deg = grid_deg(-HALF_TURN_DEG, spacing, HALF_TURN_DEG)
     phi = np.radians(phi_deg)
-    nose = nose_tappet_lift(points, i)
-    params, shapes, coeffs = tappet_parameters(points, i, nose)
+    idx = np.array([i])
+    nose = nose_tappet_lifts(points, idx)
+    params, shapes, coeffs = tappet_parameters(points, idx, nose)
     curves = np.empty((1, 4, phi.size))
     diag = np.empty((1, multi_segment.N_DIAG))
     cb.cam_kinematics_batch(params, shapes, coeffs, phi, curves, diag)
     law = np.ascontiguousarray(curves[0, :3])
     radius = float(np.min(points["base_radius"][i] + law[0] + law[2]))
-    return TappetTable(phi, law, nose, radius)
+    return TappetTable(phi, law, float(nose[0]), radius)
 
 
-def concave_chains(points: dict[str, np.ndarray], chains: dict[tuple, np.ndarray]) -> list[str]:
+def concave_chains(
+    points: dict[str, np.ndarray], first: np.ndarray, chain: np.ndarray
+) -> list[str]:
     """Warnings for the chains whose tappet cam is concave, grouped by design points: these
     points will not run (``chain_status`` says so per point); the first
-    :data:`LISTED_CHAINS` one by one, the others counted in one line. One kernel call scans
-    every chain. A standard rise law scales as h'' ∝ lift/β², so its smallest radius of
-    curvature rises with the rise angle β: bisection finds the rise angle from which the law is
-    convex."""
-    members = list(chains.values())
-    first = np.array([int(idx[0]) for idx in members], dtype=np.int64)
+    :data:`LISTED_CHAINS` one by one, the others counted in one line. ``first`` is the first
+    design point of each chain and ``chain`` the chain of each design point
+    (:func:`studies.scenes.chain.chain_groups`). One kernel call per block scans every chain.
+    A standard rise law scales as h'' ∝ lift/β², so its smallest radius of curvature rises
+    with the rise angle β: bisections side by side find the rise angle from which each listed
+    law is convex."""
     radius = min_radii(points, first, ADVICE_STEP_DEG)
     concave = np.flatnonzero(radius <= 0.0)
+    listed = concave[:LISTED_CHAINS]
+    members = {int(g): np.flatnonzero(chain == g) for g in listed}
+    laws = np.asarray(points["law"])[first[listed]].astype(str)
+    advised = [int(g) for g, law in zip(listed, laws, strict=True) if law != "six_segment"]
+    advice = dict(zip(advised, _convex_from(points, first[advised]), strict=True))
     found = PointProblems()
-    for g in concave[:LISTED_CHAINS]:
+    for g, law in zip(listed.tolist(), laws.tolist(), strict=True):
         i = int(first[g])
-        law = str(points["law"][i])
         message = (
             f"law = {law!r} gives a concave cam at rise_angle = "
             f"{math.degrees(points['rise_angle'][i]):g} degree (smallest radius of curvature "
             f"{radius[g] * 1e3:.3g} mm): these points will not run"
         )
-        if law != "six_segment":
-            message += "; " + _convex_from(points, i)
-        found.add_all(members[g].tolist(), message)
+        if g in advice:
+            message += "; " + advice[g]
+        found.add_all(members[g], message)
     rest = concave[LISTED_CHAINS:]
     if rest.size == 0:
         return found.messages()
-    more = more_concave_line(rest, members, radius * 1e3, "these points will not run either")
+    sizes = np.bincount(chain, minlength=first.size)
+    more = more_concave_line(rest, sizes, radius * 1e3, "these points will not run either")
     return [*found.messages(), more]
 
 
-def min_radii(points: dict[str, np.ndarray], idx: np.ndarray, spacing: float) -> np.ndarray:
+def min_radii(
+    points: dict[str, np.ndarray], idx: np.ndarray, spacing: float, nose: np.ndarray | None = None
+) -> np.ndarray:
     """Smallest radius of curvature r0 + h + h'' [m] of the tappet laws of design points
-    ``idx`` on a tappet-angle grid of ``spacing`` [deg], in one kernel call."""
-    rows = [tappet_parameters(points, int(i), nose_tappet_lift(points, int(i))) for i in idx]
-    if not rows:
-        return np.empty(0)
-    params, shapes, coeffs = (np.concatenate(part) for part in zip(*rows, strict=True))
+    ``idx`` on a tappet-angle grid of ``spacing`` [deg] (``nose`` [m], their tappet nose
+    lifts, if known: they do not depend on the rise angle), in one kernel call per kind of law
+    that keeps no curves (O(len(idx)) memory).
+
+    A rise-return law is the base circle (h = h'' = 0, so ρ = r0 exactly) beyond its rise
+    angle: those laws are evaluated only on the grid nodes within their largest rise angle, and
+    r0 joins the minimum when nodes were left out (the value the whole grid gives)."""
     phi = np.radians(grid_deg(-HALF_TURN_DEG, spacing, HALF_TURN_DEG))
-    curves = np.empty((len(idx), 4, phi.size))
-    diag = np.empty((len(idx), multi_segment.N_DIAG))
-    cb.cam_kinematics_batch(params, shapes, coeffs, phi, curves, diag)
-    base = np.asarray(points["base_radius"], dtype=float)[idx]
-    return np.min(base[:, None] + curves[:, 0, :] + curves[:, 2, :], axis=1)
+    nose = nose_tappet_lifts(points, idx) if nose is None else nose
+    params, shapes, coeffs = tappet_parameters(points, idx, nose)
+    out = np.empty(len(idx))
+    six = params[:, cb.P_LAW] == LAW_CODES["six_segment"]
+    beta = params[:, cb.P_RISE_ANGLE]
+    for rows in (np.flatnonzero(six), np.flatnonzero(~six)):
+        window = phi
+        if rows.size and not six[rows[0]] and (beta[rows] > 0.0).all():
+            window = phi[np.abs(phi) <= beta[rows].max()]
+        radius = np.empty(rows.size)
+        cb.min_radius_of_curvature_batch(params[rows], shapes[rows], coeffs[rows], window, radius)
+        base = params[rows, cb.P_BASE_RADIUS]
+        out[rows] = np.minimum(radius, base) if window.size < phi.size else radius
+    return out
 
 
-def _convex_from(points: dict[str, np.ndarray], i: int) -> str:
-    """Where the law of point ``i`` becomes convex as its rise angle grows (0.1° bisection)."""
-    one = {name: values[i : i + 1] for name, values in points.items()}
+def _convex_from(points: dict[str, np.ndarray], idx: np.ndarray) -> list[str]:
+    """Where the laws of design points ``idx`` become convex as their rise angles grow: a 0.1°
+    bisection each (:func:`_bisect`)."""
+    if len(idx) == 0:
+        return []
+    nose = nose_tappet_lifts(points, idx)
 
-    def convex(beta_deg: float) -> bool:
-        one["rise_angle"] = np.array([math.radians(beta_deg)])
-        return tappet_table(one, 0, ADVICE_STEP_DEG).min_radius > 0.0
+    def convex(which: np.ndarray, beta_deg: np.ndarray) -> np.ndarray:
+        some = {name: np.asarray(values)[idx[which]] for name, values in points.items()}
+        some["rise_angle"] = np.radians(beta_deg)
+        every = np.arange(len(which))
+        return min_radii(some, every, ADVICE_STEP_DEG, nose[which]) > 0.0
 
-    low, high = math.degrees(points["rise_angle"][i]), ADVICE_LIMIT_DEG
-    if not convex(high):
-        return (
+    every = np.arange(len(idx))
+    high = np.full(len(idx), ADVICE_LIMIT_DEG)
+    reachable = convex(every, high)
+    low = np.degrees(np.asarray(points["rise_angle"], dtype=float)[idx])
+    high = _bisect(low, high, convex)
+    return [
+        f"it is convex from rise_angle = {math.ceil(h * 10) / 10:g} degree"
+        if fine
+        else (
             f"no rise angle up to {ADVICE_LIMIT_DEG:g} degree makes it convex: use a larger "
             "base_radius or a smaller valve_lift"
         )
-    while high - low > 0.1:
-        middle = 0.5 * (low + high)
-        low, high = (low, middle) if convex(middle) else (middle, high)
-    return f"it is convex from rise_angle = {math.ceil(high * 10) / 10:g} degree"
+        for h, fine in zip(high.tolist(), reachable.tolist(), strict=True)
+    ]
+
+
+def _bisect(
+    low: np.ndarray,
+    high: np.ndarray,
+    convex: Callable[[np.ndarray, np.ndarray], np.ndarray],
+) -> np.ndarray:
+    """The upper ends [deg] of bisections of [low, high] (convex at high) down to 0.1°, each
+    stopping at its own 0.1° as if alone: ``convex(which, beta)`` says whether laws ``which``
+    are convex at rise angles ``beta``. Every midpoint the next :data:`BISECT_DEPTH` steps
+    could visit is evaluated in one call (a tree of 2^depth − 1 per law), then walked."""
+    rows = np.arange(low.size)
+    nodes = 2**BISECT_DEPTH
+    while (high - low > 0.1).any():
+        lows, highs = np.empty((low.size, nodes)), np.empty((low.size, nodes))
+        mids = np.empty((low.size, nodes))
+        lows[:, 1], highs[:, 1] = low, high
+        for node in range(1, nodes):
+            mids[:, node] = 0.5 * (lows[:, node] + highs[:, node])
+            if 2 * node < nodes:
+                lows[:, 2 * node], highs[:, 2 * node] = lows[:, node], mids[:, node]
+                lows[:, 2 * node + 1], highs[:, 2 * node + 1] = mids[:, node], highs[:, node]
+        ok = np.zeros((low.size, nodes), dtype=bool)
+        ok[:, 1:] = convex(np.repeat(rows, nodes - 1), mids[:, 1:].ravel()).reshape(
+            low.size, nodes - 1
+        )
+        at = np.ones(low.size, dtype=np.int64)  # each law's node of the tree
+        for _ in range(BISECT_DEPTH):
+            active = high - low > 0.1
+            middle, fine = mids[rows, at], ok[rows, at]
+            low = np.where(active & ~fine, middle, low)
+            high = np.where(active & fine, middle, high)
+            at = np.where(fine, 2 * at, 2 * at + 1)
+    return high

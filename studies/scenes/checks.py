@@ -7,50 +7,164 @@ bad fixed value gives one message instead of one per run.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 
 import numpy as np
 
 
-def point_list(indices: Iterable[int]) -> str:
+def point_list(indices: Iterable[int] | np.ndarray) -> str:
     """``design point 3`` or ``design points 0–4, 7`` (0-based run indices, ranges merged)."""
-    idx = sorted(set(indices))
-    parts: list[str] = []
-    start = prev = idx[0]
-    for i in [*idx[1:], None]:
-        if i is not None and i == prev + 1:
-            prev = i
-            continue
-        parts.append(str(start) if start == prev else f"{start}–{prev}")
-        if i is not None:
-            start = prev = i
-    return f"design point{'s' if len(idx) > 1 else ''} {', '.join(parts)}"
+    idx = np.unique(
+        np.fromiter(indices, dtype=np.int64) if not isinstance(indices, np.ndarray) else indices
+    )
+    breaks = np.flatnonzero(np.diff(idx) != 1)
+    starts = idx[np.r_[0, breaks + 1]].tolist()
+    stops = idx[np.r_[breaks, idx.size - 1]].tolist()
+    parts = [str(a) if a == b else f"{a}–{b}" for a, b in zip(starts, stops, strict=True)]
+    return f"design point{'s' if idx.size > 1 else ''} {', '.join(parts)}"
 
 
 class PointProblems:
-    """Collects ``(design point, message)`` pairs and groups identical messages."""
+    """Collects ``(design points, message)`` pairs and groups identical messages."""
 
     def __init__(self) -> None:
-        self._points: dict[str, list[int]] = {}
+        self._points: dict[str, list[np.ndarray]] = {}
 
     def add(self, point: int, message: str) -> None:
-        self._points.setdefault(message, []).append(point)
+        self.add_all(np.array([point], dtype=np.int64), message)
 
-    def add_all(self, points: Iterable[int], message: str) -> None:
-        for i in points:
-            self.add(i, message)
+    def add_all(self, points: Iterable[int] | np.ndarray, message: str) -> None:
+        idx = np.asarray(points if isinstance(points, np.ndarray) else list(points), np.int64)
+        self._points.setdefault(message, []).append(idx)
+
+    def add_grouped(
+        self, points: np.ndarray, columns: Sequence[np.ndarray], message: Callable[[int], str]
+    ) -> None:
+        """Add ``message(i)`` for the design points ``points`` (indices), whose text depends
+        only on ``columns`` (one value or row per design point): formatted once per distinct
+        combination, at its first design point, in the order of first appearance."""
+        for i, members in groups_of(points, columns):
+            self.add_all(members, message(i))
+
+    def add_checked(
+        self, points: np.ndarray, columns: Sequence[np.ndarray], check: Callable[[int], list[str]]
+    ) -> None:
+        """Add the problems ``check(i)`` finds at design point i to the design points
+        ``points``, calling it once per distinct combination of ``columns`` (the values it
+        reads), as a loop over the points would add them (:func:`checked_groups`)."""
+        for message, members in checked_groups(points, columns, check):
+            self.add_all(members, message)
 
     def messages(self) -> list[str]:
-        return [f"{point_list(idx)}: {msg}" for msg, idx in self._points.items()]
+        return [f"{point_list(np.concatenate(idx))}: {msg}" for msg, idx in self._points.items()]
+
+
+def checked_groups(
+    points: np.ndarray, columns: Sequence[np.ndarray], check: Callable[[int], list[str]]
+) -> list[tuple[str, np.ndarray]]:
+    """(message, design points) of each problem ``check(i)`` finds, ``check`` called once per
+    distinct combination of ``columns`` among ``points`` (at its first design point), in the
+    order a loop over the points meets them."""
+    return [(message, members) for i, members in groups_of(points, columns) for message in check(i)]
+
+
+class LoopOrder:
+    """Problems found by numpy masks over all design points, listed as a loop over the points
+    would list them: by ``phase`` (one loop after another), then by the first design point a
+    message names, then by ``rank`` (the order of the checks inside the loop). Each message is
+    formatted once per distinct combination of the values it shows."""
+
+    def __init__(self) -> None:
+        self.entries: dict[str, tuple[tuple[int, float], list[np.ndarray]]] = {}
+
+    def add(
+        self,
+        rank: float,
+        where: np.ndarray,
+        columns: Sequence[np.ndarray],
+        message: Callable[[int], str],
+        phase: int = 0,
+    ) -> None:
+        """``message(i)`` (its text from ``columns`` at design point i) at the points where
+        the mask ``where`` holds."""
+        for i, members in groups_of(np.flatnonzero(where), columns):
+            self.entries.setdefault(message(i), ((phase, rank), []))[1].append(members)
+
+    def into(self, found: PointProblems) -> None:
+        """Add the messages to ``found`` in loop order."""
+        merged = {text: np.concatenate(parts) for text, (_, parts) in self.entries.items()}
+
+        def key(text: str) -> tuple[int, int, float]:
+            phase, rank = self.entries[text][0]
+            return phase, int(merged[text].min()), rank
+
+        for text in sorted(merged, key=key):
+            found.add_all(merged[text], text)
+
+    def messages(self) -> list[str]:
+        found = PointProblems()
+        self.into(found)
+        return found.messages()
+
+
+def fixed(text: str) -> Callable[[int], str]:
+    """A message that shows no value of the design point (for :meth:`LoopOrder.add`)."""
+    return lambda _: text
+
+
+def groups_of(indices: np.ndarray, columns: Sequence[np.ndarray]) -> list[tuple[int, np.ndarray]]:
+    """``indices`` split by the distinct combinations of ``columns`` at them (one value or row
+    per index of the columns), in order of first appearance: (first index, indices) each."""
+    indices = np.asarray(indices, dtype=np.int64)
+    if indices.size == 0:
+        return []
+    if not columns:
+        return [(int(indices[0]), indices)]
+    first, inverse = distinct([np.asarray(c)[indices] for c in columns])
+    order = np.argsort(inverse, kind="stable")
+    bounds = np.cumsum(np.bincount(inverse, minlength=first.size))[:-1]
+    members = np.split(indices[order], bounds)
+    return list(zip(indices[first].tolist(), members, strict=True))
+
+
+def distinct(columns: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct combinations of ``columns`` (equally long; 1-D values of any dtype, or
+    2-D rows), numbered in order of first appearance: the first index of each and, per index,
+    its combination's number. O(n log n) in numpy, a column that holds one value costs O(n)."""
+    n = len(columns[0]) if columns else 0
+    group = np.zeros(n, dtype=np.int64)
+    for column in columns:
+        values = np.asarray(column)
+        if n == 0 or _constant(values):
+            continue
+        if values.ndim > 1:
+            codes = np.unique(values.reshape(n, -1), axis=0, return_inverse=True)[1]
+        else:
+            codes = np.unique(values, return_inverse=True)[1]
+        group = np.unique(group * (int(codes.max()) + 1) + codes.ravel(), return_inverse=True)[1]
+    group = group.ravel()
+    firsts = np.full(int(group.max()) + 1 if n else 0, n, dtype=np.int64)
+    np.minimum.at(firsts, group, np.arange(n))
+    order = np.argsort(firsts, kind="stable")
+    rank = np.empty_like(order)
+    rank[order] = np.arange(order.size)
+    return firsts[order], rank[group]
+
+
+def _constant(values: np.ndarray) -> bool:
+    """True when every element (or row) equals the first; a broadcast view is O(1)."""
+    if values.strides and values.strides[0] == 0:
+        return True
+    return bool((values == values[0]).all())
 
 
 def more_concave_line(
-    rest: np.ndarray, members: Sequence[np.ndarray], radius_mm: np.ndarray, consequence: str
+    rest: np.ndarray, sizes: np.ndarray, radius_mm: np.ndarray, consequence: str
 ) -> str:
-    """One line counting the concave cam shapes ``rest`` (indices into ``members``, the design
-    points of each shape; ``radius_mm`` their smallest radius of curvature) that were not
-    warned one by one."""
-    count = sum(len(members[g]) for g in rest)
+    """One line counting the concave cam shapes ``rest`` (indices into ``sizes``, the number of
+    design points of each shape; ``radius_mm`` their smallest radius of curvature) that were
+    not warned one by one."""
+    count = int(sizes[rest].sum())
     return (
         f"{rest.size} more concave cams at {count} more design points (smallest radius of "
         f"curvature {radius_mm[rest].min():.3g} … {radius_mm[rest].max():.3g} mm): {consequence}"

@@ -45,3 +45,21 @@ def test_every_built_in_scene_is_found_under_its_own_name() -> None:
     from studies.scenes import BUILT_IN
 
     assert {name: BUILT_IN[name].name for name in BUILT_IN} == {name: name for name in BUILT_IN}
+
+
+@pytest.mark.parametrize(
+    "study",
+    ["isac_l9", "ohc125_dynamics", "crank_lambda_sweep", "reed_resonance", "luffing_sizing"],
+)
+def test_check_imports_no_xarray_pandas_or_matplotlib(study: str) -> None:
+    # check needs the scene's kernels (numba, which loads scipy's BLAS) and nothing that only
+    # results, analysis and figures use: their import was most of a check's start-up.
+    probe = PROBE.format(heavy=("xarray", "pandas", "matplotlib", "netCDF4"))
+    done = subprocess.run(
+        [sys.executable, "-c", probe, "check", study],
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=120,
+    )
+    assert done.stdout.strip() == "", f"check {study} imported {done.stdout.strip()}"

@@ -14,9 +14,8 @@ import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pandas as pd
 
-from studies.scenes.checks import PointProblems, more_concave_line
+from studies.scenes.checks import PointProblems, distinct, more_concave_line
 
 if TYPE_CHECKING:
     from studies.scenes.base import Scene
@@ -52,7 +51,7 @@ def concave_cams(
     """A warning per concave cam (the first :data:`LISTED_CAMS`), naming its design points, and
     one line counting the rest; O(N) grouping, then one kernel call over the distinct cam
     shapes and one per bisection step of the advice."""
-    first, members = _distinct(points)
+    first, shape = _distinct(points)
     shapes = {name: values[first] for name, values in points.items()}
     settings, scanned = _scan_settings(settings, len(first))
     radius = _min_radius(scene, shapes, settings)
@@ -70,12 +69,15 @@ def concave_cams(
             f"r0 + h + h'' = {radius[g]:.3g} mm): no Hertz line contact, so max_contact_stress "
             "is inf and the film thickness 0 there"
         )
-        found.add_all(members[g].tolist(), message + (f"; {advice[g]}" if g in advice else ""))
+        found.add_all(
+            np.flatnonzero(shape == g), message + (f"; {advice[g]}" if g in advice else "")
+        )
     rest = concave[LISTED_CAMS:]
     if rest.size == 0:
         return found.messages()
     consequence = "their max_contact_stress is inf and their film thickness 0 too"
-    return [*found.messages(), more_concave_line(rest, members, radius, consequence) + scanned]
+    sizes = np.bincount(shape, minlength=first.size)
+    return [*found.messages(), more_concave_line(rest, sizes, radius, consequence) + scanned]
 
 
 def _scan_settings(settings: dict[str, Any], shapes: int) -> tuple[dict[str, Any], str]:
@@ -88,18 +90,10 @@ def _scan_settings(settings: dict[str, Any], shapes: int) -> tuple[dict[str, Any
     return settings | {"angle_step": step}, said
 
 
-def _distinct(points: dict[str, np.ndarray]) -> tuple[np.ndarray, list[np.ndarray]]:
-    """The first design point of each distinct cam shape and the points of each shape."""
+def _distinct(points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """The first design point of each distinct cam shape and the shape of each point."""
     columns = [np.asarray(points[name]) for name in SHAPE if name in points]
-    coefficients = np.asarray(points["polydyne_coefficients"], dtype=float)
-    columns.append(np.unique(coefficients, axis=0, return_inverse=True)[1].ravel())
-    group = np.zeros(len(columns[0]), dtype=np.int64)
-    for column in columns:
-        codes, uniques = pd.factorize(column)
-        group = pd.factorize(group * len(uniques) + codes)[0]
-    order = np.argsort(group, kind="stable")
-    members = np.split(order, np.cumsum(np.bincount(group))[:-1])
-    return np.array([m[0] for m in members], dtype=np.int64), members
+    return distinct([*columns, np.asarray(points["polydyne_coefficients"], dtype=float)])
 
 
 def _min_radius(

@@ -31,6 +31,7 @@ from studies.scenes.cam.parameters import (
     SETTINGS,
 )
 from studies.scenes.cam_laws import LAW_CODES, SHAPE_CODES, polydyne_problems
+from studies.scenes.checks import checked_groups
 
 if TYPE_CHECKING:
     from studies.scenes.base import FigureBuilder
@@ -111,6 +112,20 @@ _CURVE_SOURCE: dict[str, tuple[str, int, float]] = {
 }
 
 
+CHECKED = (
+    "law",
+    "rise_angle",
+    "lift",
+    "ramp_height",
+    "ramp_width",
+    "ramp_velocity",
+    *(f"seg{k}_{part}" for k in range(1, 7) for part in ("width", "shape")),
+    "polydyne_coefficients",
+    "lift_table",
+)
+"""The parameters the per-point input checks read (each distinct set is checked once)."""
+
+
 class CamScene(Scene):
     name = "cam"
     seconds_per_point = 1e-3
@@ -142,12 +157,18 @@ class CamScene(Scene):
         return concave_cams(self, points, settings)
 
     def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
-        found: dict[str, list[int]] = defaultdict(list)
+        found: dict[str, list[np.ndarray]] = defaultdict(list)
         tables: dict[str, str | None] = {}
-        for i in range(len(points["law"])):
-            for problem in self._point_problems(points, i, tables):
-                found[problem].append(i)
-        return [f"{_points_label(idx)}: {msg}" for msg, idx in found.items()]
+        for problem, members in checked_groups(
+            np.arange(len(points["law"])),
+            [points[name] for name in CHECKED if name in points],
+            lambda i: self._point_problems(points, i, tables),
+        ):
+            found[problem].append(members)
+        return [
+            f"{_points_label(np.sort(np.concatenate(idx)).tolist())}: {msg}"
+            for msg, idx in found.items()
+        ]
 
     def _point_problems(
         self, p: dict[str, np.ndarray], i: int, tables: dict[str, str | None]

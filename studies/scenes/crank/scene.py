@@ -31,6 +31,7 @@ from engine_kernels.crank import multicylinder as cl
 from studies.scenes.base import Scene, SceneOutput
 from studies.scenes.checks import PointProblems
 from studies.scenes.crank import work
+from studies.scenes.crank.checks import CYCLE_NAMES, LAYOUT_NAMES, cycle_problems, layout_problems
 from studies.scenes.crank.parameters import (
     CRANK_ANGLE,
     CURVES,
@@ -47,7 +48,6 @@ if TYPE_CHECKING:
     from studies.scenes.base import FigureBuilder
 
 CYCLE_DEG = 720.0
-EXHAUST_OPENING_DEG = 180.0  # after firing TDC: the cycle opens the exhaust at BDC
 MODEL_CODES = {"exact": ck.MODEL_EXACT, "approximate": ck.MODEL_TWO_TERM}
 HEAT_CODES = {"max_pressure": cb.HEAT_MODE_PEAK_PRESSURE, "cycle_heat": cb.HEAT_MODE_ENERGY}
 FORCE_NAMES = {
@@ -62,34 +62,6 @@ CYCLE_ONLY = ("compression_pressure", "heat_released", "cycle_work", "imep")
 def angle_count(angle_step: float) -> int:
     """Grid points over the 720° cycle for a step [rad] (the step must divide 720°)."""
     return round(ck.CYCLE_ANGLE / angle_step)
-
-
-def firing_order_problem(order: np.ndarray, cylinders: float) -> str | None:
-    """Why ``order`` is not a firing order of ``cylinders`` cylinders, or None."""
-    shown = "[" + ", ".join(f"{v:g}" for v in order) + "]"
-    if order.size == 0:
-        return "firing_order is empty: list every cylinder 1…z once"
-    if not np.all(order == np.round(order)):
-        return f"firing_order = {shown} must list whole cylinder numbers"
-    z = int(cylinders)
-    numbers = [int(v) for v in order]
-    issues = []
-    if len(numbers) != z:
-        issues.append(f"it has {len(numbers)} entries for cylinders = {z}")
-    missing = sorted(set(range(1, z + 1)) - set(numbers))
-    repeated = sorted({c for c in numbers if numbers.count(c) > 1})
-    foreign = sorted({c for c in numbers if not 1 <= c <= z})
-    if missing:
-        issues.append("missing " + ", ".join(map(str, missing)))
-    if repeated:
-        issues.append("repeated " + ", ".join(map(str, repeated)))
-    if foreign:
-        issues.append("no such cylinder " + ", ".join(map(str, foreign)))
-    if not issues:
-        return None
-    return (
-        f"firing_order = {shown} must list every cylinder 1…{z} exactly once ({'; '.join(issues)})"
-    )
 
 
 def crank_params(points: dict[str, np.ndarray], model: str) -> np.ndarray:
@@ -209,43 +181,19 @@ class CrankScene(Scene):
                 "whole number of grid points per cycle)"
             )
         found = PointProblems()
-        for i, lam in enumerate(points["rod_ratio"]):
-            if lam >= 1.0:
-                found.add(
-                    i,
-                    f"rod_ratio λ = r/l = {lam:g} must be < 1 (the connecting rod "
-                    "must be longer than the crank radius)",
-                )
-        self._check_layout(points, found)
+        lam = np.asarray(points["rod_ratio"])
+        found.add_grouped(
+            np.flatnonzero(lam >= 1.0),
+            [lam],
+            lambda i: (
+                f"rod_ratio λ = r/l = {lam[i]:g} must be < 1 (the connecting rod "
+                "must be longer than the crank radius)"
+            ),
+        )
+        columns = [points[name] for name in LAYOUT_NAMES]
+        found.add_checked(np.arange(lam.size), columns, lambda i: layout_problems(points, i))
         self._check_pressure(points, found)
         return problems + found.messages()
-
-    def _check_layout(self, points: dict[str, np.ndarray], found: PointProblems) -> None:
-        for i, z in enumerate(points["cylinders"]):
-            problem = firing_order_problem(points["firing_order"][i], z)
-            if problem:
-                found.add(i, problem)
-            kind, layout = points["firing"][i], points["layout"][i]
-            if kind == "shared_crankpins" and (layout != "v" or z % 2):
-                found.add(
-                    i,
-                    f"firing = 'shared_crankpins' needs layout = 'v' and an even "
-                    f"number of cylinders (layout = {layout!r}, cylinders = {z:g})",
-                )
-            positions = points["cylinder_positions"][i]
-            if positions.size and positions.size != z:
-                found.add(
-                    i,
-                    f"cylinder_positions has {positions.size} values for cylinders = {z:g} "
-                    "(one per cylinder, or none)",
-                )
-            given = points["firing_angles"][i]
-            if kind == "given" and given.size != z:
-                found.add(
-                    i,
-                    f"firing = 'given' needs one firing angle per cylinder: "
-                    f"firing_angles has {given.size} for cylinders = {z:g}",
-                )
 
     def _check_pressure(self, points: dict[str, np.ndarray], found: PointProblems) -> None:
         table = np.flatnonzero(points["pressure_model"] == "table")
@@ -254,27 +202,9 @@ class CrankScene(Scene):
                 read_pressure_table(points["pressure_table"][table[0]])
             except ValueError as exc:
                 found.add_all(table, str(exc))
-        for i in map(int, np.flatnonzero(points["pressure_model"] == "cycle")):
-            end = math.degrees(points["combustion_start"][i] + points["combustion_duration"][i])
-            if end > EXHAUST_OPENING_DEG:
-                found.add(
-                    i,
-                    f"combustion_start + combustion_duration = {end:g} deg after "
-                    "firing TDC must be ≤ 180 deg (the exhaust opens at BDC)",
-                )
-            if points["heat_input"][i] != "max_pressure":
-                continue
-            p_c = (
-                points["intake_pressure"][i]
-                * points["compression_ratio"][i] ** points["polytropic_exponent"][i]
-            )
-            if p_c >= points["max_pressure"][i]:
-                found.add(
-                    i,
-                    f"max_pressure = {points['max_pressure'][i] / 1e6:g} MPa is not "
-                    f"above the compression pressure p_a ε^k = {p_c / 1e6:.4g} MPa: "
-                    "no heat release can reach it",
-                )
+        cycle = np.flatnonzero(points["pressure_model"] == "cycle")
+        columns = [points[name] for name in CYCLE_NAMES]
+        found.add_checked(cycle, columns, lambda i: cycle_problems(points, i))
 
     # --- stages --------------------------------------------------------------------------
     def stage_kinematics(

@@ -15,9 +15,8 @@ import numpy as np
 from engine_kernels.luffing import drive
 from engine_kernels.luffing import sizing as lf
 from studies.scenes.base import Scene, SceneOutput
-from studies.scenes.checks import PointProblems
+from studies.scenes.checks import LoopOrder, groups_of
 from studies.scenes.luffing.parameters import CHECKS, KERNEL_NAMES, NEEDS, PARAMETERS, RESPONSES
-from studies.scenes.luffing.summaries import luffing_summary
 from studies.units import UNITS
 
 if TYPE_CHECKING:
@@ -62,23 +61,38 @@ class LuffingScene(Scene):
         return {"pass_fail_map": pass_fail_map_figure, "motor_power": motor_power_figure}
 
     def summaries(self, ds: xr.Dataset) -> list[str]:
+        from studies.scenes.luffing.summaries import luffing_summary  # noqa: PLC0415  (xarray on use)
+
         return luffing_summary(ds)
 
     def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
-        found = PointProblems()
+        found = LoopOrder()
         mm = UNITS["mm"].to_si
-        for i in range(len(points["trolley_mass"])):
-            outer, inner = points["tube_outer_diameter"][i], points["tube_inner_diameter"][i]
-            if inner >= outer:
-                found.add(
-                    i,
-                    f"tube_inner_diameter = {inner / mm:g} mm must be smaller than "
-                    f"tube_outer_diameter = {outer / mm:g} mm",
-                )
-            ratings = points["motor_ratings"][i]
-            if np.any(ratings <= 0) or np.any(np.diff(ratings) <= 0):
-                shown = ", ".join(f"{r:g}" for r in ratings)
-                found.add(i, f"motor_ratings = [{shown}] W must be positive and strictly ascending")
+        outer = np.asarray(points["tube_outer_diameter"])
+        inner = np.asarray(points["tube_inner_diameter"])
+        found.add(
+            0,
+            inner >= outer,
+            [inner, outer],
+            lambda i: (
+                f"tube_inner_diameter = {inner[i] / mm:g} mm must be smaller than "
+                f"tube_outer_diameter = {outer[i] / mm:g} mm"
+            ),
+        )
+        ratings = np.asarray(points["motor_ratings"])
+        bad = np.zeros(len(ratings), dtype=bool)
+        for i, members in groups_of(np.arange(len(ratings)), [ratings]):
+            row = ratings[i]
+            bad[members] = bool(np.any(row <= 0) or np.any(np.diff(row) <= 0))
+        found.add(
+            1,
+            bad,
+            [ratings],
+            lambda i: (
+                f"motor_ratings = [{', '.join(f'{r:g}' for r in ratings[i])}] W must be "
+                "positive and strictly ascending"
+            ),
+        )
         return found.messages()
 
     def stage_sizing(self, params: np.ndarray, ratings: np.ndarray) -> np.ndarray:

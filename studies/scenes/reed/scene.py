@@ -39,8 +39,7 @@ import numpy as np
 
 from engine_kernels import reed as rd
 from studies.scenes.base import Curve, CurveAxis, Parameter, Response, Scene, SceneOutput
-from studies.scenes.checks import PointProblems
-from studies.scenes.reed.summaries import reed_summary
+from studies.scenes.checks import LoopOrder
 from studies.units import UNITS
 
 if TYPE_CHECKING:
@@ -303,29 +302,37 @@ class ReedScene(Scene):
         }
 
     def summaries(self, ds: xr.Dataset) -> list[str]:
+        from studies.scenes.reed.summaries import reed_summary  # noqa: PLC0415  (xarray on use)
+
         return reed_summary(ds)
 
     def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray:
         return np.linspace(0.0, 1.0, int(settings["shape_points"]))
 
     def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
-        found = PointProblems()
+        found = LoopOrder()
         mm = UNITS["mm"].to_si
         rpm = UNITS["rpm"].to_si
-        for i in range(len(points["length"])):
-            lo, hi = points["speed_min"][i], points["speed_max"][i]
-            if lo >= hi:
-                found.add(
-                    i, f"speed_min = {lo / rpm:g} rpm must be below speed_max = {hi / rpm:g} rpm"
-                )
-            length, h = points["length"][i], points["thickness"][i]
-            if length < MIN_SLENDERNESS * h:
-                found.add(
-                    i,
-                    f"length/thickness = {length / mm:g} mm / {h / mm:g} mm = "
-                    f"{length / h:.3g} is below {MIN_SLENDERNESS:g}: the reed is not a "
-                    "slender beam and [B1]/[B2] do not apply",
-                )
+        lo, hi = np.asarray(points["speed_min"]), np.asarray(points["speed_max"])
+        found.add(
+            0,
+            lo >= hi,
+            [lo, hi],
+            lambda i: (
+                f"speed_min = {lo[i] / rpm:g} rpm must be below speed_max = {hi[i] / rpm:g} rpm"
+            ),
+        )
+        length, h = np.asarray(points["length"]), np.asarray(points["thickness"])
+        found.add(
+            1,
+            length < MIN_SLENDERNESS * h,
+            [length, h],
+            lambda i: (
+                f"length/thickness = {length[i] / mm:g} mm / {h[i] / mm:g} mm = "
+                f"{length[i] / h[i]:.3g} is below {MIN_SLENDERNESS:g}: the reed is not a "
+                "slender beam and [B1]/[B2] do not apply"
+            ),
+        )
         return found.messages()
 
     def stage_frequencies(

@@ -10,7 +10,6 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from studies.scenes.chain import ChainScene
-from studies.scenes.chain_summaries import chain_status_summary
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -27,4 +26,6 @@ class RockerScene(ChainScene):
         return {"valve_lift": valve_lift_figure}
 
     def summaries(self, ds: xr.Dataset) -> list[str]:
+        from studies.scenes.chain_summaries import chain_status_summary  # noqa: PLC0415  (xarray on use)
+
         return chain_status_summary(ds)

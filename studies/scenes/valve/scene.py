@@ -39,7 +39,6 @@ from studies.scenes.chain import (
     step_deg,
 )
 from studies.scenes.chain_parameters import RESPONSES as ROCKER_RESPONSES
-from studies.scenes.chain_summaries import chain_status_summary
 from studies.scenes.valve import spring, work
 from studies.scenes.valve.batches import (
     N_CURVES,
@@ -65,7 +64,6 @@ from studies.scenes.valve.parameters import (
     dopri_table_deg,
     dopri_tolerance,
 )
-from studies.scenes.valve.summaries import dynamics_status_summary
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -145,6 +143,9 @@ class ValveScene(ChainScene):
         }
 
     def summaries(self, ds: xr.Dataset) -> list[str]:
+        from studies.scenes.chain_summaries import chain_status_summary  # noqa: PLC0415
+        from studies.scenes.valve.summaries import dynamics_status_summary  # noqa: PLC0415
+
         return chain_status_summary(ds) + dynamics_status_summary(ds)
 
     def __init__(self) -> None:
