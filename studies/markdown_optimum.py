@@ -1,4 +1,4 @@
-"""The report's optimum and trade-off sections, read from the analysis Dataset.
+"""The report's optimum sections, read from the analysis Dataset.
 
 A full factorial computed every combination: its section is the **best computed point** (run
 and value, its neighbours, no model interval). An orthogonal array did not: its section is
@@ -11,16 +11,20 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
-from studies import taguchi
 from studies.analysis_optimum import COMPUTED
-from studies.markdown_format import level_text, levels_of, num, pct, table, units_of, value_text
+from studies.markdown_format import levels_of, num, table, units_of, value_text
+from studies.markdown_ran import ran_note, ran_text, replaced
 from studies.text_safety import Markup, md_escape
 
+NOTHING_TO_CHOOSE = (
+    "Every factor is an operating condition or a model rung: there are no levels to choose."
+)
 MAX_CONDITION_ROWS = 12  # operating conditions listed one per row; more: see analysis.nc
 MAX_LISTED_RUNS = 12  # runs named per level in "rests on runs …"
 
@@ -41,13 +45,37 @@ def optimum_levels(an: xr.Dataset, name: str) -> dict[str, int]:
     }
 
 
-def _control(an: xr.Dataset) -> list[str]:
+def control_terms(an: xr.Dataset) -> list[str]:
     return [str(t) for t, role in zip(an["term"].values, an["term_role"].values, strict=True)
             if role == "control"]  # fmt: skip
 
 
-def _operating(an: xr.Dataset) -> list[str]:
+def operating_terms(an: xr.Dataset) -> list[str]:
+    """The operating conditions, model rungs included (:func:`model_terms`)."""
     return list(json.loads(an.attrs.get("operating_factors", "[]")))
+
+
+def model_terms(an: xr.Dataset) -> list[str]:
+    """The factors that are model rungs (``role = "model"``)."""
+    return list(json.loads(an.attrs.get("model_factors", "[]")))
+
+
+def not_chosen(an: xr.Dataset) -> list[str]:
+    """Sentences naming the operating conditions and model rungs, which are never chosen."""
+    models = model_terms(an)
+    operating = [f for f in operating_terms(an) if f not in models]
+    lines = []
+    if operating:
+        lines.append(
+            f"Operating conditions, not chosen: {md_escape(', '.join(operating))} (every level "
+            "is a case the design must meet)."
+        )
+    if models:
+        lines.append(
+            f"Model rungs, not chosen: {md_escape(', '.join(models))} (each level computes the "
+            "same design with another model; values are given per model below)."
+        )
+    return lines
 
 
 def _units(r: xr.Dataset) -> Markup:
@@ -61,40 +89,49 @@ def _run(index: int) -> str:
 
 
 def _worst_condition(an: xr.Dataset, at: np.ndarray, sense: str) -> str:
-    if not np.isfinite(at).any():
+    """The label of the worst condition; "" when there is none to name (no value, or every
+    condition gives the same value)."""
+    finite = at[np.isfinite(at)]
+    if not finite.size or (finite == finite[0]).all():
         return ""
     i = int(np.nanargmax(at) if sense == "smaller" else np.nanargmin(at))
     return str(an["condition"].values[i])
 
 
-def _levels_table(view: xr.Dataset, an: xr.Dataset, levels: dict[str, int]) -> list[str]:
+def _levels_table(
+    view: xr.Dataset, an: xr.Dataset, levels: dict[str, int], runs: Sequence[int] = ()
+) -> list[str]:
+    """The chosen levels; a level that some of ``runs`` did not run with is marked as a
+    request (:mod:`studies.markdown_ran`)."""
     if not levels:
-        return ["Every factor is an operating condition: there are no levels to choose.", ""]
+        return [NOTHING_TO_CHOOSE, ""]
+    instead: set[str] = set()
+    for run in runs:
+        instead |= set(replaced(view, an, int(run))) if run >= 0 else set()
     rows = [
-        [f, level + 1, value_text(levels_of(an, f)[level], units_of(view, f))]
+        [
+            f,
+            level + 1,
+            Markup(
+                value_text(levels_of(an, f)[level], units_of(view, f))
+                + (" (requested; what ran: below)" if f in instead else "")
+            ),
+        ]
         for f, level in levels.items()
     ]
     lines = [table(["factor", "level", "value"], rows), ""]
-    operating = _operating(an)
-    if operating:
-        lines += [
-            (
-                f"Operating conditions, not chosen: {md_escape(', '.join(operating))} (every level "
-                "is a case "
-                "the design must meet)."
-            ),
-            "",
-        ]
-    return lines
+    return lines + [line for sentence in not_chosen(an) for line in (sentence, "")]
 
 
 def _levels_of_run(view: xr.Dataset, an: xr.Dataset, run: int) -> Markup:
-    return Markup(
-        ", ".join(
-            f"{md_escape(f)} = {level_text(an, f, int(view[f'{f}_level'].values[run]))}"
-            for f in _control(an)
-        )
-    )
+    """``factor = value (level n)`` of each control factor at ``run``."""
+    parts = []
+    for f in control_terms(an):
+        level = int(view[f"{f}_level"].values[run])
+        units = units_of(view, f)
+        shown = value_text(levels_of(an, f)[level], units if units != "1" else "")
+        parts.append(f"{md_escape(f)} = {shown} (level {level + 1})")
+    return Markup(", ".join(parts))
 
 
 def _conditions(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, units: str) -> list[str]:
@@ -108,20 +145,27 @@ def _conditions(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, units: str) -> 
             ),
             "",
         ]
-    grid = computed(an) and bool(_control(an))
-    header = ["condition", "at these levels" if _control(an) else "value"]
+    grid = computed(an) and bool(control_terms(an))
+    header = ["condition", "at these levels" if control_terms(an) else "value"]
     header += ["best in this condition"] if grid else []
     rows = []
+    name = str(r.response.values)
     for i, condition in enumerate(labels):
         run = int(r.optimum_run.values[i])
-        at = num(float(r.optimum_at.values[i])) + units + (f" ({_run(run)})" if run >= 0 else "")
+        value = num(float(r.optimum_at.values[i])) + units
+        at = value + (f" ({_run(run)})" if run >= 0 else "")
+        if run >= 0 and _bound_mark(view, name, run):
+            at = f"{md_escape(none_text(view, name))} ({_run(run)}: counted at {value})"
         row: list[Any] = [str(condition), Markup(at)]
         if grid:
             best = int(r.best_run.values[i])
+            value = f"{num(float(r.best_value.values[i]))}{units}"
+            if best >= 0 and _bound_mark(view, name, best):
+                value = md_escape(none_text(view, name))
             row.append(
                 Markup(
-                    f"{num(float(r.best_value.values[i]))}{units} ({_run(best)}: "
-                    f"{_levels_of_run(view, an, best)})"
+                    f"{value} ({_run(best)}: {_levels_of_run(view, an, best)}"
+                    f"{ran_text(view, an, best)})"
                 )
                 if best >= 0
                 else "—"
@@ -133,11 +177,28 @@ def _conditions(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, units: str) -> 
 def _over_conditions(an: xr.Dataset, r: xr.Dataset, units: str, what: str) -> str:
     sense = str(r.sense.values)
     worst = _worst_condition(an, r.optimum_at.values, sense)
+    n = an.sizes["condition"]
+    if not worst:
+        return f"{what} over the {n} operating conditions: **{num(float(r.optimum_value))}{units}** in every one."
     return (
-        f"{what} over the {an.sizes['condition']} operating conditions: mean "
+        f"{what} over the {n} operating conditions: mean "
         f"**{num(float(r.optimum_value))}{units}**, worst **{num(float(r.optimum_worst))}{units}**"
         f" ({md_escape(worst)})."
     )
+
+
+def _ties(r: xr.Dataset) -> list[str]:
+    """One sentence when several control combinations share the best value."""
+    ties = int(r.optimum_ties)
+    if ties < 2:
+        return []
+    rule = str(r.optimum_tie_rule.values)
+    how = (
+        "the one whose levels have the best main effects (range analysis) is shown"
+        if rule == "main effects"
+        else "the first in grid order is shown"
+    )
+    return [f"{ties} level combinations share this best value: {how}.", ""]
 
 
 def optimum_section(view: xr.Dataset, an: xr.Dataset, name: str, shown: str) -> list[str]:
@@ -151,20 +212,25 @@ def optimum_section(view: xr.Dataset, an: xr.Dataset, name: str, shown: str) -> 
 def _computed(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, shown: str) -> list[str]:
     units = _units(r)
     name = str(r.response.values)
-    if not _control(an):
+    if not control_terms(an):
         lines = ["### Over the operating conditions", ""]
-        lines += ["Every factor is an operating condition: there are no levels to choose.", ""]
+        lines += [NOTHING_TO_CHOOSE, ""]
+        lines += [line for sentence in not_chosen(an) for line in (sentence, "")]
         lines += [_over_conditions(an, r, units, "Computed"), ""]
-        return lines + _conditions(view, an, r, units)
+        return lines + _per_model(an, r, units) + _conditions(view, an, r, units)
     lines = [
         "### Best computed point",
         "",
         (
             "Every combination of the levels was computed: this is the best run, not a "
             "prediction (no model, no interval)."
+            if an.sizes["condition"] == 1
+            else "Every combination of the levels was computed: the values below are computed "
+            "runs, not a prediction (no model, no interval). The levels are the control "
+            "combination whose runs have the best mean over the operating conditions."
         ),
         "",
-        *_levels_table(view, an, optimum_levels(an, name)),
+        *_levels_table(view, an, optimum_levels(an, name), r.optimum_run.values),
     ]
     if an.sizes["condition"] == 1:
         run = int(r.optimum_run.values[0])
@@ -172,7 +238,33 @@ def _computed(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, shown: str) -> li
     else:
         lines += [_over_conditions(an, r, units, "Chosen for the best mean"), ""]
         lines += _conditions(view, an, r, units)
-    return lines + _neighbours(view, an, r, units)
+    lines += ran_note(view, an, r.optimum_run.values)
+    return lines + _per_model(an, r, units) + _ties(r) + _neighbours(view, an, r, units)
+
+
+def _per_model(an: xr.Dataset, r: xr.Dataset, units: str) -> list[str]:
+    """Per model rung: the mean and the worst over the other operating conditions."""
+    if "model" not in an.coords:
+        return []
+    labels = an["condition"].values
+    rows = []
+    for m, model in enumerate(an["model"].values):
+        worst = int(r.model_worst_at.values[m])
+        where = an["condition_model"].values == m
+        at = r.optimum_at.values[where]
+        same = bool(np.isfinite(at).all() and (at == at[0]).all())
+        rows.append(
+            [
+                str(model),
+                Markup(f"{num(float(r.model_mean.values[m]))}{units}"),
+                Markup(
+                    "the same in every condition"
+                    if same or worst < 0
+                    else f"{num(float(r.model_worst.values[m]))}{units} ({md_escape(labels[worst])})"
+                ),
+            ]
+        )
+    return ["Per model:", "", table(["model", "mean", "worst condition"], rows), ""]
 
 
 def _bound_mark(view: xr.Dataset, name: str, run: int) -> str:
@@ -182,9 +274,15 @@ def _bound_mark(view: xr.Dataset, name: str, run: int) -> str:
     return "" if np.isfinite(own) else ": no value, counted at the bound"
 
 
+def none_text(view: xr.Dataset, name: str) -> str:
+    """What a run without a value of ``name`` is, in words (its ``none_label``, else
+    "no value")."""
+    return str(view[name].attrs.get("none_label", "")) or "no value"
+
+
 def _best_line(view: xr.Dataset, r: xr.Dataset, run: int, shown: str, units: str) -> str:
-    """The best run's value, or, when that run has no value of its own, what it was counted
-    as (``none_means``): a bound, never a computed value."""
+    """The best run's value, or, when that run has no value of its own, what it is
+    (``none_label``) and what it was counted as (``none_means``): never a computed value."""
     name = str(r.response.values)
     best = num(float(r.optimum_value))
     grand = f"grand mean {num(float(r.grand_mean))}{units}"
@@ -192,14 +290,13 @@ def _best_line(view: xr.Dataset, r: xr.Dataset, run: int, shown: str, units: str
         return f"Best {md_escape(shown)}: **{best}{units}** in {_run(run)} ({grand})."
     meaning = str(view[name].attrs.get("none_means", "unknown"))
     counted = (
-        f"counted as at least as good as the best value computed, {best}{units}"
+        f"better than every computed value (the best is {best}{units})"
         if meaning == "best"
         else f"counted at the bound {best}{units}"
     )
     return (
-        f"Best {md_escape(shown)}: {_run(run)}, which has **no value** of it (none_means = "
-        f"{md_escape(meaning)}: {counted}; {grand}). Runs without a value tie with each "
-        "other: the first in grid order is shown."
+        f"Best {md_escape(shown)}: **{md_escape(none_text(view, name))}** in {_run(run)} "
+        f"(none_means = {md_escape(meaning)}: {counted}; {grand})."
     )
 
 
@@ -223,7 +320,11 @@ def _neighbours(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, units: str) -> 
                 cells.append("— (no value there)")
                 continue
             at = value_text(levels_of(an, f)[level + step], units_of(view, f))
-            ran = f" ({_run(run)}{_bound_mark(view, name, run)})" if run >= 0 else ""
+            if run >= 0 and _bound_mark(view, name, run):
+                shown = md_escape(none_text(view, name))
+                cells.append(Markup(f"{shown} at {at} ({_run(run)}: counted at {num(value)}{units})"))
+                continue
+            ran = f" ({_run(run)})" if run >= 0 else ""
             cells.append(Markup(f"{num(value)}{units} at {at}{ran}"))
         rows.append([f, *cells])
     what = "" if an.sizes["condition"] == 1 else " (mean over the operating conditions)"
@@ -323,75 +424,3 @@ def sn_optimum_line(an: xr.Dataset, sn: str) -> str:
         else ""
     )
     return f"Predicted S/N at its best levels: {num(float(r.predicted))} dB{interval}."
-
-
-def tradeoff_section(
-    an: xr.Dataset, view: xr.Dataset, names: list[str]
-) -> tuple[list[str], dict[str, int]]:
-    """The trade-off of several responses (control factors only) and the chosen levels."""
-    shown = {taguchi.mean_name(view, r): r for r in json.loads(an.attrs["responses"])}
-    factors = _control(an)
-    if not factors:  # every factor an operating condition: nothing to trade
-        return [], {}
-    operating = _operating(an)
-    lines = [
-        "## Trade-off summary",
-        "",
-        "Best level of each control factor for each response, with the factor's contribution to "
-        "that response's variation. Where the responses disagree, the chosen level is the best "
-        "one for the response the factor contributes most to."
-        + (
-            f" Operating conditions ({md_escape(', '.join(operating))}) are not chosen: the "
-            "values below "
-            "are over all of them."
-            if operating
-            else ""
-        ),
-        "",
-    ]
-    header = ["response", "better", *factors]
-    rows: list[list[Any]] = []
-    for m in names:
-        r = an.sel(response=m)
-        cells = [
-            f"{int(r.optimum_level.sel(term=f)) + 1} ({pct(float(r.contribution.sel(source=f)))} %)"
-            for f in factors
-        ]
-        rows.append([shown.get(m, m), str(r.sense.values), *cells])
-    chosen = {f: int(an["chosen_level"].sel(term=f)) for f in factors}
-    chosen_row = [Markup("**chosen level**"), "", *[level_text(an, f, chosen[f]) for f in factors]]
-    rows.append(chosen_row)
-    rows.append(
-        [
-            "decided by",
-            "",
-            *[shown.get(str(v), str(v)) for v in an["decided_by"].sel(term=factors).values],
-        ]
-    )
-    rows.append(
-        ["conflict", "", *["yes" if c else "no" for c in an["conflict"].sel(term=factors).values]]
-    )
-    lines += [table(header, rows), ""]
-    grid = computed(an)
-    several = an.sizes["condition"] > 1
-    rows = []
-    for m in names:
-        r = an.sel(response=m)
-        units = str(r.units.values)
-        row = [shown.get(m, m), str(r.sense.values), num(float(r.optimum_value)),
-               num(float(r.compromise))]  # fmt: skip
-        row += [num(float(r.compromise_worst))] if several else []
-        row += [] if grid else [num(float(r.compromise_half_width))]
-        rows.append([*row, units if units != "1" else ""])
-    header = ["response", "better", "own optimum", "chosen levels"]
-    header += ["worst condition"] if several else []
-    header += [] if grid else ["± (CI)"]
-    what = "Computed" if grid else "Predicted"
-    over = " (means over the operating conditions, and the worst of them)" if several else ""
-    lines += [
-        f"{what} value of each response at its own optimum and at the chosen levels{over}:",
-        "",
-        table([*header, "units"], rows),
-        "",
-    ]
-    return lines, chosen

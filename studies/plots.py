@@ -76,8 +76,9 @@ def main_effects_figure(an: xr.Dataset, response: str) -> Figure:
         ax.axhline(float(r.grand_mean), linestyle="--", color="0.5", label="grand mean")
         _mark_incomplete(ax, an, row, x, present)
         unit = str(row.term_units.values)
-        operating = str(an["term_role"].sel(term=f).values) == "operating"
-        ax.set_xlabel((_label(f, unit) if numeric else f) + (" (operating)" if operating else ""))
+        role = str(an["term_role"].sel(term=f).values)
+        fixed = f" ({role})" if role in ("operating", "model") else ""
+        ax.set_xlabel((_label(f, unit) if numeric else f) + fixed)
         if not numeric:  # categorical: the level names at their (1-based) positions
             labels = [str(v) for v in row.level_label.values[present]]
             ax.set_xticks(x, labels, rotation=30, ha="right")

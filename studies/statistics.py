@@ -34,6 +34,13 @@ from studies.sums_of_squares import (
 )
 
 SENSES = ("smaller", "larger")
+UNRANKED = "none"
+"""The ``[sense]`` of a response that is tabulated but not ranked (no level is best)."""
+
+
+def sense_words(sense: str) -> str:
+    """``larger is better`` / ``smaller is better`` / ``not ranked``."""
+    return "not ranked" if sense == UNRANKED else f"{sense} is better"
 
 
 def _level_names(
@@ -86,6 +93,8 @@ def _response(ds: xr.Dataset, response: str) -> tuple[xr.DataArray, np.ndarray]:
 
 def _sense(y: xr.DataArray, sense: str | None) -> str:
     chosen = sense if sense is not None else y.attrs.get("better", "smaller")
+    if chosen == UNRANKED:  # the level means and ranges do not depend on the sense
+        return "smaller"
     if chosen not in SENSES:
         msg = f"sense must be one of {SENSES}, got {chosen!r}"
         raise ValueError(msg)

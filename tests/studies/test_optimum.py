@@ -195,3 +195,54 @@ def test_a_study_of_operating_conditions_only_has_no_trade_off_section() -> None
     report = report_text(ds, analyze(ds), plan.definition.responses)
     assert "no levels to choose" in report
     assert "## Trade-off summary" not in report
+
+
+def _two_speed_grid(gap: list[float], flat: list[float], tied: list[float]) -> xr.Dataset:
+    """3 control levels of ``a`` × 2 operating speeds (speed fastest), three responses."""
+    return xr.Dataset(
+        {
+            "gap": ("run", np.array(gap), {"units": "mm", "better": "smaller",
+                                           "none_means": "best", "none_label": "no jump"}),
+            "flat": ("run", np.array(flat), {"units": "N", "better": "smaller"}),
+            "tied": ("run", np.array(tied), {"units": "N", "better": "smaller"}),
+        },
+        coords={"a": ("run", np.repeat([1.0, 2.0, 3.0], 2), {"units": "mm"}),
+                "a_level": ("run", np.repeat([0, 1, 2], 2)),
+                "speed": ("run", np.tile([1000.0, 2000.0], 3), {"units": "rpm"}),
+                "speed_level": ("run", np.tile([0, 1], 3))},
+        attrs={"design": "full_factorial", "factors": '["a", "speed"]',
+               "responses": '["gap", "flat", "tied"]', "operating_factors": '["speed"]'},
+    )  # fmt: skip
+
+
+def _section(text: str, name: str) -> str:
+    start = text.index(f"## {name}:")
+    return text[start : text.index("\n## ", start + 1)]
+
+
+def test_a_run_better_than_every_value_wins_and_ties_are_said() -> None:
+    # By hand: a = 1 mm has no jump at 1000 rpm (NaN, none_means = best) and 5 mm at 2000 rpm;
+    # a = 2 mm jumps 1 mm at both; a = 3 mm jumps 3 mm at both. Filled at the bound (1 mm),
+    # a = 1 mm has mean 3 mm against 1 mm, but "no jump" is better than every jump: the
+    # combination with more such conditions is chosen first.
+    ds = _two_speed_grid(
+        [np.nan, 5.0, 1.0, 1.0, 3.0, 3.0], [2.0, 2.0, 5.0, 6.0, 5.0, 6.0], [7.0, 9.0] * 3
+    )
+    an = analyze(ds)
+    gap = an.sel(response="gap")
+    assert int(gap.optimum_level.sel(term="a")) == 0
+    np.testing.assert_array_equal(gap.optimum_run.values, [0, 1])
+    assert int(gap.optimum_ties) == 1
+    text = report_text(ds, an, ["gap", "flat", "tied"])
+    assert "no jump (run 1: counted at 1 mm)" in _section(text, "gap")
+    # flat: a = 1 mm gives 2 N at both speeds: no condition is the worst one.
+    flat = _section(text, "flat")
+    assert "**2 N** in every one" in flat
+    assert "worst" not in flat.split("### Best computed point")[1]
+    # tied: 7 N and 9 N whatever a is: the 3 combinations tie, and the report says so.
+    r = an.sel(response="tied")
+    assert int(r.optimum_ties) == 3
+    assert str(r.optimum_tie_rule.values) == "grid order"
+    assert "3 level combinations share this best value: the first in grid order" in _section(
+        text, "tied"
+    )

@@ -332,13 +332,20 @@ DYNAMIC_RESPONSES: tuple[Response, ...] = (
         "the step against one at a quarter (same sub-step length)",
         DYN,
     ),
-    Response("angle_step_used", "degree", "RK4 step used (picked per point with a tolerance)", DYN),
+    Response(
+        "angle_step_used",
+        "degree",
+        "RK4 step used (picked per point with a tolerance)",
+        DYN,
+        used_for="angle_step",
+    ),
     Response(
         "integrator_used",
         "1",
         "integrator of the reported results (picked per point with a tolerance)",
         DYN,
         codes=INTEGRATORS,
+        used_for="integrator",
     ),
     Response(
         "tolerance_met",

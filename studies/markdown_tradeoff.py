@@ -1,0 +1,105 @@
+"""The report's trade-off section, read from the analysis Dataset: per control factor the level
+each response prefers and the chosen one, then every response at its own optimum and at the
+chosen levels (:mod:`studies.tradeoff`). Operating conditions are never chosen."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+import xarray as xr
+
+from studies import taguchi
+from studies.markdown_format import level_text, num, pct, table
+from studies.markdown_optimum import computed, control_terms, operating_terms
+from studies.markdown_ran import replaced
+from studies.text_safety import Markup, md_escape
+
+
+def tradeoff_section(
+    an: xr.Dataset, view: xr.Dataset, names: list[str]
+) -> tuple[list[str], dict[str, int]]:
+    """The trade-off of several responses (control factors only) and the chosen levels."""
+    shown = {taguchi.mean_name(view, r): r for r in json.loads(an.attrs["responses"])}
+    factors = control_terms(an)
+    if not factors:  # every factor an operating condition: nothing to trade
+        return [], {}
+    operating = operating_terms(an)
+    lines = [
+        "## Trade-off summary",
+        "",
+        "Best level of each control factor for each response, with the factor's contribution to "
+        "that response's variation. Where the responses disagree, the chosen level is the best "
+        "one for the response the factor contributes most to."
+        + (
+            f" Operating conditions ({md_escape(', '.join(operating))}) are not chosen: the "
+            "values below "
+            "are over all of them."
+            if operating
+            else ""
+        ),
+        "",
+    ]
+    header = ["response", "better", *factors]
+    rows: list[list[Any]] = []
+    requested = False
+    for m in names:
+        r = an.sel(response=m)
+        instead: set[str] = set()
+        for run in r.optimum_run.values:
+            instead |= set(replaced(view, an, int(run))) if run >= 0 else set()
+        cells = [
+            f"{int(r.optimum_level.sel(term=f)) + 1} ({pct(float(r.contribution.sel(source=f)))} %)"
+            + (" ‡" if f in instead else "")
+            for f in factors
+        ]
+        requested = requested or bool(instead)
+        rows.append([shown.get(m, m), str(r.sense.values), *cells])
+    chosen = {f: int(an["chosen_level"].sel(term=f)) for f in factors}
+    chosen_row = [Markup("**chosen level**"), "", *[level_text(an, f, chosen[f]) for f in factors]]
+    rows.append(chosen_row)
+    rows.append(
+        [
+            "decided by",
+            "",
+            *[shown.get(str(v), str(v)) for v in an["decided_by"].sel(term=factors).values],
+        ]
+    )
+    rows.append(
+        ["conflict", "", *["yes" if c else "no" for c in an["conflict"].sel(term=factors).values]]
+    )
+    lines += [table(header, rows), ""]
+    if requested:
+        lines += [
+            "‡ A requested level: at that response's best point the scene ran another value "
+            "in some runs (its best computed point says which).",
+            "",
+        ]
+    grid = computed(an)
+    several = an.sizes["condition"] > 1
+    rows = []
+    for m in names:
+        r = an.sel(response=m)
+        units = str(r.units.values)
+        row = [shown.get(m, m), str(r.sense.values), num(float(r.optimum_value)),
+               num(float(r.compromise))]  # fmt: skip
+        row += [num(float(r.compromise_worst))] if several else []
+        row += [] if grid else [num(float(r.compromise_half_width))]
+        rows.append([*row, units if units != "1" else ""])
+    header = ["response", "better", "own optimum", "chosen levels"]
+    header += ["worst condition at the chosen levels"] if several else []
+    header += [] if grid else ["± (CI)"]
+    what = "Computed" if grid else "Predicted"
+    over = (
+        " (means over the operating conditions; the last value column is the worst condition "
+        "at the chosen levels)"
+        if several
+        else ""
+    )
+    lines += [
+        f"{what} value of each response at its own optimum and at the chosen levels{over}:",
+        "",
+        table([*header, "units"], rows),
+        "",
+    ]
+    return lines, chosen
