@@ -69,9 +69,7 @@ class Refinement:
     notes: list[str] = field(default_factory=list)
 
 
-def refinement(
-    ds: xr.Dataset, levels: Mapping[str, int], hold: Collection[str] = ()
-) -> Refinement:
+def refinement(ds: xr.Dataset, levels: Mapping[str, int], hold: Collection[str] = ()) -> Refinement:
     """The levels of the refinement grid (see the module docstring); factors in ``hold``
     (e.g. without any effect) stay at their chosen level."""
     values = confirmation_values(ds, levels)
@@ -81,11 +79,12 @@ def refinement(
         known = level_values(ds, f)
         if isinstance(chosen, str | bool) or f in hold or len(known) < 2:
             continue
-        ends = [known.get(level - 1), known.get(level + 1)]
         geometric = _geometric([float(known[i]) for i in sorted(known)])
         whole = isinstance(chosen, int) or _whole(ds, f)
-        if None in ends:
-            inner = float(ends[0] if ends[0] is not None else ends[1])
+        if level - 1 in known and level + 1 in known:
+            ends = [float(known[level - 1]), float(known[level + 1])]
+        else:  # at the edge of the grid: one step past it
+            inner = float(known[level - 1] if level - 1 in known else known[level + 1])
             beyond, note = _beyond(ds, f, float(chosen), inner, geometric, whole)
             notes.append(note)
             ends = [inner, beyond]
@@ -112,7 +111,7 @@ def refinement_values(
 
 def _geometric(values: list[float]) -> bool:
     """Three or more levels of one sign at a constant ratio (not 1)."""
-    if len(values) < 3 or not all(v > 0 for v in values) and not all(v < 0 for v in values):
+    if len(values) < 3 or (not all(v > 0 for v in values) and not all(v < 0 for v in values)):
         return False
     ratios = np.asarray(values[1:]) / np.asarray(values[:-1])
     return bool(np.allclose(ratios, ratios[0], rtol=1e-9) and not np.isclose(ratios[0], 1.0))
@@ -129,7 +128,10 @@ def _beyond(
     shown = f"{step:g}" + (f" {units}" if units not in ("", "1") else "")
     problem = _problem(ds, factor, step, units)
     if problem is None:
-        return step, f"{factor}: the best level is at the edge of the grid; refined past it to {shown}"
+        return (
+            step,
+            f"{factor}: the best level is at the edge of the grid; refined past it to {shown}",
+        )
     return edge, (
         f"{factor}: the best level is at the edge of the grid, but one step past it is not "
         f"allowed ({problem}): refined towards the inside only"
@@ -144,7 +146,7 @@ def _problem(ds: xr.Dataset, factor: str, value: float, units: str) -> str | Non
     except (KeyError, ValueError):
         parameter = None
     if parameter is not None:
-        return parameter.problem(value, units or None)
+        return parameter.check(value, units or None)
     levels = [float(v) for v in level_values(ds, factor).values()]
     if all(v > 0 for v in levels) and value <= 0:
         return f"{factor} = {value:g}: its levels are all positive"

@@ -322,7 +322,9 @@ def _neighbours(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, units: str) -> 
             at = value_text(levels_of(an, f)[level + step], units_of(view, f))
             if run >= 0 and _bound_mark(view, name, run):
                 shown = md_escape(none_text(view, name))
-                cells.append(Markup(f"{shown} at {at} ({_run(run)}: counted at {num(value)}{units})"))
+                cells.append(
+                    Markup(f"{shown} at {at} ({_run(run)}: counted at {num(value)}{units})")
+                )
                 continue
             ran = f" ({_run(run)})" if run >= 0 else ""
             cells.append(Markup(f"{num(value)}{units} at {at}{ran}"))

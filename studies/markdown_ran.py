@@ -14,17 +14,15 @@ import numpy as np
 import xarray as xr
 
 from studies.markdown_format import levels_of, units_of, value_text
+from studies.taguchi import factor_names
 from studies.text_safety import Markup, md_escape
 
 
 def recorders(view: xr.Dataset) -> dict[str, str]:
-    """Factor → the response recording the value it ran with (only factors of the design)."""
-    factors = {str(t) for t in view.coords if f"{t}_level" in view.coords}
-    return {
-        str(view[r].attrs["used_for"]): str(r)
-        for r in view.data_vars
-        if view[r].attrs.get("used_for") in factors
-    }
+    """Factor → the response recording the value it ran with (factors of the design, in
+    their order)."""
+    by_factor = {str(view[r].attrs.get("used_for", "")): str(r) for r in view.data_vars}
+    return {f: by_factor[f] for f in factor_names(view) if f in by_factor}
 
 
 def _used(view: xr.Dataset, response: str, run: int) -> object:
@@ -62,9 +60,7 @@ def ran_text(view: xr.Dataset, an: xr.Dataset, run: int) -> Markup:
     instead = replaced(view, an, run)
     if not instead:
         return Markup("")
-    return Markup(
-        "; ran " + ", ".join(f"{md_escape(f)} = {shown}" for f, shown in instead.items())
-    )
+    return Markup("; ran " + ", ".join(f"{md_escape(f)} = {shown}" for f, shown in instead.items()))
 
 
 def ran_note(view: xr.Dataset, an: xr.Dataset, runs: Iterable[int]) -> list[str]:

@@ -152,7 +152,7 @@ def response_section(
         (
             f"{md_escape(sense.capitalize())} is better."
             if sense != "none"
-            else "Not ranked ([sense] = \"none\": no direction is better, no best level)."
+            else 'Not ranked ([sense] = "none": no direction is better, no best level).'
         )
         + " k\\_i = mean at level i.",
         "",

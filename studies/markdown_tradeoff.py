@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 from typing import Any
 
+import numpy as np
 import xarray as xr
 
 from studies import taguchi
@@ -71,8 +72,10 @@ def tradeoff_section(
     lines += [table(header, rows), ""]
     if requested:
         lines += [
-            "‡ A requested level: at that response's best point the scene ran another value "
-            "in some runs (its best computed point says which).",
+            (
+                "‡ A requested level: at that response's best point the scene ran another "
+                "value in some runs (its best computed point says which)."
+            ),
             "",
         ]
     grid = computed(an)
@@ -102,4 +105,15 @@ def tradeoff_section(
         table([*header, "units"], rows),
         "",
     ]
+    missing = [
+        shown.get(m, m) for m in names if not np.isfinite(float(an.compromise.sel(response=m)))
+    ]
+    if missing:
+        lines += [
+            (
+                f"— at the chosen levels ({md_escape(', '.join(missing))}): some of those runs "
+                "have no value (none_means = unknown), so there is no value to give."
+            ),
+            "",
+        ]
     return lines, chosen

@@ -111,8 +111,10 @@ def _mark_incomplete(
         ax.plot([xi], [ki], marker="o", mfc="white", mec="C3", ms=7, linestyle="none", zorder=3)
         text = [f"{a}/{n} left out"] if a else []
         text += [f"{b}/{n} at {'bound' if meaning == 'unknown' else meaning}"] if b else []
+        # At the first and last level the label grows inwards: centred, it would leave the axes.
+        ha = "left" if xi == np.min(x) else "right" if xi == np.max(x) else "center"
         ax.annotate("\n".join(text), (xi, ki), xytext=(0, 6), textcoords="offset points",
-                    ha="center", fontsize="xx-small", color="C3")  # fmt: skip
+                    ha=ha, fontsize="xx-small", color="C3")  # fmt: skip
 
 
 def _level_ticks(ax: Axes, x: np.ndarray) -> None:

@@ -114,10 +114,10 @@ def test_no_crossing_is_the_best_computed_point(reed: xr.Dataset, name: str) -> 
     none = np.flatnonzero(np.isnan(y))
     assert none.size >= 2
     filled = np.where(np.isnan(y), np.nanmax(y), y)  # larger is better: the bound is the max
-    frame = pd.DataFrame({f: reed[f"{f}_level"].values for f in ("length", "thickness", "material")})
-    score = sum(
-        frame[f].map(pd.Series(filled).groupby(frame[f]).mean()).to_numpy() for f in frame
+    frame = pd.DataFrame(
+        {f: reed[f"{f}_level"].values for f in ("length", "thickness", "material")}
     )
+    score = sum(frame[f].map(pd.Series(filled).groupby(frame[f]).mean()).to_numpy() for f in frame)
     expected = int(none[np.argmax(score[none])])
     an = analyze(reed)
     r = an.sel(response=name)

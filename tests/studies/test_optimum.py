@@ -16,6 +16,7 @@ import pytest
 import xarray as xr
 
 from results_datasets import CATALOG, study_dataset
+from studies import confirmation
 from studies.analysis import analyze
 from studies.markdown_report import report_text
 from studies.plan import plan_text
@@ -73,10 +74,14 @@ def test_full_factorial_reports_the_best_computed_run(
     names = {f.name for f in files}
     assert "confirmation.toml" not in names  # nothing to confirm: the point was computed
     refinement = tomllib.loads((tmp_path / "refinement.toml").read_text(encoding="utf-8"))
-    # 5 levels between the neighbours: mass 3…5 kg (5 is the edge), rod ratio 0.25…0.35.
+    # 5 levels between the neighbours; both optima are at an edge of the grid, so the range
+    # reaches one level spacing past it (by hand): mass 3 … 5 + (5 − 3) = 7 kg, rod ratio
+    # 0.25 − (0.35 − 0.25) = 0.15 … 0.35, and the file says so.
     factors = refinement["factors"]
-    assert factors["reciprocating_mass"]["levels"] == [3.0, 3.5, 4.0, 4.5, 5.0]
-    assert factors["rod_ratio"]["levels"] == [0.25, 0.275, 0.3, 0.325, 0.35]
+    assert factors["reciprocating_mass"]["levels"] == [3.0, 4.0, 5.0, 6.0, 7.0]
+    assert factors["rod_ratio"]["levels"] == [0.15, 0.2, 0.25, 0.3, 0.35]
+    head = (tmp_path / "refinement.toml").read_text(encoding="utf-8").splitlines()[:3]
+    assert any("reciprocating_mass" in line and "past it to 7 kg" in line for line in head)
 
 
 def test_neighbours_of_the_best_point_are_the_runs_one_level_away(side_force: xr.Dataset) -> None:
@@ -246,3 +251,32 @@ def test_a_run_better_than_every_value_wins_and_ties_are_said() -> None:
     assert "3 level combinations share this best value: the first in grid order" in _section(
         text, "tied"
     )
+
+
+def _one_factor(levels: list[float], scene: str, name: str, units: str) -> xr.Dataset:
+    n = len(levels)
+    return xr.Dataset(
+        {"y": ("run", np.arange(n, dtype=float))},
+        coords={name: ("run", np.array(levels), {"units": units}),
+                f"{name}_level": ("run", np.arange(n))},
+        attrs={"design": "full_factorial", "factors": json.dumps([name]), "scene": scene},
+    )  # fmt: skip
+
+
+def test_refinement_past_the_edge_keeps_the_spacing_and_the_allowed_range() -> None:
+    # valve_step_accuracy's steps 1, 0.5, 0.25, 0.125 degree halve: past the finest the grid
+    # goes on halving (0.0625 degree), 5 levels at a constant ratio from 0.0625 to 0.25
+    # (by hand: 0.0625·√2^k).
+    steps = _one_factor([1.0, 0.5, 0.25, 0.125], "valve_accuracy", "angle_step", "degree")
+    found = confirmation.refinement(steps, {"angle_step": 3})
+    np.testing.assert_allclose(
+        found.values["angle_step"], 0.0625 * np.sqrt(2.0) ** np.arange(5), rtol=1e-5
+    )
+    assert "past it to 0.0625 degree" in found.notes[0]
+    # Two positive levels, the best at the smaller: one step of 0.5 past 0.5 is 0, which a
+    # length cannot be (the cam's base radius must be > 0): refined towards the inside only.
+    radius = _one_factor([0.5, 1.0], "cam", "base_radius", "mm")
+    found = confirmation.refinement(radius, {"base_radius": 0})
+    assert found.values["base_radius"] == [0.5, 0.625, 0.75, 0.875, 1.0]
+    assert "not allowed" in found.notes[0]
+    assert found.notes[0].startswith("base_radius")

@@ -265,6 +265,8 @@ DYNAMIC_RESPONSES: tuple[Response, ...] = (
         "degree",
         "cam angle where separation first starts, located between grid points (NaN: none)",
         DYN,
+        none_means="best",
+        none_label="no separation",
     ),
     Response("jump_duration", "degree", "cam angle over which the valve is separated", DYN),
     Response("jump_max_gap", "mm", "largest gap y − Y while separated", DYN),
