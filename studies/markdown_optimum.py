@@ -9,17 +9,24 @@ and the mean over them (:mod:`studies.analysis_optimum`).
 
 from __future__ import annotations
 
-import json
-import math
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
-from studies.analysis_optimum import COMPUTED
 from studies.markdown_format import levels_of, num, table, units_of, value_text
 from studies.markdown_ran import ran_note, ran_text, replaced
+from studies.markdown_terms import (
+    bound_mark,
+    computed,
+    control_terms,
+    none_text,
+    not_chosen,
+    optimum_levels,
+    run_text,
+    units_suffix,
+)
 from studies.text_safety import Markup, md_escape
 
 NOTHING_TO_CHOOSE = (
@@ -27,65 +34,6 @@ NOTHING_TO_CHOOSE = (
 )
 MAX_CONDITION_ROWS = 12  # operating conditions listed one per row; more: see analysis.nc
 MAX_LISTED_RUNS = 12  # runs named per level in "rests on runs …"
-
-
-def computed(an: xr.Dataset) -> bool:
-    return an.attrs.get("optimum_basis") == COMPUTED
-
-
-def optimum_levels(an: xr.Dataset, name: str) -> dict[str, int]:
-    """Control factor → its chosen level (0-based) for ``name``."""
-    r = an.sel(response=name)
-    return {
-        str(t): int(level)
-        for t, level, role in zip(
-            an["term"].values, r.optimum_level.values, an["term_role"].values, strict=True
-        )
-        if role == "control" and level >= 0
-    }
-
-
-def control_terms(an: xr.Dataset) -> list[str]:
-    return [str(t) for t, role in zip(an["term"].values, an["term_role"].values, strict=True)
-            if role == "control"]  # fmt: skip
-
-
-def operating_terms(an: xr.Dataset) -> list[str]:
-    """The operating conditions, model rungs included (:func:`model_terms`)."""
-    return list(json.loads(an.attrs.get("operating_factors", "[]")))
-
-
-def model_terms(an: xr.Dataset) -> list[str]:
-    """The factors that are model rungs (``role = "model"``)."""
-    return list(json.loads(an.attrs.get("model_factors", "[]")))
-
-
-def not_chosen(an: xr.Dataset) -> list[str]:
-    """Sentences naming the operating conditions and model rungs, which are never chosen."""
-    models = model_terms(an)
-    operating = [f for f in operating_terms(an) if f not in models]
-    lines = []
-    if operating:
-        lines.append(
-            f"Operating conditions, not chosen: {md_escape(', '.join(operating))} (every level "
-            "is a case the design must meet)."
-        )
-    if models:
-        lines.append(
-            f"Model rungs, not chosen: {md_escape(', '.join(models))} (each level computes the "
-            "same design with another model; values are given per model below)."
-        )
-    return lines
-
-
-def _units(r: xr.Dataset) -> Markup:
-    """`` <units>`` (Markdown, escaped); nothing for a dimensionless "1"."""
-    units = str(r.units.values)
-    return Markup(f" {md_escape(units)}" if units and units != "1" else "")
-
-
-def _run(index: int) -> str:
-    return f"run {index + 1}"
 
 
 def _worst_condition(an: xr.Dataset, at: np.ndarray, sense: str) -> str:
@@ -123,7 +71,7 @@ def _levels_table(
     return lines + [line for sentence in not_chosen(an) for line in (sentence, "")]
 
 
-def _levels_of_run(view: xr.Dataset, an: xr.Dataset, run: int) -> Markup:
+def _levels_ofrun_text(view: xr.Dataset, an: xr.Dataset, run: int) -> Markup:
     """``factor = value (level n)`` of each control factor at ``run``."""
     parts = []
     for f in control_terms(an):
@@ -153,18 +101,18 @@ def _conditions(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, units: str) -> 
     for i, condition in enumerate(labels):
         run = int(r.optimum_run.values[i])
         value = num(float(r.optimum_at.values[i])) + units
-        at = value + (f" ({_run(run)})" if run >= 0 else "")
-        if run >= 0 and _bound_mark(view, name, run):
-            at = f"{md_escape(none_text(view, name))} ({_run(run)}: counted at {value})"
+        at = value + (f" ({run_text(run)})" if run >= 0 else "")
+        if run >= 0 and bound_mark(view, name, run):
+            at = f"{md_escape(none_text(view, name))} ({run_text(run)}: counted at {value})"
         row: list[Any] = [str(condition), Markup(at)]
         if grid:
             best = int(r.best_run.values[i])
             value = f"{num(float(r.best_value.values[i]))}{units}"
-            if best >= 0 and _bound_mark(view, name, best):
+            if best >= 0 and bound_mark(view, name, best):
                 value = md_escape(none_text(view, name))
             row.append(
                 Markup(
-                    f"{value} ({_run(best)}: {_levels_of_run(view, an, best)}"
+                    f"{value} ({run_text(best)}: {_levels_ofrun_text(view, an, best)}"
                     f"{ran_text(view, an, best)})"
                 )
                 if best >= 0
@@ -210,7 +158,7 @@ def optimum_section(view: xr.Dataset, an: xr.Dataset, name: str, shown: str) -> 
 
 
 def _computed(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, shown: str) -> list[str]:
-    units = _units(r)
+    units = units_suffix(r)
     name = str(r.response.values)
     if not control_terms(an):
         lines = ["### Over the operating conditions", ""]
@@ -267,27 +215,14 @@ def _per_model(an: xr.Dataset, r: xr.Dataset, units: str) -> list[str]:
     return ["Per model:", "", table(["model", "mean", "worst condition"], rows), ""]
 
 
-def _bound_mark(view: xr.Dataset, name: str, run: int) -> str:
-    """``: no value, counted at the bound`` when ``run`` has no value of ``name`` of its own
-    (its response's ``none_means`` counted it at the best or worst value seen)."""
-    own = float(view[name].values[run]) if name in view else math.nan
-    return "" if np.isfinite(own) else ": no value, counted at the bound"
-
-
-def none_text(view: xr.Dataset, name: str) -> str:
-    """What a run without a value of ``name`` is, in words (its ``none_label``, else
-    "no value")."""
-    return str(view[name].attrs.get("none_label", "")) or "no value"
-
-
 def _best_line(view: xr.Dataset, r: xr.Dataset, run: int, shown: str, units: str) -> str:
     """The best run's value, or, when that run has no value of its own, what it is
     (``none_label``) and what it was counted as (``none_means``): never a computed value."""
     name = str(r.response.values)
     best = num(float(r.optimum_value))
     grand = f"grand mean {num(float(r.grand_mean))}{units}"
-    if not _bound_mark(view, name, run):
-        return f"Best {md_escape(shown)}: **{best}{units}** in {_run(run)} ({grand})."
+    if not bound_mark(view, name, run):
+        return f"Best {md_escape(shown)}: **{best}{units}** in {run_text(run)} ({grand})."
     meaning = str(view[name].attrs.get("none_means", "unknown"))
     counted = (
         f"better than every computed value (the best is {best}{units})"
@@ -295,7 +230,7 @@ def _best_line(view: xr.Dataset, r: xr.Dataset, run: int, shown: str, units: str
         else f"counted at the bound {best}{units}"
     )
     return (
-        f"Best {md_escape(shown)}: **{md_escape(none_text(view, name))}** in {_run(run)} "
+        f"Best {md_escape(shown)}: **{md_escape(none_text(view, name))}** in {run_text(run)} "
         f"(none_means = {md_escape(meaning)}: {counted}; {grand})."
     )
 
@@ -320,13 +255,13 @@ def _neighbours(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, units: str) -> 
                 cells.append("— (no value there)")
                 continue
             at = value_text(levels_of(an, f)[level + step], units_of(view, f))
-            if run >= 0 and _bound_mark(view, name, run):
+            if run >= 0 and bound_mark(view, name, run):
                 shown = md_escape(none_text(view, name))
                 cells.append(
-                    Markup(f"{shown} at {at} ({_run(run)}: counted at {num(value)}{units})")
+                    Markup(f"{shown} at {at} ({run_text(run)}: counted at {num(value)}{units})")
                 )
                 continue
-            ran = f" ({_run(run)})" if run >= 0 else ""
+            ran = f" ({run_text(run)})" if run >= 0 else ""
             cells.append(Markup(f"{num(value)}{units} at {at}{ran}"))
         rows.append([f, *cells])
     what = "" if an.sizes["condition"] == 1 else " (mean over the operating conditions)"
@@ -362,7 +297,7 @@ def _rests_on(view: xr.Dataset, terms: list[str], levels: dict[str, int]) -> str
 
 
 def _predicted(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, shown: str) -> list[str]:
-    units = _units(r)
+    units = units_suffix(r)
     name = str(r.response.values)
     levels = optimum_levels(an, name)
     terms = [t for t in str(r.model_terms.values).split(",") if t]
@@ -400,7 +335,7 @@ def _predicted(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, shown: str) -> l
     run = int(r.optimum_run.values[0])
     if an.sizes["condition"] == 1 and run >= 0:
         y = float(view[name].values[run])
-        lines.append(f"This combination was run: {_run(run)} gave {num(y)}{units}.")
+        lines.append(f"This combination was run: {run_text(run)} gave {num(y)}{units}.")
     elif an.sizes["condition"] == 1:
         lines.append(
             "This combination is not among the runs of the array: the confirmation run tests "
@@ -417,7 +352,7 @@ def sn_optimum_line(an: xr.Dataset, sn: str) -> str:
         return ""
     if computed(an):
         run = int(r.optimum_run.values[0])
-        where = f" in {_run(run)}" if an.sizes["condition"] == 1 and run >= 0 else ""
+        where = f" in {run_text(run)}" if an.sizes["condition"] == 1 and run >= 0 else ""
         return f"Best computed S/N: {num(value)} dB{where}."
     half = float(r.half_width)
     interval = (

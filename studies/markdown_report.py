@@ -38,8 +38,8 @@ from studies.markdown_format import (
     units_of,
     value_text,
 )
-from studies.markdown_optimum import computed, optimum_levels
 from studies.markdown_response import constant_section, response_section
+from studies.markdown_terms import computed, optimum_levels
 from studies.markdown_tradeoff import tradeoff_section
 from studies.missing import nothing_to_analyse
 from studies.statistics import sense_words, sweep_runs

@@ -12,8 +12,8 @@ import xarray as xr
 
 from studies import taguchi
 from studies.markdown_format import level_text, num, pct, table
-from studies.markdown_optimum import computed, control_terms, operating_terms
 from studies.markdown_ran import replaced
+from studies.markdown_terms import computed, control_terms, operating_terms
 from studies.text_safety import Markup, md_escape
 
 
