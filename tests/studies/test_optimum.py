@@ -12,6 +12,7 @@ import tomllib
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 import xarray as xr
 
@@ -280,3 +281,55 @@ def test_refinement_past_the_edge_keeps_the_spacing_and_the_allowed_range() -> N
     assert found.values["base_radius"] == [0.5, 0.625, 0.75, 0.875, 1.0]
     assert "not allowed" in found.notes[0]
     assert found.notes[0].startswith("base_radius")
+
+
+def test_model_rungs_are_reported_per_model_and_never_chosen() -> None:
+    # The shipped ladders mark the spring's coil masses a model rung (0 = the lumped spring).
+    for study in ("ohc125_spring_surge", "spring_model_ladder"):
+        text = (CATALOG / f"{study}.toml").read_text(encoding="utf-8")
+        assert tomllib.loads(text)["factors"]["spring_masses"]["role"] == "model"
+    # 2 rungs × 3 speeds, a larger-is-better response; per model the mean and the worst speed
+    # come from a pandas groupby of the values themselves.
+    y = np.array([1.0, 2.0, 3.0, 10.0, 8.0, 9.0])
+    ds = xr.Dataset(
+        {"f": ("run", y, {"units": "Hz", "better": "larger"})},
+        coords={"masses": ("run", np.repeat([0, 8], 3)), "masses_level": ("run", np.repeat([0, 1], 3)),
+                "speed": ("run", np.tile([1.0, 2.0, 3.0], 2), {"units": "rpm"}),
+                "speed_level": ("run", np.tile([0, 1, 2], 2))},
+        attrs={"design": "full_factorial", "factors": '["masses", "speed"]', "responses": '["f"]',
+               "operating_factors": '["masses", "speed"]', "model_factors": '["masses"]'},
+    )  # fmt: skip
+    an = analyze(ds)
+    r = an.sel(response="f")
+    assert str(an["term_role"].sel(term="masses").values) == "model"
+    assert int(r.best_level.sel(term="masses")) == -1
+    frame = pd.DataFrame({"m": ds["masses"].values, "f": y})
+    np.testing.assert_allclose(r.model_mean.values, frame.groupby("m").f.mean().to_numpy())
+    np.testing.assert_allclose(r.model_worst.values, frame.groupby("m").f.min().to_numpy())
+    text = report_text(ds, an, ["f"])
+    assert "Model rungs, not chosen: masses" in text
+    assert "| masses = 8 | 9 Hz | 8 Hz (masses = 8, speed = 2 rpm) |" in text
+    assert "| model rung |" in text  # the design table
+
+
+def test_a_response_declared_without_a_sense_is_tabulated_not_ranked(
+    side_force: xr.Dataset,
+) -> None:
+    # valve_step_accuracy tabulates the lift without ranking it (not an accuracy criterion).
+    text = (CATALOG / "valve_step_accuracy.toml").read_text(encoding="utf-8")
+    assert tomllib.loads(text)["sense"]["max_lift"] == "none"
+    ds = side_force.copy()
+    ds["max_side_force"].attrs["better"] = "none"
+    an = analyze(ds)
+    r = an.sel(response="max_side_force")
+    assert (r.best_level.values == -1).all()
+    assert np.isnan(float(r.optimum_value))
+    # The range analysis still holds (brute force: the level means of the results).
+    y = ds["max_side_force"].values
+    codes = ds["rod_ratio_level"].values
+    np.testing.assert_allclose(
+        r.k.sel(term="rod_ratio").values[:2], [y[codes == 0].mean(), y[codes == 1].mean()]
+    )
+    report = report_text(ds, an, ["max_side_force"])
+    assert "Not ranked" in report
+    assert "### Best computed point" not in report
