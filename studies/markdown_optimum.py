@@ -247,8 +247,10 @@ def _neighbours(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, units: str) -> 
             value = float(r.neighbour_value.sel(term=f).values[s])
             run = int(r.neighbour_run.sel(term=f).values[s])
             if not 0 <= level + step < len(levels_of(an, f)):
-                cells.append("— (edge of the grid)")
-                if len(levels_of(an, f)) > 1:
+                # Named levels (a material) have no order: nothing lies beyond the first or last.
+                numeric = np.isfinite(an["level_value"].sel(term=f).values[level])
+                cells.append("— (edge of the grid)" if numeric else "—")
+                if numeric and len(levels_of(an, f)) > 1:
                     edges.append(f)
                 continue
             if not np.isfinite(value):
