@@ -5,6 +5,7 @@ chosen levels (:mod:`studies.tradeoff`). Operating conditions are never chosen."
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -13,7 +14,13 @@ import xarray as xr
 from studies import taguchi
 from studies.markdown_format import level_text, num, pct, table
 from studies.markdown_ran import replaced
-from studies.markdown_terms import computed, control_terms, operating_terms
+from studies.markdown_terms import (
+    bound_mark,
+    computed,
+    control_terms,
+    none_text,
+    operating_terms,
+)
 from studies.text_safety import Markup, md_escape
 
 
@@ -80,12 +87,14 @@ def tradeoff_section(
         ]
     grid = computed(an)
     several = an.sizes["condition"] > 1
+    at_chosen = _runs_at(view, chosen) if grid else np.array([], dtype=np.int64)
     rows = []
     for m in names:
         r = an.sel(response=m)
         units = str(r.units.values)
-        row = [shown.get(m, m), str(r.sense.values), num(float(r.optimum_value)),
-               num(float(r.compromise))]  # fmt: skip
+        own = _value(view, m, float(r.optimum_value), r.optimum_run.values if grid else ())
+        row = [shown.get(m, m), str(r.sense.values), own,
+               _value(view, m, float(r.compromise), at_chosen)]  # fmt: skip
         row += [num(float(r.compromise_worst))] if several else []
         row += [] if grid else [num(float(r.compromise_half_width))]
         rows.append([*row, units if units != "1" else ""])
@@ -117,3 +126,27 @@ def tradeoff_section(
             "",
         ]
     return lines, chosen
+
+
+def _runs_at(view: xr.Dataset, levels: dict[str, int]) -> np.ndarray:
+    """The runs at these control levels (one per operating condition on a grid)."""
+    hit = np.ones(view.sizes["run"], dtype=bool)
+    for f, level in levels.items():
+        hit &= view[f"{f}_level"].values == level
+    return np.flatnonzero(hit)
+
+
+def _value(view: xr.Dataset, name: str, value: float, runs: Sequence[int] | np.ndarray) -> Markup:
+    """``value``, or what the runs behind it are when none has a value of its own (the reed's
+    "no crossing up to order 3"), or the value marked as resting on such runs: a bound is
+    never shown as a computed value."""
+    runs = [int(i) for i in runs if int(i) >= 0]
+    without = [i for i in runs if bound_mark(view, name, i)]
+    if not without:
+        return Markup(num(value))
+    if len(without) == len(runs):
+        return md_escape(none_text(view, name))
+    return Markup(
+        f"{num(value)} (counts {len(without)} of {len(runs)} runs at the bound: "
+        f"{md_escape(none_text(view, name))})"
+    )

@@ -131,3 +131,19 @@ def test_no_crossing_is_the_best_computed_point(reed: xr.Dataset, name: str) -> 
     assert f"{none.size} level combinations share this best value" in report
     if name == NAME:  # the runs: 10, 13 and 14 (1-based) have no crossing up to 3
         np.testing.assert_array_equal(none + 1, [10, 13, 14])
+
+
+def test_the_trade_off_never_shows_a_bound_as_a_computed_value(reed: xr.Dataset) -> None:
+    # Two responses: the value table gives each at its own optimum and at the chosen levels;
+    # a run without a crossing reads as such, never as the order it was counted at.
+    an = analyze(reed)
+    report = report_text(reed, an, [NAME, "first_frequency"])
+    chosen = {f: int(an["chosen_level"].sel(term=f)) for f in ("length", "thickness", "material")}
+    hit = np.ones(reed.sizes["run"], dtype=bool)
+    for f, level in chosen.items():
+        hit &= reed[f"{f}_level"].values == level
+    (run,) = np.flatnonzero(hit)  # brute force: the one run at the chosen levels
+    y = reed[NAME].values
+    own = int(an["optimum_run"].sel(response=NAME).values[0])
+    cells = ["no crossing up to order 3" if np.isnan(y[i]) else f"{y[i]:.4g}" for i in (own, run)]
+    assert f"| {NAME} | larger | {cells[0]} | {cells[1]} |" in report
