@@ -29,11 +29,13 @@ from studies.markdown_terms import (
 )
 from studies.text_safety import Markup, md_escape
 
-NOTHING_TO_CHOOSE = (
-    "Every factor is an operating condition or a model rung: there are no levels to choose."
-)
 MAX_CONDITION_ROWS = 12  # operating conditions listed one per row; more: see analysis.nc
 MAX_LISTED_RUNS = 12  # runs named per level in "rests on runs …"
+
+
+def _nothing_to_choose(an: xr.Dataset) -> str:
+    what = "an operating condition or a model rung" if model_terms(an) else "an operating condition"
+    return f"Every factor is {what}: there are no levels to choose."
 
 
 def _worst_condition(an: xr.Dataset, at: np.ndarray, sense: str) -> str:
@@ -52,7 +54,7 @@ def _levels_table(
     """The chosen levels; a level that some of ``runs`` did not run with is marked as a
     request (:mod:`studies.markdown_ran`)."""
     if not levels:
-        return [NOTHING_TO_CHOOSE, ""]
+        return [_nothing_to_choose(an), ""]
     instead: set[str] = set()
     for run in runs:
         instead |= set(replaced(view, an, int(run))) if run >= 0 else set()
@@ -162,7 +164,7 @@ def _computed(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, shown: str) -> li
     name = str(r.response.values)
     if not control_terms(an):
         lines = ["### Over the operating conditions", ""]
-        lines += [NOTHING_TO_CHOOSE, ""]
+        lines += [_nothing_to_choose(an), ""]
         lines += [line for sentence in not_chosen(an) for line in (sentence, "")]
         lines += [_over_conditions(an, r, units, "Computed"), ""]
         return lines + _per_model(an, r, units) + _conditions(view, an, r, units)
