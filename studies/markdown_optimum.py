@@ -21,6 +21,7 @@ from studies.markdown_terms import (
     bound_mark,
     computed,
     control_terms,
+    model_terms,
     none_text,
     not_chosen,
     optimum_levels,
