@@ -106,7 +106,10 @@ def test_valve_step_accuracy_runs_with_one_reference_per_pair(
     frame = pd.DataFrame({k: everything[k].values for k in keys})
     means = frame.assign(e=everything["reference_error"].values).groupby(keys).e.mean()
     best = means.idxmin()
-    runs = np.flatnonzero((frame[keys] == best).all(axis=1).to_numpy())
+    at_best = np.ones(len(frame), dtype=bool)
+    for key, value in zip(keys, best, strict=True):
+        at_best &= (frame[key] == value).to_numpy()
+    runs = np.flatnonzero(at_best)
     used = everything["integrator_used"]
     meanings = str(used.attrs["flag_meanings"]).split()
     codes = [int(c) for c in used.attrs["flag_values"]]
