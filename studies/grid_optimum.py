@@ -14,8 +14,8 @@ and whether it sits at the edge of the grid. O(N) in the design points.
 Runs without a value of their own (:mod:`studies.missing`) enter at the bound they were counted
 at, but a bound is not a value: a run whose ``none_means`` is "best" (the reed's "no crossing")
 is better than every computed value and one whose value is "worst" is worse than every one. So
-the combinations are ranked by (fewest such worst runs, most such best runs, best mean); among
-exact ties, the one whose levels have the best main effects wins (then the first in grid order),
+the combinations are ranked by (fewest such worst runs, most such best runs, best mean, means
+within round-off of each other equal, as in the range analysis); among ties, the one whose levels have the best main effects wins (then the first in grid order),
 and the number of tied combinations is kept, for the report to say.
 """
 
@@ -27,6 +27,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+
+from studies.sums_of_squares import ROUND_OFF
 
 SIDES = ("below", "above")
 
@@ -139,6 +141,10 @@ class Grid:
         """Per control combination, its place in the order of the module docstring (0 best;
         combinations without a mean last)."""
         finite = np.isfinite(mean)
+        # Means within round-off of the best are ties, as in the range analysis (R = 0).
+        best = np.min(mean[finite])
+        tolerance = ROUND_OFF * np.max(np.abs(mean[finite]))
+        mean = np.where(finite & (mean <= best + tolerance), best, mean)
         if beyond is None:
             worse = better = np.zeros(mean.shape, dtype=np.int64)
         else:
