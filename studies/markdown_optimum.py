@@ -167,7 +167,8 @@ def _computed(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, shown: str) -> li
         lines = ["### Over the operating conditions", ""]
         lines += [_nothing_to_choose(an), ""]
         lines += [line for sentence in not_chosen(an) for line in (sentence, "")]
-        lines += [_over_conditions(an, r, units, "Computed"), ""]
+        if not model_terms(an):  # a mean over models would mix them: per model instead
+            lines += [_over_conditions(an, r, units, "Computed"), ""]
         return lines + _per_model(an, r, units) + _conditions(view, an, r, units)
     lines = [
         "### Best computed point",

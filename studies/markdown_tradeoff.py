@@ -50,7 +50,7 @@ def tradeoff_section(
     ]
     header = ["response", "better", *factors]
     rows: list[list[Any]] = []
-    requested = False
+    requested = differs = False
     for m in names:
         r = an.sel(response=m)
         instead: set[str] = set()
@@ -59,8 +59,10 @@ def tradeoff_section(
         cells = [
             f"{int(r.optimum_level.sel(term=f)) + 1} ({pct(float(r.contribution.sel(source=f)))} %)"
             + (" ‡" if f in instead else "")
+            + (" ≠" if _differs(r, f) else "")
             for f in factors
         ]
+        differs = differs or any(_differs(r, f) for f in factors)
         requested = requested or bool(instead)
         rows.append([shown.get(m, m), str(r.sense.values), *cells])
     chosen = {f: int(an["chosen_level"].sel(term=f)) for f in factors}
@@ -77,6 +79,15 @@ def tradeoff_section(
         ["conflict", "", *["yes" if c else "no" for c in an["conflict"].sel(term=factors).values]]
     )
     lines += [table(header, rows), ""]
+    if differs:
+        lines += [
+            (
+                "≠ Not the range analysis' best level: the level at that response's best "
+                "computed point, where the other factors' levels make it best (an interaction); "
+                "the range analysis averages over them."
+            ),
+            "",
+        ]
     if requested:
         lines += [
             (
@@ -142,7 +153,7 @@ def _value(view: xr.Dataset, name: str, value: float, runs: Sequence[int] | np.n
     never shown as a computed value."""
     runs = [int(i) for i in runs if int(i) >= 0]
     without = [i for i in runs if bound_mark(view, name, i)]
-    if not without:
+    if not without or not np.isfinite(value):  # "—": no value (none_means = unknown)
         return Markup(num(value))
     if len(without) == len(runs):
         return md_escape(none_text(view, name))
@@ -150,3 +161,9 @@ def _value(view: xr.Dataset, name: str, value: float, runs: Sequence[int] | np.n
         f"{num(value)} (counts {len(without)} of {len(runs)} runs at the bound: "
         f"{md_escape(none_text(view, name))})"
     )
+
+
+def _differs(r: xr.Dataset, factor: str) -> bool:
+    """Whether the optimum's level of ``factor`` is not the range analysis' best level."""
+    best = int(r.best_level.sel(term=factor))
+    return best >= 0 and best != int(r.optimum_level.sel(term=factor))

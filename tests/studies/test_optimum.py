@@ -334,3 +334,26 @@ def test_a_response_declared_without_a_sense_is_tabulated_not_ranked(
     report = report_text(ds, an, ["max_side_force"])
     assert "Not ranked" in report
     assert "### Best computed point" not in report
+
+
+def test_trade_off_marks_a_best_point_level_that_is_not_the_main_effect_best() -> None:
+    # By hand (smaller is better): a0b0 = 0, a0b1 = 5, a1b0 = 3, a1b1 = 1. Main effects: a1
+    # (mean 2) beats a0 (2.5), but the best computed point is a0b0 (ohc125_dynamics'
+    # bounce_height at 20 N/mm is this case, S3 of the re-read).
+    y = np.array([0.0, 5.0, 3.0, 1.0])
+    ds = xr.Dataset(
+        {"y": ("run", y, {"units": "mm", "better": "smaller"}),
+         "z": ("run", y + 1.0, {"units": "mm", "better": "smaller"})},
+        coords={"a": ("run", [1.0, 1.0, 2.0, 2.0]), "a_level": ("run", [0, 0, 1, 1]),
+                "b": ("run", [1.0, 2.0, 1.0, 2.0]), "b_level": ("run", [0, 1, 0, 1])},
+        attrs={"design": "full_factorial", "factors": '["a", "b"]', "responses": '["y", "z"]'},
+    )  # fmt: skip
+    an = analyze(ds)
+    r = an.sel(response="y")
+    assert int(r.best_level.sel(term="a")) == 1
+    assert int(r.optimum_level.sel(term="a")) == 0
+    text = report_text(ds, an, ["y", "z"])
+    row = next(line for line in text.splitlines() if line.startswith("| y | smaller |"))
+    assert row.split(" | ")[2].endswith("≠")  # a: level 1 at the best point, not the main effect's
+    assert not row.split(" | ")[3].endswith("≠")  # b: level 1 either way
+    assert "≠ Not the range analysis' best level" in text
