@@ -91,7 +91,13 @@ def _conditions(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, units: str) -> 
     if len(labels) > MAX_CONDITION_ROWS:
         return [
             (
-                f"{len(labels)} operating conditions: per condition in `analysis.nc` "
+                f"{len(labels)} "
+                + (
+                    "conditions (model rungs × operating conditions)"
+                    if model_terms(an)
+                    else "operating conditions"
+                )
+                + ": per condition in `analysis.nc` "
                 "(`optimum_at`, `optimum_run`, `best_value`, `best_run`)."
             ),
             "",

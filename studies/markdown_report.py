@@ -146,8 +146,10 @@ def _next_study(
         intro = (
             "Every combination was computed, so there is nothing to confirm. The study below "
             "is a finer grid around the chosen levels (5 levels between the neighbours of each "
-            "numeric control factor that has an effect; operating conditions at all their "
-            "levels)" + (f", also written to `{REFINEMENT_NAME}`." if written else ".")
+            "numeric control factor that has an effect, reaching one step past the edge of the "
+            "grid where the chosen level is at an edge, as its comment lines say; operating "
+            "conditions at all their levels)"
+            + (f", also written to `{REFINEMENT_NAME}`." if written else ".")
         )
         title = "## Refinement around the best point"
     else:
