@@ -7,8 +7,9 @@
   its neighbouring levels, text levels at the chosen one, operating factors at all their
   levels. At the edge of the grid the better value may lie beyond it, so the grid reaches one
   step past the edge (the spacing of the levels: a constant ratio of three or more levels is
-  kept, e.g. 1, 0.5, 0.25 → 0.125; else the last difference), as far as the scene's
-  parameter allows (a length stays positive); each such step is noted in the file."""
+  kept, e.g. 1, 0.5, 0.25 → 0.125, and such a factor gets no levels in between; else the last
+  difference), as far as the scene's parameter allows (a length stays positive); each such
+  step is noted in the file."""
 
 from __future__ import annotations
 
@@ -89,9 +90,12 @@ def refinement(ds: xr.Dataset, levels: Mapping[str, int], hold: Collection[str] 
             notes.append(note)
             ends = [inner, beyond]
         low, high = min(ends), max(ends)
+        # Levels at a constant ratio (halved steps) keep it: the refinement is the sequence's
+        # own next member, not points in between (a step of 0.0884 deg would not divide the
+        # others' grids).
         grid = (
-            np.geomspace(low, high, REFINEMENT_LEVELS)
-            if geometric and low * high > 0
+            np.array(sorted({low, float(chosen), high}))
+            if geometric
             else np.linspace(low, high, REFINEMENT_LEVELS)
         )
         if whole:
