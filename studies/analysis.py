@@ -32,8 +32,9 @@ a full factorial) and ``level_a`` × ``level_b`` for two-way tables of means.
   ``compromise``, ``compromise_worst``, ``compromise_half_width`` per response and
   ``compromise_at`` per condition).
 
-Coordinates ``term_role`` ("control", "operating" or "column") and ``condition`` (the labels of
-the operating conditions); attributes ``operating_factors`` and ``optimum_basis``.
+Coordinates ``term_role`` ("control", "operating", "model" or "column") and ``condition`` (the
+labels of the operating conditions: model rungs count among them); attributes
+``operating_factors`` (model factors included), ``model_factors`` and ``optimum_basis``.
 
 Variables that hold a response's values carry its units in the ``units`` variable (per
 response); the ANOVA SS are in units².
@@ -55,6 +56,7 @@ from studies.grid_optimum import Grid
 from studies.results import NOT_EVALUATED, PASS_FAIL, is_status, write_netcdf
 from studies.statistics import (
     SENSES,
+    UNRANKED,
     anova,
     has_values,
     range_analysis,
@@ -125,13 +127,14 @@ def analyze(
     attrs |= {"points": ds.sizes["run"], "points_without_value": int((~ran).sum())}
     terms = taguchi.model_terms(view)
     operating = prediction.operating_factors(view)
+    models = [f for f in json.loads(view.attrs.get("model_factors", "[]")) if f in operating]
     # The level codes once in memory, then one response at a time: a 10⁷-run result is never
     # held whole.
     base = view.drop_vars(list(view.data_vars))
     base = base.assign_coords(
         {f"{t}_level": base[f"{t}_level"].variable.copy(deep=False).load() for t in terms}
     )  # the level codes stay in memory (4 B per run and term); factor values are read on use
-    out = _frame(base, view, analysed, terms, operating)
+    out = _frame(base, view, analysed, terms, operating, models)
     order = grid_of(base) if design == "full_factorial" else None
     grid = None if order is None else Grid(*order, operating)
     if order is not None:
@@ -139,17 +142,18 @@ def analyze(
     attrs["optimum_basis"] = analysis_optimum.COMPUTED if grid else analysis_optimum.PREDICTED
     tables, optima, replaced = {}, {}, {}
     for name in analysed:
-        variable, changed = _filled(out, base, view[name], ran, name, terms)
+        variable, beyond = _filled(out, base, view[name], ran, name, terms)
         one = base.assign({name: variable})
-        if changed:
+        if beyond is not None:
             replaced[name] = variable
         out["varies"].loc[name] = int(taguchi.varies(one, name))
         tables[name] = anova(one, name, factors=terms, pool=pool)
         _range(out, one, name, terms, operating)
         _anova(out, tables[name], name)
-        found = analysis_optimum.optimum(out, one, name, tables[name], grid)
-        if found is not None:
-            optima[name] = found
+        if str(view[name].attrs.get("better")) != UNRANKED:
+            found = analysis_optimum.optimum(out, one, name, tables[name], grid, beyond)
+            if found is not None:
+                optima[name] = found
         _interactions(out, one, name, tables[name])
         if order is not None:
             factorial(out, one, name, order)
@@ -165,6 +169,7 @@ def analyze(
     out.attrs = attrs | {
         "analysed": json.dumps(analysed),
         "operating_factors": json.dumps(operating),
+        "model_factors": json.dumps(models),
     }
     return out
 
@@ -176,7 +181,12 @@ def write_analysis_nc(an: xr.Dataset, folder: Path) -> Path:
 
 # --- the frame ------------------------------------------------------------------------------
 def _frame(
-    base: xr.Dataset, view: xr.Dataset, names: list[str], terms: list[str], operating: list[str]
+    base: xr.Dataset,
+    view: xr.Dataset,
+    names: list[str],
+    terms: list[str],
+    operating: list[str],
+    models: list[str],
 ) -> xr.Dataset:
     nlevels = max(int(base[f"{t}_level"].max()) + 1 for t in terms) if terms else 1
     pairs = list(taguchi.interaction_pairs(view))
@@ -243,7 +253,7 @@ def _frame(
         "level_label": (("term", "level"), label),
         "term_units": ("term", units),
         "is_factor": ("term", [int(t in taguchi.factor_names(view)) for t in terms]),
-        "term_role": ("term", [_role(view, t, operating) for t in terms]),
+        "term_role": ("term", [_role(view, t, operating, models) for t in terms]),
         "level_runs": (("term", "level"), _level_runs(base, terms, nlevels)),
         "interaction_a": ("interaction", [a for a, _ in pairs]),
         "interaction_b": ("interaction", [b for _, b in pairs]),
@@ -255,9 +265,11 @@ def _frame(
         for t, pair in zip(terms, zip(value, label, strict=True), strict=True)
     }
     term_units = dict(zip(terms, units, strict=True))
-    analysis_optimum.optimum_frame(
-        out, analysis_optimum.condition_labels(conditions, shown, term_units)
+    labels = analysis_optimum.condition_labels(conditions, shown, term_units)
+    model_labels = analysis_optimum.condition_labels(
+        [{f: c[f] for f in models} for c in conditions], shown, term_units
     )
+    analysis_optimum.optimum_frame(out, labels, model_labels if models else None)
     return out
 
 
@@ -269,9 +281,11 @@ def _level_runs(base: xr.Dataset, terms: list[str], nlevels: int) -> np.ndarray:
     ).reshape(len(terms), nlevels)
 
 
-def _role(view: xr.Dataset, term: str, operating: list[str]) -> str:
+def _role(view: xr.Dataset, term: str, operating: list[str], models: list[str]) -> str:
     if term not in taguchi.factor_names(view):
         return "column"
+    if term in models:
+        return "model"
     return "operating" if term in operating else "control"
 
 
@@ -296,15 +310,16 @@ def _level_values(
 # --- per response ---------------------------------------------------------------------------
 def _filled(
     out: xr.Dataset, base: xr.Dataset, y: xr.DataArray, ran: np.ndarray, name: str, terms: list[str]
-) -> tuple[xr.Variable, bool]:
+) -> tuple[xr.Variable, np.ndarray | None]:
     """The values the analysis uses (runs without a finite value resolved by
     :mod:`studies.missing`), with the per-level counts of what was done written into ``out``.
     A bare Variable (no coordinates to compare and load on assignment; the view stays lazy),
-    and whether any value was resolved."""
+    and, when any value was resolved, which runs lie beyond every computed value
+    (``missing.Filled.beyond``), else None."""
     variable = y.variable.copy(deep=False).load()
     values = variable.values.astype(float)
     if np.isfinite(values).all():
-        return variable, False
+        return variable, None
     sense = str(y.attrs.get("better", "smaller"))
     filled = missing.fill(values, ran, missing.none_means(y), sense)
     i = out.indexes["response"].get_loc(name)
@@ -317,7 +332,7 @@ def _filled(
         filled.best_bound,
         filled.worst_bound,
     )
-    return xr.Variable(variable.dims, filled.values, variable.attrs), True
+    return xr.Variable(variable.dims, filled.values, variable.attrs), filled.beyond
 
 
 def _range(
@@ -330,7 +345,8 @@ def _range(
     )
     for v in ("R", "rank"):
         out[v].loc[at] = ra[v].values
-    chosen = [t not in operating and t in taguchi.factor_names(view) for t in terms]
+    ranked = str(view[name].attrs.get("better")) != UNRANKED
+    chosen = [ranked and t not in operating and t in taguchi.factor_names(view) for t in terms]
     best = np.where(np.asarray(chosen) & (ra["R"].values > 0), ra["best_level"].values, -1)
     out["best_level"].loc[at] = best
     y = view[name].values.astype(float)

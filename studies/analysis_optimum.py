@@ -12,7 +12,8 @@ Variables (``condition``: each combination of the operating factors' levels, one
 none): ``optimum_level`` (response, term; -1 for operating factors and interaction columns),
 ``optimum_value`` (mean over the conditions), ``optimum_worst``, ``optimum_at`` and
 ``optimum_run`` (response, condition; -1 where that combination was not run), ``best_value`` and
-``best_run`` (response, condition; full factorials), ``neighbour_value`` and ``neighbour_run``
+``best_run`` (response, condition; full factorials), ``optimum_ties`` and ``optimum_tie_rule``
+(response: control combinations sharing the best rank and what chose among them), ``neighbour_value`` and ``neighbour_run``
 (response, term, side), the array's ``predicted``, ``half_width``, ``confirmation_half_width``,
 ``n_eff``, ``error_ms``, ``error_dof``, ``model_terms``; the trade-off's ``chosen_level``,
 ``decided_by``, ``conflict`` (term), ``compromise``, ``compromise_worst``,
@@ -48,11 +49,24 @@ def condition_labels(
     return [", ".join(one(f, v) for f, v in c.items()) or "all design points" for c in conditions]
 
 
-def optimum_frame(out: xr.Dataset, labels: list[str]) -> None:
+def optimum_frame(out: xr.Dataset, labels: list[str], models: list[str] | None = None) -> None:
     """The optimum variables (NaN / -1 until a response fills them) and the ``condition`` and
-    ``side`` coordinates."""
+    ``side`` coordinates; with model factors, ``models`` is the model label of each condition
+    (coordinate ``model`` and ``condition_model``, the model index of each condition)."""
     nr, nt, nc = out.sizes["response"], out.sizes["term"], len(labels)
     out.coords["condition"] = labels
+    if models is not None:
+        unique = list(dict.fromkeys(models))
+        out.coords["model"] = unique
+        out.coords["condition_model"] = ("condition", [unique.index(m) for m in models])
+        nm = len(unique)
+        out.update(
+            {
+                "model_mean": (("response", "model"), np.full((nr, nm), np.nan)),
+                "model_worst": (("response", "model"), np.full((nr, nm), np.nan)),
+                "model_worst_at": (("response", "model"), np.full((nr, nm), -1, np.int64)),
+            }
+        )
     out.coords["side"] = list(SIDES)
     rc, rts = ("response", "condition"), ("response", "term", "side")
     out.update(
@@ -65,16 +79,24 @@ def optimum_frame(out: xr.Dataset, labels: list[str]) -> None:
             "best_run": (rc, np.full((nr, nc), -1, dtype=np.int64)),
             "neighbour_value": (rts, np.full((nr, nt, 2), np.nan)),
             "neighbour_run": (rts, np.full((nr, nt, 2), -1, dtype=np.int64)),
+            "optimum_ties": ("response", np.ones(nr, dtype=np.int64)),
+            "optimum_tie_rule": ("response", np.full(nr, "", dtype=object)),
         }
     )
 
 
 def optimum(
-    out: xr.Dataset, one: xr.Dataset, name: str, table: Any, grid: Grid | None
+    out: xr.Dataset,
+    one: xr.Dataset,
+    name: str,
+    table: Any,
+    grid: Grid | None,
+    beyond: np.ndarray | None = None,
 ) -> tradeoff.Optimum | None:
-    """Fill the optimum of ``name`` (the computed one on a grid, else the prediction)."""
+    """Fill the optimum of ``name`` (the computed one on a grid, else the prediction);
+    ``beyond``: the runs whose value is a bound (:attr:`studies.missing.Filled.beyond`)."""
     if grid is not None:
-        return _computed(out, one, name, grid)
+        return _computed(out, one, name, grid, beyond)
     return _predicted(out, one, name, table)
 
 
@@ -89,14 +111,26 @@ def _summary(out: xr.Dataset, name: str, at: np.ndarray, sense: str) -> None:
     out["optimum_at"].values[i] = at
     out["optimum_value"].values[i] = float(np.mean(at))
     out["optimum_worst"].values[i] = float(at.max() if sense == "smaller" else at.min())
+    if "model" not in out.coords:
+        return
+    signed = at if sense == "smaller" else -at
+    for m in range(out.sizes["model"]):
+        where = np.flatnonzero(out["condition_model"].values == m)
+        out["model_mean"].values[i, m] = float(np.mean(at[where]))
+        worst = int(where[int(np.argmax(signed[where]))])
+        out["model_worst"].values[i, m] = float(at[worst])
+        out["model_worst_at"].values[i, m] = worst
 
 
-def _computed(out: xr.Dataset, one: xr.Dataset, name: str, grid: Grid) -> GridOptimum | None:
+def _computed(
+    out: xr.Dataset, one: xr.Dataset, name: str, grid: Grid, beyond: np.ndarray | None
+) -> GridOptimum | None:
     sense = str(one[name].attrs.get("better", "smaller"))
-    found = grid.optimum(one[name].values, sense)
+    found = grid.optimum(one[name].values, sense, beyond)
     if found is None:
         return None
     i = out.indexes["response"].get_loc(name)
+    out["optimum_ties"].values[i], out["optimum_tie_rule"].values[i] = found.ties, found.tie_rule
     _levels(out, name, found.levels)
     _summary(out, name, found.at, sense)
     out["optimum_run"].values[i] = found.runs

@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from studies.statistics import sweep_runs
+from studies.statistics import sense_words, sweep_runs
 
 NO_NOISE = (
     "A deterministic full factorial has no noise term: its ANOVA 'error' is the interactions, "
@@ -66,12 +66,12 @@ def _level_names(row: xr.Dataset) -> list[str]:
 def _best_text(an: xr.Dataset, row: xr.Dataset, t: str) -> str:
     role = str(an["term_role"].sel(term=t).values)
     best = int(row.best_level)
-    if role == "operating":
-        return "— (operating)"
+    if role in ("operating", "model"):
+        return f"— ({role})"
     if role == "column":
         return "—"
     if best < 0:
-        return "— (R = 0)"
+        return "— (not ranked)" if str(row.sense.values) == "none" else "— (R = 0)"
     names = _level_names(row)
     fu = str(row.term_units.values)
     return f"{best + 1} ({_with_units(names[best], fu)})" if best < len(names) else str(best + 1)
@@ -192,7 +192,7 @@ def format_tables(an: xr.Dataset, response: str) -> str:
     lines = [
         wrap(
             f"Range analysis of {response} ({r.long_name.values}){_units_suffix(units)}; "
-            f"{r.sense.values} is better; k_i = mean at level i (levels numbered from 1 here, "
+            f"{sense_words(str(r.sense.values))}; k_i = mean at level i (levels numbered from 1 here, "
             "from 0 in results.nc)"
         ),
         range_text(an, response),

@@ -4,8 +4,12 @@
   one point per operating condition: operating factors keep all their levels).
 * The refinement of a full factorial, whose best point was computed and needs no confirmation:
   a finer grid around it, ``REFINEMENT_LEVELS`` levels of each numeric control factor between
-  its neighbouring levels (from the chosen level to its one neighbour at the edge of the grid),
-  text levels at the chosen one, operating factors at all their levels."""
+  its neighbouring levels, text levels at the chosen one, operating factors at all their
+  levels. At the edge of the grid the better value may lie beyond it, so the grid reaches one
+  step past the edge (the spacing of the levels: a constant ratio of three or more levels is
+  kept, e.g. 1, 0.5, 0.25 → 0.125, and such a factor gets no levels in between; else the last
+  difference), as far as the scene's parameter allows (a length stays positive); each such
+  step is noted in the file."""
 
 from __future__ import annotations
 
@@ -14,11 +18,13 @@ import math
 import re
 import tomllib
 from collections.abc import Collection, Mapping
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
+from studies.scenes import get_scene
 from studies.taguchi import factor_names, level_values, plain
 
 _BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
@@ -55,25 +61,100 @@ def confirmation_toml(ds: xr.Dataset, levels: Mapping[str, int]) -> str:
     return _study(ds, confirmation_values(ds, levels), "confirmation", "Confirmation run", what)
 
 
-def refinement_values(
-    ds: xr.Dataset, levels: Mapping[str, int], hold: Collection[str] = ()
-) -> dict[str, list[Any]]:
-    """Factor → the levels of the refinement grid (see the module docstring); factors in
-    ``hold`` (e.g. without any effect) stay at their chosen level."""
+@dataclass(frozen=True)
+class Refinement:
+    """The refinement grid: factor → levels, and one note per factor extended past the edge
+    of the grid (or held at it by its allowed range)."""
+
+    values: dict[str, list[Any]]
+    notes: list[str] = field(default_factory=list)
+
+
+def refinement(ds: xr.Dataset, levels: Mapping[str, int], hold: Collection[str] = ()) -> Refinement:
+    """The levels of the refinement grid (see the module docstring); factors in ``hold``
+    (e.g. without any effect) stay at their chosen level."""
     values = confirmation_values(ds, levels)
+    notes = []
     for f, level in levels.items():
         chosen = values[f][0]
-        if isinstance(chosen, str | bool) or f in hold:
-            continue
         known = level_values(ds, f)
-        ends = [known.get(level - 1, chosen), known.get(level + 1, chosen)]
-        grid = np.linspace(min(ends), max(ends), REFINEMENT_LEVELS)
-        if isinstance(chosen, int) or _whole(ds, f):
+        if isinstance(chosen, str | bool) or f in hold or len(known) < 2:
+            continue
+        geometric = _geometric([float(known[i]) for i in sorted(known)])
+        whole = isinstance(chosen, int) or _whole(ds, f)
+        if level - 1 in known and level + 1 in known:
+            ends = [float(known[level - 1]), float(known[level + 1])]
+        else:  # at the edge of the grid: one step past it
+            inner = float(known[level - 1] if level - 1 in known else known[level + 1])
+            beyond, note = _beyond(ds, f, float(chosen), inner, geometric, whole)
+            notes.append(note)
+            ends = [inner, beyond]
+        low, high = min(ends), max(ends)
+        # Levels at a constant ratio (halved steps) keep it: the refinement is the sequence's
+        # own next member, not points in between (a step of 0.0884 deg would not divide the
+        # others' grids).
+        grid = (
+            np.array(sorted({low, float(chosen), high}))
+            if geometric
+            else np.linspace(low, high, REFINEMENT_LEVELS)
+        )
+        if whole:
             refined: list[Any] = sorted({round(float(v)) for v in grid})
         else:
             refined = sorted({float(f"{v:.{SIGNIFICANT}g}") for v in grid} | {float(chosen)})
         values[f] = refined
-    return values
+    return Refinement(values, notes)
+
+
+def refinement_values(
+    ds: xr.Dataset, levels: Mapping[str, int], hold: Collection[str] = ()
+) -> dict[str, list[Any]]:
+    """Factor → the levels of the refinement grid (:func:`refinement`)."""
+    return refinement(ds, levels, hold).values
+
+
+def _geometric(values: list[float]) -> bool:
+    """Three or more levels of one sign at a constant ratio (not 1)."""
+    if len(values) < 3 or (not all(v > 0 for v in values) and not all(v < 0 for v in values)):
+        return False
+    ratios = np.asarray(values[1:]) / np.asarray(values[:-1])
+    return bool(np.allclose(ratios, ratios[0], rtol=1e-9) and not np.isclose(ratios[0], 1.0))
+
+
+def _beyond(
+    ds: xr.Dataset, factor: str, edge: float, inner: float, geometric: bool, whole: bool
+) -> tuple[float, str]:
+    """One step past ``edge`` away from ``inner`` and the note on it; ``edge`` itself when the
+    factor's allowed range ends there."""
+    step = edge * edge / inner if geometric else edge + (edge - inner)
+    step = float(round(step)) if whole else float(f"{step:.{SIGNIFICANT}g}")
+    units = str(ds[factor].attrs.get("units", "")) if factor in ds.coords else ""
+    shown = f"{step:g}" + (f" {units}" if units not in ("", "1") else "")
+    problem = _problem(ds, factor, step, units)
+    if problem is None:
+        return (
+            step,
+            f"{factor}: the best level is at the edge of the grid; refined past it to {shown}",
+        )
+    return edge, (
+        f"{factor}: the best level is at the edge of the grid, but one step past it is not "
+        f"allowed ({problem}): refined towards the inside only"
+    )
+
+
+def _problem(ds: xr.Dataset, factor: str, value: float, units: str) -> str | None:
+    """Why ``value`` is not an allowed value of ``factor`` (its scene's parameter; without the
+    scene: a quantity whose levels are all positive stays positive)."""
+    try:
+        parameter = get_scene(str(ds.attrs.get("scene", ""))).parameter(factor)
+    except (KeyError, ValueError):
+        parameter = None
+    if parameter is not None:
+        return parameter.check(value, units or None)
+    levels = [float(v) for v in level_values(ds, factor).values()]
+    if all(v > 0 for v in levels) and value <= 0:
+        return f"{factor} = {value:g}: its levels are all positive"
+    return None
 
 
 def _whole(ds: xr.Dataset, factor: str) -> bool:
@@ -85,12 +166,16 @@ def _whole(ds: xr.Dataset, factor: str) -> bool:
 
 def refinement_toml(ds: xr.Dataset, levels: Mapping[str, int], hold: Collection[str] = ()) -> str:
     """A finer full factorial around the chosen levels ("" when no numeric control factor
-    has a neighbouring level to refine towards)."""
-    values = refinement_values(ds, levels, hold)
-    if all(len(values[f]) < 2 for f in levels):
+    has a neighbouring level to refine towards); a comment line per note of
+    :func:`refinement`."""
+    found = refinement(ds, levels, hold)
+    if all(len(found.values[f]) < 2 for f in levels):
         return ""
     what = "a finer grid between the neighbours of the best computed point"
-    return _study(ds, values, "refinement", "Refinement", what)
+    text = _study(ds, found.values, "refinement", "Refinement", what)
+    head, rest = text.split("\n", 1)
+    notes = "".join(f"# {' '.join(n.splitlines())}.\n" for n in found.notes)
+    return f"{head}\n{notes}{rest}"
 
 
 def _study(
@@ -110,7 +195,8 @@ def _study(
         if units:
             table["units"] = str(units)
         if f in operating_factors(ds):
-            table["role"] = "operating"
+            models = json.loads(ds.attrs.get("model_factors", "[]"))
+            table["role"] = "model" if f in models else "operating"
         factors[f] = table
     study["factors"] = factors
     run = ds.attrs.get("run_id", "")

@@ -369,8 +369,10 @@ class _Parser(ValueParser):
         for r, s in sense.items():
             if r not in responses:
                 self.problem(f"[sense] names {r!r}, which is not in responses")
-            if s not in ("smaller", "larger"):
-                self.problem(f"[sense] {r} = {short(s)} must be 'smaller' or 'larger'")
+            if s not in ("smaller", "larger", "none"):
+                self.problem(
+                    f"[sense] {r} = {short(s)} must be 'smaller', 'larger' or 'none' (not ranked)"
+                )
 
     def _check_none_means(self, responses: list[str], none_means: dict[str, Any]) -> None:
         for r, meaning in none_means.items():

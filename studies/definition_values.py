@@ -15,9 +15,11 @@ from studies.units import UNITS, canonical, compatible_units
 
 FACTOR_KEYS = {"levels", "units", "column", "base", "role"}
 SHOWN_LEVEL_PROBLEMS = 3  # refused levels listed per factor; the rest are counted
-ROLES = ("control", "operating")
+ROLES = ("control", "operating", "model")
 """A control factor is a design choice (its best level is chosen); an operating factor is a
-condition the design must meet at every level (engine speed, load): never "chosen"."""
+condition the design must meet at every level (engine speed, load): never "chosen"; a model
+factor is a rung of a model ladder (the spring's coil masses: 0 = lumped) that computes the
+same design another way: never chosen either, its results are reported per model."""
 
 
 @dataclass(frozen=True)
@@ -150,8 +152,8 @@ class ValueParser:
             if role not in ROLES:
                 self.problem(
                     f"factor {name}: role = {short(role)} must be one of "
-                    f"{', '.join(repr(r) for r in ROLES)} (a design choice, or a condition such as "
-                    "engine speed that the design must meet at every level)"
+                    f"{', '.join(repr(r) for r in ROLES)} (a design choice, a condition such as "
+                    "engine speed that the design must meet at every level, or a model rung)"
                 )
                 role = "control"
             factors.append(Factor(name, tuple(levels), canonical(str(units)), column, base, role))

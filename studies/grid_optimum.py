@@ -5,12 +5,18 @@ is the best run. Factors have a role (:mod:`studies.definition_values`): only **
 factors are chosen; **operating** factors (speed, load) are conditions the design must meet at
 every level. With operating factors, the design points form a table of control combinations ×
 conditions (the operating-level combinations); the chosen control combination is the one with
-the best mean over the conditions (ties: the one whose levels have the best main effects,
-then the first in grid order), and the table gives its value
+the best mean over the conditions, and the table gives its value
 in each condition, the worst of them, and the best run of each condition on its own.
 Neighbours: the control combinations one level below and above the chosen one in each control
 factor, others fixed (their mean over the conditions), which shows whether the optimum is flat
 and whether it sits at the edge of the grid. O(N) in the design points.
+
+Runs without a value of their own (:mod:`studies.missing`) enter at the bound they were counted
+at, but a bound is not a value: a run whose ``none_means`` is "best" (the reed's "no crossing")
+is better than every computed value and one whose value is "worst" is worse than every one. So
+the combinations are ranked by (fewest such worst runs, most such best runs, best mean, means
+within round-off of each other equal, as in the range analysis); among ties, the one whose levels have the best main effects wins (then the first in grid order),
+and the number of tied combinations is kept, for the report to say.
 """
 
 from __future__ import annotations
@@ -22,6 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from studies.sums_of_squares import ROUND_OFF
+
 SIDES = ("below", "above")
 
 
@@ -30,7 +38,9 @@ class GridOptimum:
     """The chosen control levels (0-based; empty when nothing varies under control) and, per
     condition, the value and run there and the best run of that condition. ``neighbours``:
     control factor → ((mean, run), (mean, run)) one level below and above (NaN, -1 at an edge;
-    the run only when there is a single condition)."""
+    the run only when there is a single condition). ``ties``: control combinations that share the
+    best rank (1: no tie); ``tie_rule``: what chose among them ("main effects", "grid order" or
+    "" without a tie)."""
 
     levels: dict[str, int]
     at: np.ndarray
@@ -38,6 +48,8 @@ class GridOptimum:
     best_values: np.ndarray
     best_runs: np.ndarray
     neighbours: dict[str, tuple[tuple[float, int], tuple[float, int]]]
+    ties: int = 1
+    tie_rule: str = ""
 
     @property
     def mean(self) -> float:
@@ -89,16 +101,21 @@ class Grid:
         row = self.combination(levels)
         return self.table(y)[row], self.runs[row]
 
-    def optimum(self, y: np.ndarray, sense: str) -> GridOptimum | None:
+    def optimum(
+        self, y: np.ndarray, sense: str, beyond: np.ndarray | None = None
+    ) -> GridOptimum | None:
         """The best computed control combination of ``y`` (NaN where a run has no value: a
-        combination missing a condition is not chosen); None if none is complete."""
+        combination missing a condition is not chosen); None if none is complete. ``beyond``
+        (per run, :attr:`studies.missing.Filled.beyond`): +1 where the run's value is a bound
+        it is better than, -1 one it is worse than."""
         values = self.table(y)
         signed = values if sense == "smaller" else -values
         with np.errstate(invalid="ignore"):
             mean = signed.mean(axis=1)
         if not np.isfinite(mean).any():
             return None
-        row = self._tie_break(mean)
+        rank = self._rank(mean, beyond)
+        row, ties, rule = self._tie_break(mean, rank)
         codes = np.unravel_index(row, self.control_counts) if self.control else ()
         levels = {f: int(c) for f, c in zip(self.control, codes, strict=True)}
         best_values = np.full(values.shape[1], np.nan)
@@ -116,16 +133,40 @@ class Grid:
             )
             for f in self.control
         }
-        return GridOptimum(levels, values[row], self.runs[row], best_values, best_runs, neighbours)
+        return GridOptimum(
+            levels, values[row], self.runs[row], best_values, best_runs, neighbours, ties, rule
+        )
 
-    def _tie_break(self, mean: np.ndarray) -> int:
-        """The best row of ``mean`` (smaller is better); among exact ties, the one whose
-        levels have the best main effects (mean of ``mean`` over each factor's level, summed),
-        so a flat optimum agrees with the range analysis instead of the grid order."""
-        best = np.nanmin(mean)
-        tied = np.flatnonzero(mean == best)
-        if tied.size == 1 or not self.control:
-            return int(tied[0])
+    def _rank(self, mean: np.ndarray, beyond: np.ndarray | None) -> np.ndarray:
+        """Per control combination, its place in the order of the module docstring (0 best;
+        combinations without a mean last)."""
+        finite = np.isfinite(mean)
+        # Means within round-off of the best are ties, as in the range analysis (R = 0).
+        best = np.min(mean[finite])
+        tolerance = ROUND_OFF * np.max(np.abs(mean[finite]))
+        mean = np.where(finite & (mean <= best + tolerance), best, mean)
+        if beyond is None:
+            worse = better = np.zeros(mean.shape, dtype=np.int64)
+        else:
+            bounds = np.asarray(beyond)[self.runs]
+            worse, better = (bounds < 0).sum(axis=1), (bounds > 0).sum(axis=1)
+        order = np.lexsort((np.where(finite, mean, np.inf), -better, worse, ~finite))
+        keys = np.stack([~finite, worse, -better, np.where(finite, mean, np.inf)])[:, order]
+        new = np.concatenate([[True], (keys[:, 1:] != keys[:, :-1]).any(axis=0)])
+        rank = np.empty(mean.size, dtype=np.int64)
+        rank[order] = np.cumsum(new) - 1
+        return rank
+
+    def _tie_break(self, mean: np.ndarray, rank: np.ndarray) -> tuple[int, int, str]:
+        """The best-ranked row, the number of rows sharing its rank and the rule that chose:
+        among exact ties, the one whose levels have the best main effects (mean of ``mean``
+        over each factor's level, summed), so a flat optimum agrees with the range analysis
+        instead of the grid order."""
+        tied = np.flatnonzero(rank == 0)
+        if tied.size == 1:
+            return int(tied[0]), 1, ""
+        if not self.control:
+            return int(tied[0]), int(tied.size), "grid order"
         grid = mean.reshape(self.control_counts)
         score = np.zeros(tied.size)
         for axis, _ in enumerate(self.control):
@@ -136,7 +177,9 @@ class Grid:
             effect = np.where(count > 0, total / np.maximum(count, 1), np.nan)
             codes = np.unravel_index(tied, self.control_counts)[axis]
             score += effect[codes]
-        return int(tied[int(np.nanargmin(score))]) if np.isfinite(score).any() else int(tied[0])
+        if not np.isfinite(score).any() or (score == np.nanmin(score)).sum() == tied.size:
+            return int(tied[0]), int(tied.size), "grid order"
+        return int(tied[int(np.nanargmin(score))]), int(tied.size), "main effects"
 
     def _neighbour(
         self, mean: np.ndarray, levels: Mapping[str, int], factor: str, step: int

@@ -25,6 +25,8 @@ def num(value: Any, digits: int = 4) -> str:
         return "—"
     if not np.isfinite(value):
         return "inf" if value > 0 else "-inf"
+    if value == 0:  # also -0.0, which would print as "-0"
+        return "0"
     return f"{value:.{digits}g}"
 
 

@@ -1,4 +1,4 @@
-"""The report's optimum and trade-off sections, read from the analysis Dataset.
+"""The report's optimum sections, read from the analysis Dataset.
 
 A full factorial computed every combination: its section is the **best computed point** (run
 and value, its neighbours, no model interval). An orthogonal array did not: its section is
@@ -9,92 +9,80 @@ and the mean over them (:mod:`studies.analysis_optimum`).
 
 from __future__ import annotations
 
-import json
-import math
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
-from studies import taguchi
-from studies.analysis_optimum import COMPUTED
-from studies.markdown_format import level_text, levels_of, num, pct, table, units_of, value_text
+from studies.markdown_format import levels_of, num, table, units_of, value_text
+from studies.markdown_ran import ran_note, ran_text, replaced
+from studies.markdown_terms import (
+    bound_mark,
+    computed,
+    control_terms,
+    model_terms,
+    none_text,
+    not_chosen,
+    optimum_levels,
+    run_text,
+    units_suffix,
+)
 from studies.text_safety import Markup, md_escape
 
 MAX_CONDITION_ROWS = 12  # operating conditions listed one per row; more: see analysis.nc
 MAX_LISTED_RUNS = 12  # runs named per level in "rests on runs …"
 
 
-def computed(an: xr.Dataset) -> bool:
-    return an.attrs.get("optimum_basis") == COMPUTED
-
-
-def optimum_levels(an: xr.Dataset, name: str) -> dict[str, int]:
-    """Control factor → its chosen level (0-based) for ``name``."""
-    r = an.sel(response=name)
-    return {
-        str(t): int(level)
-        for t, level, role in zip(
-            an["term"].values, r.optimum_level.values, an["term_role"].values, strict=True
-        )
-        if role == "control" and level >= 0
-    }
-
-
-def _control(an: xr.Dataset) -> list[str]:
-    return [str(t) for t, role in zip(an["term"].values, an["term_role"].values, strict=True)
-            if role == "control"]  # fmt: skip
-
-
-def _operating(an: xr.Dataset) -> list[str]:
-    return list(json.loads(an.attrs.get("operating_factors", "[]")))
-
-
-def _units(r: xr.Dataset) -> Markup:
-    """`` <units>`` (Markdown, escaped); nothing for a dimensionless "1"."""
-    units = str(r.units.values)
-    return Markup(f" {md_escape(units)}" if units and units != "1" else "")
-
-
-def _run(index: int) -> str:
-    return f"run {index + 1}"
+def _nothing_to_choose(an: xr.Dataset) -> str:
+    what = "an operating condition or a model rung" if model_terms(an) else "an operating condition"
+    return f"Every factor is {what}: there are no levels to choose."
 
 
 def _worst_condition(an: xr.Dataset, at: np.ndarray, sense: str) -> str:
-    if not np.isfinite(at).any():
+    """The label of the worst condition; "" when there is none to name (no value, or every
+    condition gives the same value)."""
+    finite = at[np.isfinite(at)]
+    if not finite.size or (finite == finite[0]).all():
         return ""
     i = int(np.nanargmax(at) if sense == "smaller" else np.nanargmin(at))
     return str(an["condition"].values[i])
 
 
-def _levels_table(view: xr.Dataset, an: xr.Dataset, levels: dict[str, int]) -> list[str]:
+def _levels_table(
+    view: xr.Dataset, an: xr.Dataset, levels: dict[str, int], runs: Sequence[int] = ()
+) -> list[str]:
+    """The chosen levels; a level that some of ``runs`` did not run with is marked as a
+    request (:mod:`studies.markdown_ran`)."""
     if not levels:
-        return ["Every factor is an operating condition: there are no levels to choose.", ""]
+        return [_nothing_to_choose(an), ""]
+    instead: set[str] = set()
+    for run in runs:
+        instead |= set(replaced(view, an, int(run))) if run >= 0 else set()
     rows = [
-        [f, level + 1, value_text(levels_of(an, f)[level], units_of(view, f))]
+        [
+            f,
+            level + 1,
+            Markup(
+                value_text(levels_of(an, f)[level], units_of(view, f))
+                + (" (requested; what ran: below)" if f in instead else "")
+            ),
+        ]
         for f, level in levels.items()
     ]
     lines = [table(["factor", "level", "value"], rows), ""]
-    operating = _operating(an)
-    if operating:
-        lines += [
-            (
-                f"Operating conditions, not chosen: {md_escape(', '.join(operating))} (every level "
-                "is a case "
-                "the design must meet)."
-            ),
-            "",
-        ]
-    return lines
+    return lines + [line for sentence in not_chosen(an) for line in (sentence, "")]
 
 
-def _levels_of_run(view: xr.Dataset, an: xr.Dataset, run: int) -> Markup:
-    return Markup(
-        ", ".join(
-            f"{md_escape(f)} = {level_text(an, f, int(view[f'{f}_level'].values[run]))}"
-            for f in _control(an)
-        )
-    )
+def _levels_ofrun_text(view: xr.Dataset, an: xr.Dataset, run: int) -> Markup:
+    """``factor = value (level n)`` of each control factor at ``run``."""
+    parts = []
+    for f in control_terms(an):
+        level = int(view[f"{f}_level"].values[run])
+        units = units_of(view, f)
+        shown = value_text(levels_of(an, f)[level], units if units != "1" else "")
+        parts.append(f"{md_escape(f)} = {shown} (level {level + 1})")
+    return Markup(", ".join(parts))
 
 
 def _conditions(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, units: str) -> list[str]:
@@ -103,25 +91,38 @@ def _conditions(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, units: str) -> 
     if len(labels) > MAX_CONDITION_ROWS:
         return [
             (
-                f"{len(labels)} operating conditions: per condition in `analysis.nc` "
+                f"{len(labels)} "
+                + (
+                    "conditions (model rungs × operating conditions)"
+                    if model_terms(an)
+                    else "operating conditions"
+                )
+                + ": per condition in `analysis.nc` "
                 "(`optimum_at`, `optimum_run`, `best_value`, `best_run`)."
             ),
             "",
         ]
-    grid = computed(an) and bool(_control(an))
-    header = ["condition", "at these levels" if _control(an) else "value"]
+    grid = computed(an) and bool(control_terms(an))
+    header = ["condition", "at these levels" if control_terms(an) else "value"]
     header += ["best in this condition"] if grid else []
     rows = []
+    name = str(r.response.values)
     for i, condition in enumerate(labels):
         run = int(r.optimum_run.values[i])
-        at = num(float(r.optimum_at.values[i])) + units + (f" ({_run(run)})" if run >= 0 else "")
+        value = num(float(r.optimum_at.values[i])) + units
+        at = value + (f" ({run_text(run)})" if run >= 0 else "")
+        if run >= 0 and bound_mark(view, name, run):
+            at = f"{md_escape(none_text(view, name))} ({run_text(run)}: counted at {value})"
         row: list[Any] = [str(condition), Markup(at)]
         if grid:
             best = int(r.best_run.values[i])
+            value = f"{num(float(r.best_value.values[i]))}{units}"
+            if best >= 0 and bound_mark(view, name, best):
+                value = md_escape(none_text(view, name))
             row.append(
                 Markup(
-                    f"{num(float(r.best_value.values[i]))}{units} ({_run(best)}: "
-                    f"{_levels_of_run(view, an, best)})"
+                    f"{value} ({run_text(best)}: {_levels_ofrun_text(view, an, best)}"
+                    f"{ran_text(view, an, best)})"
                 )
                 if best >= 0
                 else "—"
@@ -133,11 +134,28 @@ def _conditions(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, units: str) -> 
 def _over_conditions(an: xr.Dataset, r: xr.Dataset, units: str, what: str) -> str:
     sense = str(r.sense.values)
     worst = _worst_condition(an, r.optimum_at.values, sense)
+    n = an.sizes["condition"]
+    if not worst:
+        return f"{what} over the {n} operating conditions: **{num(float(r.optimum_value))}{units}** in every one."
     return (
-        f"{what} over the {an.sizes['condition']} operating conditions: mean "
+        f"{what} over the {n} operating conditions: mean "
         f"**{num(float(r.optimum_value))}{units}**, worst **{num(float(r.optimum_worst))}{units}**"
         f" ({md_escape(worst)})."
     )
+
+
+def _ties(r: xr.Dataset) -> list[str]:
+    """One sentence when several control combinations share the best value."""
+    ties = int(r.optimum_ties)
+    if ties < 2:
+        return []
+    rule = str(r.optimum_tie_rule.values)
+    how = (
+        "the one whose levels have the best main effects (range analysis) is shown"
+        if rule == "main effects"
+        else "the first in grid order is shown"
+    )
+    return [f"{ties} level combinations share this best value: {how}.", ""]
 
 
 def optimum_section(view: xr.Dataset, an: xr.Dataset, name: str, shown: str) -> list[str]:
@@ -149,22 +167,28 @@ def optimum_section(view: xr.Dataset, an: xr.Dataset, name: str, shown: str) -> 
 
 
 def _computed(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, shown: str) -> list[str]:
-    units = _units(r)
+    units = units_suffix(r)
     name = str(r.response.values)
-    if not _control(an):
+    if not control_terms(an):
         lines = ["### Over the operating conditions", ""]
-        lines += ["Every factor is an operating condition: there are no levels to choose.", ""]
-        lines += [_over_conditions(an, r, units, "Computed"), ""]
-        return lines + _conditions(view, an, r, units)
+        lines += [_nothing_to_choose(an), ""]
+        lines += [line for sentence in not_chosen(an) for line in (sentence, "")]
+        if not model_terms(an):  # a mean over models would mix them: per model instead
+            lines += [_over_conditions(an, r, units, "Computed"), ""]
+        return lines + _per_model(an, r, units) + _conditions(view, an, r, units)
     lines = [
         "### Best computed point",
         "",
         (
             "Every combination of the levels was computed: this is the best run, not a "
             "prediction (no model, no interval)."
+            if an.sizes["condition"] == 1
+            else "Every combination of the levels was computed: the values below are computed "
+            "runs, not a prediction (no model, no interval). The levels are the control "
+            "combination whose runs have the best mean over the operating conditions."
         ),
         "",
-        *_levels_table(view, an, optimum_levels(an, name)),
+        *_levels_table(view, an, optimum_levels(an, name), r.optimum_run.values),
     ]
     if an.sizes["condition"] == 1:
         run = int(r.optimum_run.values[0])
@@ -172,34 +196,52 @@ def _computed(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, shown: str) -> li
     else:
         lines += [_over_conditions(an, r, units, "Chosen for the best mean"), ""]
         lines += _conditions(view, an, r, units)
-    return lines + _neighbours(view, an, r, units)
+    lines += ran_note(view, an, r.optimum_run.values)
+    return lines + _per_model(an, r, units) + _ties(r) + _neighbours(view, an, r, units)
 
 
-def _bound_mark(view: xr.Dataset, name: str, run: int) -> str:
-    """``: no value, counted at the bound`` when ``run`` has no value of ``name`` of its own
-    (its response's ``none_means`` counted it at the best or worst value seen)."""
-    own = float(view[name].values[run]) if name in view else math.nan
-    return "" if np.isfinite(own) else ": no value, counted at the bound"
+def _per_model(an: xr.Dataset, r: xr.Dataset, units: str) -> list[str]:
+    """Per model rung: the mean and the worst over the other operating conditions."""
+    if "model" not in an.coords:
+        return []
+    labels = an["condition"].values
+    rows = []
+    for m, model in enumerate(an["model"].values):
+        worst = int(r.model_worst_at.values[m])
+        where = an["condition_model"].values == m
+        at = r.optimum_at.values[where]
+        same = bool(np.isfinite(at).all() and (at == at[0]).all())
+        rows.append(
+            [
+                str(model),
+                Markup(f"{num(float(r.model_mean.values[m]))}{units}"),
+                Markup(
+                    "the same in every condition"
+                    if same or worst < 0
+                    else f"{num(float(r.model_worst.values[m]))}{units} ({md_escape(labels[worst])})"
+                ),
+            ]
+        )
+    return ["Per model:", "", table(["model", "mean", "worst condition"], rows), ""]
 
 
 def _best_line(view: xr.Dataset, r: xr.Dataset, run: int, shown: str, units: str) -> str:
-    """The best run's value, or, when that run has no value of its own, what it was counted
-    as (``none_means``): a bound, never a computed value."""
+    """The best run's value, or, when that run has no value of its own, what it is
+    (``none_label``) and what it was counted as (``none_means``): never a computed value."""
     name = str(r.response.values)
     best = num(float(r.optimum_value))
     grand = f"grand mean {num(float(r.grand_mean))}{units}"
-    if not _bound_mark(view, name, run):
-        return f"Best {md_escape(shown)}: **{best}{units}** in {_run(run)} ({grand})."
+    if not bound_mark(view, name, run):
+        return f"Best {md_escape(shown)}: **{best}{units}** in {run_text(run)} ({grand})."
     meaning = str(view[name].attrs.get("none_means", "unknown"))
     counted = (
-        f"counted as at least as good as the best value computed, {best}{units}"
+        f"better than every computed value (the best is {best}{units})"
         if meaning == "best"
         else f"counted at the bound {best}{units}"
     )
     return (
-        f"Best {md_escape(shown)}: {_run(run)}, which has **no value** of it (none_means = "
-        f"{md_escape(meaning)}: {counted}; {grand}). Runs without a value tie with each "
-        "other: the first in grid order is shown."
+        f"Best {md_escape(shown)}: **{md_escape(none_text(view, name))}** in {run_text(run)} "
+        f"(none_means = {md_escape(meaning)}: {counted}; {grand})."
     )
 
 
@@ -215,15 +257,23 @@ def _neighbours(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, units: str) -> 
             value = float(r.neighbour_value.sel(term=f).values[s])
             run = int(r.neighbour_run.sel(term=f).values[s])
             if not 0 <= level + step < len(levels_of(an, f)):
-                cells.append("— (edge of the grid)")
-                if len(levels_of(an, f)) > 1:
+                # Named levels (a material) have no order: nothing lies beyond the first or last.
+                numeric = np.isfinite(an["level_value"].sel(term=f).values[level])
+                cells.append("— (edge of the grid)" if numeric else "—")
+                if numeric and len(levels_of(an, f)) > 1:
                     edges.append(f)
                 continue
             if not np.isfinite(value):
                 cells.append("— (no value there)")
                 continue
             at = value_text(levels_of(an, f)[level + step], units_of(view, f))
-            ran = f" ({_run(run)}{_bound_mark(view, name, run)})" if run >= 0 else ""
+            if run >= 0 and bound_mark(view, name, run):
+                shown = md_escape(none_text(view, name))
+                cells.append(
+                    Markup(f"{shown} at {at} ({run_text(run)}: counted at {num(value)}{units})")
+                )
+                continue
+            ran = f" ({run_text(run)})" if run >= 0 else ""
             cells.append(Markup(f"{num(value)}{units} at {at}{ran}"))
         rows.append([f, *cells])
     what = "" if an.sizes["condition"] == 1 else " (mean over the operating conditions)"
@@ -259,7 +309,7 @@ def _rests_on(view: xr.Dataset, terms: list[str], levels: dict[str, int]) -> str
 
 
 def _predicted(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, shown: str) -> list[str]:
-    units = _units(r)
+    units = units_suffix(r)
     name = str(r.response.values)
     levels = optimum_levels(an, name)
     terms = [t for t in str(r.model_terms.values).split(",") if t]
@@ -297,7 +347,7 @@ def _predicted(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, shown: str) -> l
     run = int(r.optimum_run.values[0])
     if an.sizes["condition"] == 1 and run >= 0:
         y = float(view[name].values[run])
-        lines.append(f"This combination was run: {_run(run)} gave {num(y)}{units}.")
+        lines.append(f"This combination was run: {run_text(run)} gave {num(y)}{units}.")
     elif an.sizes["condition"] == 1:
         lines.append(
             "This combination is not among the runs of the array: the confirmation run tests "
@@ -314,7 +364,7 @@ def sn_optimum_line(an: xr.Dataset, sn: str) -> str:
         return ""
     if computed(an):
         run = int(r.optimum_run.values[0])
-        where = f" in {_run(run)}" if an.sizes["condition"] == 1 and run >= 0 else ""
+        where = f" in {run_text(run)}" if an.sizes["condition"] == 1 and run >= 0 else ""
         return f"Best computed S/N: {num(value)} dB{where}."
     half = float(r.half_width)
     interval = (
@@ -323,75 +373,3 @@ def sn_optimum_line(an: xr.Dataset, sn: str) -> str:
         else ""
     )
     return f"Predicted S/N at its best levels: {num(float(r.predicted))} dB{interval}."
-
-
-def tradeoff_section(
-    an: xr.Dataset, view: xr.Dataset, names: list[str]
-) -> tuple[list[str], dict[str, int]]:
-    """The trade-off of several responses (control factors only) and the chosen levels."""
-    shown = {taguchi.mean_name(view, r): r for r in json.loads(an.attrs["responses"])}
-    factors = _control(an)
-    if not factors:  # every factor an operating condition: nothing to trade
-        return [], {}
-    operating = _operating(an)
-    lines = [
-        "## Trade-off summary",
-        "",
-        "Best level of each control factor for each response, with the factor's contribution to "
-        "that response's variation. Where the responses disagree, the chosen level is the best "
-        "one for the response the factor contributes most to."
-        + (
-            f" Operating conditions ({md_escape(', '.join(operating))}) are not chosen: the "
-            "values below "
-            "are over all of them."
-            if operating
-            else ""
-        ),
-        "",
-    ]
-    header = ["response", "better", *factors]
-    rows: list[list[Any]] = []
-    for m in names:
-        r = an.sel(response=m)
-        cells = [
-            f"{int(r.optimum_level.sel(term=f)) + 1} ({pct(float(r.contribution.sel(source=f)))} %)"
-            for f in factors
-        ]
-        rows.append([shown.get(m, m), str(r.sense.values), *cells])
-    chosen = {f: int(an["chosen_level"].sel(term=f)) for f in factors}
-    chosen_row = [Markup("**chosen level**"), "", *[level_text(an, f, chosen[f]) for f in factors]]
-    rows.append(chosen_row)
-    rows.append(
-        [
-            "decided by",
-            "",
-            *[shown.get(str(v), str(v)) for v in an["decided_by"].sel(term=factors).values],
-        ]
-    )
-    rows.append(
-        ["conflict", "", *["yes" if c else "no" for c in an["conflict"].sel(term=factors).values]]
-    )
-    lines += [table(header, rows), ""]
-    grid = computed(an)
-    several = an.sizes["condition"] > 1
-    rows = []
-    for m in names:
-        r = an.sel(response=m)
-        units = str(r.units.values)
-        row = [shown.get(m, m), str(r.sense.values), num(float(r.optimum_value)),
-               num(float(r.compromise))]  # fmt: skip
-        row += [num(float(r.compromise_worst))] if several else []
-        row += [] if grid else [num(float(r.compromise_half_width))]
-        rows.append([*row, units if units != "1" else ""])
-    header = ["response", "better", "own optimum", "chosen levels"]
-    header += ["worst condition"] if several else []
-    header += [] if grid else ["± (CI)"]
-    what = "Computed" if grid else "Predicted"
-    over = " (means over the operating conditions, and the worst of them)" if several else ""
-    lines += [
-        f"{what} value of each response at its own optimum and at the chosen levels{over}:",
-        "",
-        table([*header, "units"], rows),
-        "",
-    ]
-    return lines, chosen

@@ -38,10 +38,11 @@ from studies.markdown_format import (
     units_of,
     value_text,
 )
-from studies.markdown_optimum import computed, optimum_levels, tradeoff_section
 from studies.markdown_response import constant_section, response_section
+from studies.markdown_terms import computed, optimum_levels
+from studies.markdown_tradeoff import tradeoff_section
 from studies.missing import nothing_to_analyse
-from studies.statistics import sweep_runs
+from studies.statistics import sense_words, sweep_runs
 from studies.text_safety import Markup, code_span, fence, md_escape
 
 REPORT_NAME = "report.md"
@@ -145,8 +146,10 @@ def _next_study(
         intro = (
             "Every combination was computed, so there is nothing to confirm. The study below "
             "is a finer grid around the chosen levels (5 levels between the neighbours of each "
-            "numeric control factor that has an effect; operating conditions at all their "
-            "levels)" + (f", also written to `{REFINEMENT_NAME}`." if written else ".")
+            "numeric control factor that has an effect, reaching one step past the edge of the "
+            "grid where the chosen level is at an edge, as its comment lines say; operating "
+            "conditions at all their levels)"
+            + (f", also written to `{REFINEMENT_NAME}`." if written else ".")
         )
         title = "## Refinement around the best point"
     else:
@@ -186,7 +189,7 @@ def _header(
         sense = y.attrs.get("better")
         shown.append(
             f"{md_escape(r)} ({label(str(y.attrs.get('long_name', r)), units_of(ds, r))}"
-            + (f", {md_escape(sense)} is better" if sense else "")
+            + (f", {md_escape(sense_words(sense))}" if sense else "")
             + (
                 ""
                 if taguchi.mean_name(ds, r) in analysed
@@ -223,8 +226,9 @@ def _design(ds: xr.Dataset, an: xr.Dataset) -> list[str]:
         if entry in factors:
             values = levels_of(an, entry)
             units = units_of(ds, entry)
-            operating = str(an["term_role"].sel(term=entry).values) == "operating"
-            role = "operating condition" if operating else "factor"
+            role = {"operating": "operating condition", "model": "model rung"}.get(
+                str(an["term_role"].sel(term=entry).values), "factor"
+            )
             if col_levels and len(values) < col_levels:
                 dummy = ", ".join(
                     f"{j + 1} → {j % len(values) + 1}" for j in range(len(values), col_levels)

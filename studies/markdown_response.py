@@ -37,10 +37,13 @@ MAX_LEVEL_COLUMNS = 12  # level means as columns up to this many levels; more: o
 
 
 def _best(an: xr.Dataset, row: xr.Dataset, f: str) -> str:
-    if str(an["term_role"].sel(term=f).values) == "operating":
-        return "— (operating condition)"
+    role = str(an["term_role"].sel(term=f).values)
+    if role in ("operating", "model"):
+        return "— (operating condition)" if role == "operating" else "— (model rung)"
     best = int(row.best_level)
-    return level_text(an, f, best) if best >= 0 else "— (R = 0: all levels equal)"
+    if best >= 0:
+        return level_text(an, f, best)
+    return "— (not ranked)" if str(row.sense.values) == "none" else "— (R = 0: all levels equal)"
 
 
 def _k(row: xr.Dataset, i: int) -> str:
@@ -146,7 +149,12 @@ def response_section(
     lines = [
         f"## {md_escape(response)}: {label(str(r.long_name.values), units)}",
         "",
-        f"{md_escape(sense.capitalize())} is better. k\\_i = mean at level i.",
+        (
+            f"{md_escape(sense.capitalize())} is better."
+            if sense != "none"
+            else 'Not ranked ([sense] = "none": no direction is better, no best level).'
+        )
+        + " k\\_i = mean at level i.",
         "",
         "### Range analysis",
         "",

@@ -11,7 +11,8 @@ overrides it):
   run;
 * ``"unknown"`` (default): a NaN is left out, and every level that loses runs says how many.
 
-An infinite value is ordered whatever the declaration: +inf is the worst value of a
+A response declared not ranked (``[sense] = "none"``) has no best or worst: every run without a
+finite value is left out. Otherwise an infinite value is ordered whatever the declaration: +inf is the worst value of a
 smaller-is-better response and the best of a larger-is-better one; it counts as the worst /
 best finite value seen, the same kind of bound. Design points that did not run at all (no value
 in any response) are always left out.
@@ -35,13 +36,15 @@ class Filled:
 
     ``values``: finite, or NaN where left out. ``left_out``: runs without a value that the
     analysis leaves out. ``bounded``: runs counted at ``best_bound`` or ``worst_bound`` (NaN when
-    that bound was not used)."""
+    that bound was not used). ``beyond``: +1 where a run is better than every computed value
+    (counted at the best bound), -1 where it is worse than every one, 0 elsewhere."""
 
     values: np.ndarray
     left_out: np.ndarray
     bounded: np.ndarray
     best_bound: float
     worst_bound: float
+    beyond: np.ndarray
 
 
 def none_means(y: xr.DataArray) -> str:
@@ -59,12 +62,16 @@ def fill(y: np.ndarray, ran: np.ndarray, meaning: str, sense: str) -> Filled:
     finite = np.isfinite(y)
     if not finite.any():
         left = ~finite
-        return Filled(np.full(y.shape, np.nan), left, np.zeros_like(left), np.nan, np.nan)
+        none = np.zeros(y.shape, dtype=np.int8)
+        return Filled(np.full(y.shape, np.nan), left, np.zeros_like(left), np.nan, np.nan, none)
     low, high = float(y[finite].min()), float(y[finite].max())
     best, worst = (low, high) if sense == "smaller" else (high, low)
     nan = np.isnan(y) & ran
     positive = (y == np.inf) & ran
     negative = (y == -np.inf) & ran
+    if sense not in ("smaller", "larger"):  # not ranked: nothing is best or worst
+        positive = negative = np.zeros_like(nan)
+        meaning = DEFAULT
     to_best = (positive if sense == "larger" else negative) | (nan if meaning == "best" else False)
     to_worst = (positive if sense == "smaller" else negative) | (
         nan if meaning == "worst" else False
@@ -79,6 +86,7 @@ def fill(y: np.ndarray, ran: np.ndarray, meaning: str, sense: str) -> Filled:
         bounded,
         best if to_best.any() else np.nan,
         worst if to_worst.any() else np.nan,
+        to_best.astype(np.int8) - to_worst.astype(np.int8),
     )
 
 

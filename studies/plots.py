@@ -76,8 +76,9 @@ def main_effects_figure(an: xr.Dataset, response: str) -> Figure:
         ax.axhline(float(r.grand_mean), linestyle="--", color="0.5", label="grand mean")
         _mark_incomplete(ax, an, row, x, present)
         unit = str(row.term_units.values)
-        operating = str(an["term_role"].sel(term=f).values) == "operating"
-        ax.set_xlabel((_label(f, unit) if numeric else f) + (" (operating)" if operating else ""))
+        role = str(an["term_role"].sel(term=f).values)
+        fixed = f" ({role})" if role in ("operating", "model") else ""
+        ax.set_xlabel((_label(f, unit) if numeric else f) + fixed)
         if not numeric:  # categorical: the level names at their (1-based) positions
             labels = [str(v) for v in row.level_label.values[present]]
             ax.set_xticks(x, labels, rotation=30, ha="right")
@@ -110,8 +111,10 @@ def _mark_incomplete(
         ax.plot([xi], [ki], marker="o", mfc="white", mec="C3", ms=7, linestyle="none", zorder=3)
         text = [f"{a}/{n} left out"] if a else []
         text += [f"{b}/{n} at {'bound' if meaning == 'unknown' else meaning}"] if b else []
+        # At the first and last level the label grows inwards: centred, it would leave the axes.
+        ha = "left" if xi == np.min(x) else "right" if xi == np.max(x) else "center"
         ax.annotate("\n".join(text), (xi, ki), xytext=(0, 6), textcoords="offset points",
-                    ha="center", fontsize="xx-small", color="C3")  # fmt: skip
+                    ha=ha, fontsize="xx-small", color="C3")  # fmt: skip
 
 
 def _level_ticks(ax: Axes, x: np.ndarray) -> None:

@@ -111,7 +111,10 @@ def layout(plan: Plan, attrs: dict[str, Any]) -> xr.Dataset:
         "scene": d.scene,
         "design": design.name,
         "factors": json.dumps([f.name for f in d.factors]),
-        "operating_factors": json.dumps([f.name for f in d.factors if f.role == "operating"]),
+        "operating_factors": json.dumps(
+            [f.name for f in d.factors if f.role in ("operating", "model")]
+        ),
+        "model_factors": json.dumps([f.name for f in d.factors if f.role == "model"]),
         "error_columns": json.dumps(list(design.error_columns)),
         "interaction_columns": json.dumps({k: list(v) for k, v in design.interactions.items()}),
         **({} if d.pool is None else {"pool": json.dumps(list(d.pool))}),
@@ -143,6 +146,10 @@ def response_layout(plan: Plan, name: str) -> tuple[tuple[str, ...], type, dict[
         "better": plan.definition.sense.get(name, r.sense),
         "none_means": plan.definition.none_means.get(name, r.none_means),
     }
+    if r.used_for:
+        attrs_r["used_for"] = r.used_for
+    if r.none_label:
+        attrs_r["none_label"] = r.none_label.format(**plan.definition.settings)
     if r.bits:
         masks = {
             "flag_masks": np.array([1 << i for i in range(len(r.bits))], dtype=np.int8),

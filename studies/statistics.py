@@ -34,6 +34,13 @@ from studies.sums_of_squares import (
 )
 
 SENSES = ("smaller", "larger")
+UNRANKED = "none"
+"""The ``[sense]`` of a response that is tabulated but not ranked (no level is best)."""
+
+
+def sense_words(sense: str) -> str:
+    """``larger is better`` / ``smaller is better`` / ``not ranked``."""
+    return "not ranked" if sense == UNRANKED else f"{sense} is better"
 
 
 def _level_names(
@@ -86,6 +93,8 @@ def _response(ds: xr.Dataset, response: str) -> tuple[xr.DataArray, np.ndarray]:
 
 def _sense(y: xr.DataArray, sense: str | None) -> str:
     chosen = sense if sense is not None else y.attrs.get("better", "smaller")
+    if chosen == UNRANKED:  # the level means and ranges do not depend on the sense
+        return "smaller"
     if chosen not in SENSES:
         msg = f"sense must be one of {SENSES}, got {chosen!r}"
         raise ValueError(msg)
@@ -174,8 +183,8 @@ def range_analysis(
 def _f_test(ms: float, dof: int, ms_error: float, dof_error: int) -> tuple[float, float]:
     if dof == 0 or dof_error == 0:
         return np.nan, np.nan
-    if ms_error == 0.0:
-        return (np.inf, 0.0) if ms > 0.0 else (np.nan, np.nan)
+    if ms_error == 0.0:  # no error term (an exact fit): no test
+        return np.nan, np.nan
     f = ms / ms_error
     return f, float(stats.f.sf(f, dof, dof_error))
 
@@ -252,6 +261,11 @@ def anova(
     ss_error = max(ss_error, 0.0)
     dof_error = dof_total - sum(terms[f][1] for f in kept)
     ms_error = ss_error / dof_error if dof_error else np.nan
+    if dof_error and ss_error == 0.0 and ss_total > 0.0:  # F = MS/0 would print as "inf"
+        notes.append(
+            "No error term (an exact fit: the terms explain every run, the error SS is 0): "
+            "F and P cannot be computed."
+        )
 
     def contribution(ss: float) -> float:
         return 100.0 * ss / ss_total if ss_total > 0.0 else np.nan

@@ -2,9 +2,12 @@
 
 Everything a user wrote — a study's description and names, factor levels, units, notes, and any
 attribute of a results file given to ``analyze`` — reaches ``report.md`` through
-:func:`md_escape`: HTML's ``& < >`` become entities and the Markdown characters that make
-links, images, code or emphasis are backslash-escaped, so CommonMark renderers and
-python-markdown alike show the text as written and run none of it. Text the report itself
+:func:`md_escape`: a ``<`` that could open a tag, comment or autolink and an ``&`` that could
+start an entity become entities, a ``>`` that could start a quote is backslash-escaped, and the
+Markdown characters that make links, images, code or emphasis are backslash-escaped, so
+CommonMark renderers and python-markdown alike show the text as written and run none of it.
+Prose such as "> 0 outside, < 0 inside" keeps its plain ``<`` and ``>`` (inert there: a tag
+needs a letter, ``/``, ``!`` or ``?`` right after the ``<``), so report.md also reads as text. Text the report itself
 marks up is a :class:`Markup`, which is never escaped twice. Terminal output goes through
 :class:`TerminalText`, which drops control and escape characters.
 """
@@ -22,6 +25,8 @@ if TYPE_CHECKING:
     import xarray as xr
 
 MARKDOWN_SPECIAL = re.compile(r"([\\`*\[\]|])")
+ACTIVE_AMPERSAND = re.compile(r"&(?=[A-Za-z0-9#]|$)")  # could start an entity
+ACTIVE_LESS = re.compile(r"<(?!\s)")  # could open a tag, comment or autolink (or ends the text)
 LONE_UNDERSCORE = re.compile(r"(?<![A-Za-z0-9])_|_(?![A-Za-z0-9])")  # not inside a word
 IDENTIFIER = re.compile(r"[A-Za-z0-9_.:+-]+")
 BIDI_CONTROLS = frozenset("\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069")
@@ -66,12 +71,15 @@ def printable_dataset(ds: xr.Dataset) -> xr.Dataset:
 
 def md_escape(value: object) -> Markup:
     """``value`` as Markdown text that renders as written: one line, no control characters,
-    HTML inert (``&amp; &lt; &gt;``), no link, image, code span or emphasis of its own."""
+    HTML inert (``&amp; &lt;`` where they could act), no quote, link, image, code span or
+    emphasis of its own."""
     if isinstance(value, Markup):
         return value
     text = printable(" ".join(str(value).splitlines()), keep="\t")
-    text = text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+    text = ACTIVE_LESS.sub("&lt;", ACTIVE_AMPERSAND.sub("&amp;", text))
     text = MARKDOWN_SPECIAL.sub(r"\\\1", text)
+    if text.startswith(">"):  # a quote at the start of a line
+        text = "\\" + text
     return Markup(LONE_UNDERSCORE.sub(r"\\_", text))
 
 

@@ -139,7 +139,12 @@ class Response:
     stored as integers with CF flag attributes and counted, never averaged.
     ``none_means`` says what a design point without a value (NaN: e.g. no resonance crossing
     in the range) means for the analysis (``NONE_MEANINGS``): "best" or "worst" (it counts
-    as the best or worst value seen, a bound), or "unknown" (left out, counted per level).
+    as the best or worst value seen, a bound), or "unknown" (left out, counted per level);
+    ``none_label`` says in words what such a point is, for the report (its ``{setting}`` fields
+    are filled with the study's settings: "no crossing up to order {max_order:g}").
+    ``used_for`` names the parameter whose value this response records as it actually ran,
+    where the scene may replace the requested one (``angle_step_used`` of a tolerance run): the
+    report then says what ran wherever it names that parameter's level.
     """
 
     name: str
@@ -151,6 +156,8 @@ class Response:
     codes: tuple[str, ...] = ()
     bits: tuple[str, ...] = ()
     none_means: str = "unknown"
+    none_label: str = ""
+    used_for: str = ""
 
 
 @dataclass(frozen=True)

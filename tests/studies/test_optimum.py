@@ -12,10 +12,12 @@ import tomllib
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 import xarray as xr
 
 from results_datasets import CATALOG, study_dataset
+from studies import confirmation
 from studies.analysis import analyze
 from studies.markdown_report import report_text
 from studies.plan import plan_text
@@ -73,10 +75,14 @@ def test_full_factorial_reports_the_best_computed_run(
     names = {f.name for f in files}
     assert "confirmation.toml" not in names  # nothing to confirm: the point was computed
     refinement = tomllib.loads((tmp_path / "refinement.toml").read_text(encoding="utf-8"))
-    # 5 levels between the neighbours: mass 3…5 kg (5 is the edge), rod ratio 0.25…0.35.
+    # 5 levels between the neighbours; both optima are at an edge of the grid, so the range
+    # reaches one level spacing past it (by hand): mass 3 … 5 + (5 − 3) = 7 kg, rod ratio
+    # 0.25 − (0.35 − 0.25) = 0.15 … 0.35, and the file says so.
     factors = refinement["factors"]
-    assert factors["reciprocating_mass"]["levels"] == [3.0, 3.5, 4.0, 4.5, 5.0]
-    assert factors["rod_ratio"]["levels"] == [0.25, 0.275, 0.3, 0.325, 0.35]
+    assert factors["reciprocating_mass"]["levels"] == [3.0, 4.0, 5.0, 6.0, 7.0]
+    assert factors["rod_ratio"]["levels"] == [0.15, 0.2, 0.25, 0.3, 0.35]
+    head = (tmp_path / "refinement.toml").read_text(encoding="utf-8").splitlines()[:3]
+    assert any("reciprocating_mass" in line and "past it to 7 kg" in line for line in head)
 
 
 def test_neighbours_of_the_best_point_are_the_runs_one_level_away(side_force: xr.Dataset) -> None:
@@ -195,3 +201,158 @@ def test_a_study_of_operating_conditions_only_has_no_trade_off_section() -> None
     report = report_text(ds, analyze(ds), plan.definition.responses)
     assert "no levels to choose" in report
     assert "## Trade-off summary" not in report
+
+
+def _two_speed_grid(gap: list[float], flat: list[float], tied: list[float]) -> xr.Dataset:
+    """3 control levels of ``a`` × 2 operating speeds (speed fastest), three responses."""
+    return xr.Dataset(
+        {
+            "gap": ("run", np.array(gap), {"units": "mm", "better": "smaller",
+                                           "none_means": "best", "none_label": "no jump"}),
+            "flat": ("run", np.array(flat), {"units": "N", "better": "smaller"}),
+            "tied": ("run", np.array(tied), {"units": "N", "better": "smaller"}),
+        },
+        coords={"a": ("run", np.repeat([1.0, 2.0, 3.0], 2), {"units": "mm"}),
+                "a_level": ("run", np.repeat([0, 1, 2], 2)),
+                "speed": ("run", np.tile([1000.0, 2000.0], 3), {"units": "rpm"}),
+                "speed_level": ("run", np.tile([0, 1], 3))},
+        attrs={"design": "full_factorial", "factors": '["a", "speed"]',
+               "responses": '["gap", "flat", "tied"]', "operating_factors": '["speed"]'},
+    )  # fmt: skip
+
+
+def _section(text: str, name: str) -> str:
+    start = text.index(f"## {name}:")
+    return text[start : text.index("\n## ", start + 1)]
+
+
+def test_a_run_better_than_every_value_wins_and_ties_are_said() -> None:
+    # By hand: a = 1 mm has no jump at 1000 rpm (NaN, none_means = best) and 5 mm at 2000 rpm;
+    # a = 2 mm jumps 1 mm at both; a = 3 mm jumps 3 mm at both. Filled at the bound (1 mm),
+    # a = 1 mm has mean 3 mm against 1 mm, but "no jump" is better than every jump: the
+    # combination with more such conditions is chosen first.
+    ds = _two_speed_grid(
+        [np.nan, 5.0, 1.0, 1.0, 3.0, 3.0],
+        [2.0, 2.0, 5.0, 6.0, 5.0, 6.0],
+        [7.0, 9.0, 7.0, 9.0 + 9e-15, 7.0, 9.0],  # equal but for round-off (v12's imep)
+    )
+    an = analyze(ds)
+    gap = an.sel(response="gap")
+    assert int(gap.optimum_level.sel(term="a")) == 0
+    np.testing.assert_array_equal(gap.optimum_run.values, [0, 1])
+    assert int(gap.optimum_ties) == 1
+    text = report_text(ds, an, ["gap", "flat", "tied"])
+    assert "no jump (run 1: counted at 1 mm)" in _section(text, "gap")
+    # flat: a = 1 mm gives 2 N at both speeds: no condition is the worst one.
+    flat = _section(text, "flat")
+    assert "**2 N** in every one" in flat
+    assert "worst" not in flat.split("### Best computed point")[1]
+    # tied: 7 N and 9 N whatever a is (to round-off): the 3 combinations tie, as the range
+    # analysis says (R = 0), and the report says so.
+    r = an.sel(response="tied")
+    assert int(r.optimum_ties) == 3
+    assert int(r.best_level.sel(term="a")) == -1  # R = 0
+    assert "3 level combinations share this best value" in _section(text, "tied")
+
+
+def _one_factor(levels: list[float], scene: str, name: str, units: str) -> xr.Dataset:
+    n = len(levels)
+    return xr.Dataset(
+        {"y": ("run", np.arange(n, dtype=float))},
+        coords={name: ("run", np.array(levels), {"units": units}),
+                f"{name}_level": ("run", np.arange(n))},
+        attrs={"design": "full_factorial", "factors": json.dumps([name]), "scene": scene},
+    )  # fmt: skip
+
+
+def test_refinement_past_the_edge_keeps_the_spacing_and_the_allowed_range() -> None:
+    # valve_step_accuracy's steps 1, 0.5, 0.25, 0.125 degree halve: past the finest the grid
+    # goes on halving (0.0625 degree), and keeps to halved steps (by hand: 0.0625, 0.125, 0.25;
+    # a step in between such as 0.0884 would not divide the others' grids, which the valve
+    # scene refuses).
+    steps = _one_factor([1.0, 0.5, 0.25, 0.125], "valve_accuracy", "angle_step", "degree")
+    found = confirmation.refinement(steps, {"angle_step": 3})
+    assert found.values["angle_step"] == [0.0625, 0.125, 0.25]
+    assert "past it to 0.0625 degree" in found.notes[0]
+    # Two positive levels, the best at the smaller: one step of 0.5 past 0.5 is 0, which a
+    # length cannot be (the cam's base radius must be > 0): refined towards the inside only.
+    radius = _one_factor([0.5, 1.0], "cam", "base_radius", "mm")
+    found = confirmation.refinement(radius, {"base_radius": 0})
+    assert found.values["base_radius"] == [0.5, 0.625, 0.75, 0.875, 1.0]
+    assert "not allowed" in found.notes[0]
+    assert found.notes[0].startswith("base_radius")
+
+
+def test_model_rungs_are_reported_per_model_and_never_chosen() -> None:
+    # The shipped ladders mark the spring's coil masses a model rung (0 = the lumped spring).
+    for study in ("ohc125_spring_surge", "spring_model_ladder"):
+        text = (CATALOG / f"{study}.toml").read_text(encoding="utf-8")
+        assert tomllib.loads(text)["factors"]["spring_masses"]["role"] == "model"
+    # 2 rungs × 3 speeds, a larger-is-better response; per model the mean and the worst speed
+    # come from a pandas groupby of the values themselves.
+    y = np.array([1.0, 2.0, 3.0, 10.0, 8.0, 9.0])
+    ds = xr.Dataset(
+        {"f": ("run", y, {"units": "Hz", "better": "larger"})},
+        coords={"masses": ("run", np.repeat([0, 8], 3)), "masses_level": ("run", np.repeat([0, 1], 3)),
+                "speed": ("run", np.tile([1.0, 2.0, 3.0], 2), {"units": "rpm"}),
+                "speed_level": ("run", np.tile([0, 1, 2], 2))},
+        attrs={"design": "full_factorial", "factors": '["masses", "speed"]', "responses": '["f"]',
+               "operating_factors": '["masses", "speed"]', "model_factors": '["masses"]'},
+    )  # fmt: skip
+    an = analyze(ds)
+    r = an.sel(response="f")
+    assert str(an["term_role"].sel(term="masses").values) == "model"
+    assert int(r.best_level.sel(term="masses")) == -1
+    frame = pd.DataFrame({"m": ds["masses"].values, "f": y})
+    np.testing.assert_allclose(r.model_mean.values, frame.groupby("m").f.mean().to_numpy())
+    np.testing.assert_allclose(r.model_worst.values, frame.groupby("m").f.min().to_numpy())
+    text = report_text(ds, an, ["f"])
+    assert "Model rungs, not chosen: masses" in text
+    assert "| masses = 8 | 9 Hz | 8 Hz (masses = 8, speed = 2 rpm) |" in text
+    assert "| model rung |" in text  # the design table
+
+
+def test_a_response_declared_without_a_sense_is_tabulated_not_ranked(
+    side_force: xr.Dataset,
+) -> None:
+    # valve_step_accuracy tabulates the lift without ranking it (not an accuracy criterion).
+    text = (CATALOG / "valve_step_accuracy.toml").read_text(encoding="utf-8")
+    assert tomllib.loads(text)["sense"]["max_lift"] == "none"
+    ds = side_force.copy()
+    ds["max_side_force"].attrs["better"] = "none"
+    an = analyze(ds)
+    r = an.sel(response="max_side_force")
+    assert (r.best_level.values == -1).all()
+    assert np.isnan(float(r.optimum_value))
+    # The range analysis still holds (brute force: the level means of the results).
+    y = ds["max_side_force"].values
+    codes = ds["rod_ratio_level"].values
+    np.testing.assert_allclose(
+        r.k.sel(term="rod_ratio").values[:2], [y[codes == 0].mean(), y[codes == 1].mean()]
+    )
+    report = report_text(ds, an, ["max_side_force"])
+    assert "Not ranked" in report
+    assert "### Best computed point" not in report
+
+
+def test_trade_off_marks_a_best_point_level_that_is_not_the_main_effect_best() -> None:
+    # By hand (smaller is better): a0b0 = 0, a0b1 = 5, a1b0 = 3, a1b1 = 1. Main effects: a1
+    # (mean 2) beats a0 (2.5), but the best computed point is a0b0 (ohc125_dynamics'
+    # bounce_height at 20 N/mm is this case, S3 of the re-read).
+    y = np.array([0.0, 5.0, 3.0, 1.0])
+    ds = xr.Dataset(
+        {"y": ("run", y, {"units": "mm", "better": "smaller"}),
+         "z": ("run", y + 1.0, {"units": "mm", "better": "smaller"})},
+        coords={"a": ("run", [1.0, 1.0, 2.0, 2.0]), "a_level": ("run", [0, 0, 1, 1]),
+                "b": ("run", [1.0, 2.0, 1.0, 2.0]), "b_level": ("run", [0, 1, 0, 1])},
+        attrs={"design": "full_factorial", "factors": '["a", "b"]', "responses": '["y", "z"]'},
+    )  # fmt: skip
+    an = analyze(ds)
+    r = an.sel(response="y")
+    assert int(r.best_level.sel(term="a")) == 1
+    assert int(r.optimum_level.sel(term="a")) == 0
+    text = report_text(ds, an, ["y", "z"])
+    row = next(line for line in text.splitlines() if line.startswith("| y | smaller |"))
+    assert row.split(" | ")[2].endswith("≠")  # a: level 1 at the best point, not the main effect's
+    assert not row.split(" | ")[3].endswith("≠")  # b: level 1 either way
+    assert "≠ Not the range analysis' best level" in text

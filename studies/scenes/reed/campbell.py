@@ -80,8 +80,8 @@ def campbell_figure(ds: xr.Dataset) -> Figure | None:
     ax.set_xlabel("engine speed [rpm]")
     ax.set_ylabel("frequency [Hz]")
     ax.set_title(
-        f"Campbell diagram: engine orders {orders[0]:g}…{orders[-1]:g} (at the right; "
-        f"multiples of crankshaft speed), reed opens {events:g}× per revolution",
+        f"Campbell diagram: engine orders {orders[0]:g}…{orders[-1]:g} (numbered at the right)\n"
+        f"orders are multiples of crankshaft speed; the reed opens {events:g}× per revolution",
         fontsize="medium",
     )
     ax.legend(loc="upper left", fontsize="small")

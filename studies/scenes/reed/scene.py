@@ -170,6 +170,7 @@ def _mode_responses() -> tuple[Response, ...]:
                 NEEDS,
                 "larger",
                 none_means="best",
+                none_label="no crossing up to order {max_order:g}",
             ),
             Response(
                 f"{word}_crossing_speed",
@@ -178,6 +179,7 @@ def _mode_responses() -> tuple[Response, ...]:
                 NEEDS,
                 "larger",
                 none_means="best",
+                none_label="no crossing up to order {max_order:g}",
             ),
             Response(
                 f"{word}_order_margin",
@@ -240,6 +242,7 @@ RESPONSES: tuple[Response, ...] = (
         NEEDS,
         "larger",
         none_means="best",
+        none_label="f₁ between two bands",
     ),
     Response(
         "resonance_speed",
@@ -248,6 +251,7 @@ RESPONSES: tuple[Response, ...] = (
         NEEDS,
         "larger",
         none_means="best",
+        none_label="no order reaches f₁",
     ),
     Response("tip_stiffness", "N/m", "static tip stiffness 3EI/l³", NEEDS, "larger"),
     Response("mass", "g", "reed mass ρ b h l", NEEDS),

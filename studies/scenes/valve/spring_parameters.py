@@ -134,6 +134,7 @@ SURGE_RESPONSES: tuple[Response, ...] = (
         "first surge frequency f_1 of the spring with both ends held: the N-mass chain's [V4] "
         "(lumped rung: the continuous spring's (1/2)·√(ks/m_s), which it does not model)",
         SURGE,
+        "larger",
     ),
     Response("coil_clash_count", "1", "segment closures to solid length (coil clash)", SURGE),
     Response(
