@@ -29,16 +29,16 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from studies.definition import StudyError, catalog_names, read_study
-from studies.registry_file import RegistryUnusable, unusable
-from studies.text_safety import TerminalText, printable_dataset
+from studies.common.text_safety import TerminalText, printable_dataset
+from studies.define.definition import StudyError, catalog_names, read_study
+from studies.tracking.registry_file import RegistryUnusable, unusable
 from studies.tracking_cli import add_commands
 
 if TYPE_CHECKING:
     from concurrent.futures import Executor
 
-    from studies.plan import Plan
-    from studies.study_run import RunResult
+    from studies.define.plan import Plan
+    from studies.pipeline import RunResult
 
 EXIT_STUDY_ERROR = 2
 OUTPUTS_HELP = (
@@ -51,7 +51,7 @@ EXIT_INTERRUPTED = 130  # the shell's code for a process ended by SIGINT
 
 def main(argv: list[str] | None = None) -> int:
     """Run one command; return its exit code. What it prints passes through
-    :class:`~studies.text_safety.TerminalText` (no escape sequences from a description)."""
+    :class:`~studies.common.text_safety.TerminalText` (no escape sequences from a description)."""
     streams = sys.stdout, sys.stderr
     sys.stdout, sys.stderr = TerminalText(sys.stdout), TerminalText(sys.stderr)
     try:
@@ -137,7 +137,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--mlflow",
         metavar="URI",
-        help="also log the run to MLflow (tracking URI, e.g. sqlite:///mlflow.db; the [mlflow] "
+        help="also log the run to MLflow (store URI, e.g. sqlite:///mlflow.db; the [mlflow] "
         "extra); a reused run is logged too, once",
     )
     run.add_argument("--tag", action="append", default=[], help="tag the run (repeat for more)")
@@ -210,7 +210,7 @@ def positive_int(text: str) -> int:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
-    from studies.bench import BENCHMARKS, run_benchmark, summarize
+    from studies.bench.benchmarks import BENCHMARKS, run_benchmark, summarize
 
     names = list(BENCHMARKS) if args.name == "all" else [args.name]
     for name in names:
@@ -224,8 +224,8 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from studies.plan import plan_study
-    from studies.study_run import resume_run
+    from studies.define.plan import plan_study
+    from studies.pipeline import resume_run
 
     if args.all == bool(args.study or args.resume):
         print("error: name one study, --resume RUN_ID or --all", file=sys.stderr)
@@ -241,7 +241,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     _check_mlflow(args)
     if not args.scheduler:
         return _run_plans(args, plans, None)
-    from studies.cluster import cluster_executor
+    from studies.run.cluster import cluster_executor
 
     with cluster_executor(args.scheduler, sorted({p.definition.scene for p in plans})) as pool:
         return _run_plans(args, plans, pool)
@@ -250,22 +250,23 @@ def _cmd_run(args: argparse.Namespace) -> int:
 def _check_mlflow(args: argparse.Namespace) -> None:
     """Before anything runs: a store MLflow refuses records nothing."""
     if args.mlflow:
-        from studies.mlflow_export import check_store
+        from studies.tracking.mlflow_export import check_store
 
         check_store(args.mlflow)
 
 
 def _run_plans(args: argparse.Namespace, plans: list[Plan], executor: Executor | None) -> int:
     """Run (or reuse) each plan; chunks on ``executor`` when given."""
-    from studies import provenance, tracking
-    from studies.runner import DEFAULT_CHUNK_SIZE
-    from studies.study_run import run_plan
+    from studies.pipeline import run_plan
+    from studies.run import provenance
+    from studies.run.runner import DEFAULT_CHUNK_SIZE
+    from studies.tracking import store
 
     flagged = 0
     for plan in plans:
-        key = tracking.definition_hash(plan.definition.text, plan.definition.input_files())
+        key = store.definition_hash(plan.definition.text, plan.definition.input_files())
         code = provenance.code_hash(provenance.code(type(plan.scene)))
-        earlier = None if args.force else tracking.finished_identical(args.outputs, key, code)
+        earlier = None if args.force else store.finished_identical(args.outputs, key, code)
         if earlier is not None:
             print(
                 f"{plan.definition.name}: identical definition already ran on identical code "
@@ -298,8 +299,8 @@ def _run_plans(args: argparse.Namespace, plans: list[Plan], executor: Executor |
 
 def _track(args: argparse.Namespace, folder: Path, run_id: str) -> None:
     """``run --tag/--note/--mlflow``: tag and note the run, then log it to MLflow."""
-    from studies import registry
-    from studies.tracking import now
+    from studies.tracking import registry
+    from studies.tracking.store import now
 
     for tag in args.tag:
         registry.set_tag(args.outputs, run_id, tag)
@@ -307,7 +308,7 @@ def _track(args: argparse.Namespace, folder: Path, run_id: str) -> None:
     if args.note:
         registry.add_note(args.outputs, run_id, now(), args.note)
     if args.mlflow:
-        from studies.mlflow_export import log_run
+        from studies.tracking.mlflow_export import log_run
 
         tags, notes = registry.tags_and_notes(args.outputs)
         try:
@@ -343,14 +344,14 @@ def _report(result: RunResult) -> None:
 
 
 def _default_outputs() -> Path:
-    """The outputs root (imported on use: ``check``, ``list`` and ``scenes`` need no tracking)."""
-    from studies.tracking import default_outputs
+    """The outputs root (imported on use: ``check``, ``list`` and ``scenes`` need no store)."""
+    from studies.tracking.store import default_outputs
 
     return default_outputs()
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
-    from studies.plan import plan_study
+    from studies.define.plan import plan_study
 
     plan = plan_study(args.study)
     d = plan.definition
@@ -390,8 +391,8 @@ def _cmd_scenes(args: argparse.Namespace) -> int:
 def _cmd_analyze(args: argparse.Namespace) -> int:
     import datetime as dt
 
-    from studies.report import write_analysis
-    from studies.results import open_results
+    from studies.report.write import write_analysis
+    from studies.run.results import open_results
 
     if not args.results.exists():
         raise FileNotFoundError(f"no such results file: {args.results}")

@@ -120,7 +120,7 @@ def _tolerance_options(parser: argparse.ArgumentParser, meaning: str) -> None:
 
 def _tolerances(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
     """(the default Tolerance, the per-response ones) of --rtol, --atol and --tolerances."""
-    from studies import tolerances
+    from studies.compare import tolerances
 
     per_response = tolerances.read_tolerances(args.tolerances) if args.tolerances else {}
     default = tolerances.Tolerance(
@@ -131,8 +131,8 @@ def _tolerances(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
 
 
 def _runs(args: argparse.Namespace) -> int:
-    from studies import query
-    from studies.tracking import resume_command
+    from studies.tracking import query
+    from studies.tracking.store import resume_command
 
     rows = query.find_runs(
         args.outputs, args.study, args.scene, args.status, args.since, args.where, args.tag
@@ -156,8 +156,8 @@ def _runs(args: argparse.Namespace) -> int:
 
 
 def _show(args: argparse.Namespace) -> int:
-    from studies import registry
-    from studies.tracking import current_status, resolve_run, resume_command
+    from studies.tracking import registry
+    from studies.tracking.store import current_status, resolve_run, resume_command
 
     row = resolve_run(args.outputs, args.run_id)
     status, record = current_status(row)
@@ -176,14 +176,14 @@ def _show(args: argparse.Namespace) -> int:
 
 
 def _compare(args: argparse.Namespace) -> int:
-    from studies.compare import compare, format_comparison, load_run
+    from studies.compare.runs import compare, format_comparison, load_run
 
     runs = [load_run(args.outputs, ref) for ref in args.run_ids]
     default, per_response = _tolerances(args)
     comparison = compare(runs, default, per_response)
     print(format_comparison(comparison))
     if args.plot:
-        from studies.compare_plots import save_overlays
+        from studies.compare.plots import save_overlays
 
         folder = args.to or args.outputs / "compare" / "-vs-".join(x.run_id for x in runs)
         for path in save_overlays(comparison, folder):
@@ -192,8 +192,8 @@ def _compare(args: argparse.Namespace) -> int:
 
 
 def _regress(args: argparse.Namespace) -> int:
-    from studies import regress
-    from studies.compare import load_results
+    from studies.compare import regress
+    from studies.compare.runs import load_results
 
     default, per_response = _tolerances(args)
     baseline_id, baseline = load_results(args.outputs, args.baseline)
@@ -205,8 +205,8 @@ def _regress(args: argparse.Namespace) -> int:
 
 
 def _tag(args: argparse.Namespace) -> int:
-    from studies import registry
-    from studies.tracking import resolve_run
+    from studies.tracking import registry
+    from studies.tracking.store import resolve_run
 
     if args.remove:
         if not registry.remove_tag(args.outputs, args.tag):
@@ -220,8 +220,8 @@ def _tag(args: argparse.Namespace) -> int:
 
 
 def _note(args: argparse.Namespace) -> int:
-    from studies import registry
-    from studies.tracking import now, resolve_run
+    from studies.tracking import registry
+    from studies.tracking.store import now, resolve_run
 
     row = resolve_run(args.outputs, args.run_id)
     registry.add_note(args.outputs, row["run_id"], now(), args.text)
@@ -230,8 +230,8 @@ def _note(args: argparse.Namespace) -> int:
 
 
 def _rm(args: argparse.Namespace) -> int:
-    from studies.housekeeping import remove_run
-    from studies.tracking import resolve_run
+    from studies.tracking.housekeeping import remove_run
+    from studies.tracking.store import resolve_run
 
     row = resolve_run(args.outputs, args.run_id)
     where = remove_run(args.outputs, row, args.force)
@@ -244,7 +244,7 @@ def _rm(args: argparse.Namespace) -> int:
 
 
 def _restore(args: argparse.Namespace) -> int:
-    from studies.housekeeping import restore_run
+    from studies.tracking.housekeeping import restore_run
 
     entry, folder, lost = restore_run(args.outputs, args.run_id)
     print(f"restored {entry.run_id} to {folder}")
@@ -254,7 +254,7 @@ def _restore(args: argparse.Namespace) -> int:
 
 
 def _trash(args: argparse.Namespace) -> int:
-    from studies.trash import entries
+    from studies.tracking.trash import entries
 
     found = entries(args.outputs)
     for e in found:
@@ -266,7 +266,7 @@ def _trash(args: argparse.Namespace) -> int:
 
 
 def _gc(args: argparse.Namespace) -> int:
-    from studies.housekeeping import collect_garbage, parse_age
+    from studies.tracking.housekeeping import collect_garbage, parse_age
 
     done = collect_garbage(args.outputs, parse_age(args.older_than), args.keep_tagged, args.dry_run)
     move, delete = ("would move", "would delete") if args.dry_run else ("moved", "deleted")
@@ -279,7 +279,7 @@ def _gc(args: argparse.Namespace) -> int:
 
 
 def _reindex(args: argparse.Namespace) -> int:
-    from studies.reindex import reindex
+    from studies.tracking.reindex import reindex
 
     done = reindex(args.outputs)
     print(
@@ -294,9 +294,9 @@ def _reindex(args: argparse.Namespace) -> int:
 
 
 def _mlflow(args: argparse.Namespace) -> int:
-    from studies import registry
-    from studies.mlflow_export import check_store, log_run
-    from studies.tracking import current_status, resolve_run
+    from studies.tracking import registry
+    from studies.tracking.mlflow_export import check_store, log_run
+    from studies.tracking.store import current_status, resolve_run
 
     rows = [resolve_run(args.outputs, ref) for ref in args.run_ids]
     unfinished = [r["run_id"] for r in rows if current_status(r)[0] != "finished"]
@@ -314,8 +314,8 @@ def _mlflow(args: argparse.Namespace) -> int:
 
 
 def _export(args: argparse.Namespace) -> int:
-    from studies.export import export_results
-    from studies.tracking import resolve_run
+    from studies.tracking.export import export_results
+    from studies.tracking.store import resolve_run
 
     row = resolve_run(args.outputs, args.run_id)
     results = Path(row["folder"]) / "results.nc"

@@ -20,9 +20,9 @@ import contextlib
 import datetime as dt
 from pathlib import Path
 
-from studies import registry, tracking, trash
-from studies.housekeeping import collect_garbage, remove_run, restore_run
-from studies.liveness import lock_folder
+from studies.tracking import registry, store, trash
+from studies.tracking.housekeeping import collect_garbage, remove_run, restore_run
+from studies.tracking.liveness import lock_folder
 
 RUNS_EACH = 25
 OLD = "2020-01-01T00:00:00+00:00"
@@ -38,8 +38,8 @@ def register_many(outputs: str, writer: int) -> None:
     for i in range(RUNS_EACH):
         folder = root / "many" / run_id(writer, i)
         folder.mkdir(parents=True)
-        started = OLD if i % 5 == 4 else tracking.now()
-        record = tracking.RunRecord(
+        started = OLD if i % 5 == 4 else store.now()
+        record = store.RunRecord(
             run_id=folder.name, study="many", scene="cam", design="sweep", runs=1,
             status="running", started=started, git_commit="c", git_dirty=False,
             definition_sha256="d", folder=str(folder),
@@ -48,10 +48,10 @@ def register_many(outputs: str, writer: int) -> None:
         assert lock is not None, f"{folder} is new: no one else can hold it"
         with lock:  # as a live run holds it
             record.write()
-            tracking.register(root, record)
+            store.register(root, record)
             record.status = "finished"
             record.write()
-            tracking.register(root, record)
+            store.register(root, record)
         row = {"run_id": folder.name, "study": "many", "folder": str(folder)}
         if i % 5 in (1, 2):
             remove_run(root, row)
@@ -60,7 +60,7 @@ def register_many(outputs: str, writer: int) -> None:
                 restore_run(root, folder.name)
         if i % 5 == 3:
             registry.set_tag(root, folder.name, f"w{writer}-{i}")
-            registry.add_note(root, folder.name, tracking.now(), f"note of w{writer}-{i}")
+            registry.add_note(root, folder.name, store.now(), f"note of w{writer}-{i}")
         if i % 5 == 0:
             collect_garbage(root, AGE, keep_tagged=True)
             for entry in trash.entries(root):

@@ -1,4 +1,4 @@
-"""Results Datasets laid out as :mod:`studies.results` writes them, with synthetic responses,
+"""Results Datasets laid out as :mod:`studies.run.results` writes them, with synthetic responses,
 for checking analysis and reports without running kernels (shared by the report tests)."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from studies import designs
+from studies.define import designs
 
 CATALOG = Path(__file__).parents[1] / "studies" / "catalog"
 

@@ -18,8 +18,9 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from studies import registry, study_run, tracking
+from studies import pipeline
 from studies.cli import main
+from studies.tracking import registry, store
 
 SLOW_CHUNK_S = 1.5
 
@@ -50,28 +51,28 @@ def after(original: Callable[..., Any], then: Callable[..., Any]) -> Callable:
     return wrapped
 
 
-def register_unless_finished(outputs: Any, record: tracking.RunRecord) -> None:
+def register_unless_finished(outputs: Any, record: store.RunRecord) -> None:
     if record.status == "finished":
         die()
     REGISTER(outputs, record)
 
 
-REGISTER = tracking.register
+REGISTER = store.register
 
 
 def patch(phase: str) -> None:
     if phase == "before-registration":
-        tracking.register = on_call(tracking.register, 1, die)
+        store.register = on_call(store.register, 1, die)
     elif phase == "after-first-chunk":
-        study_run._save_chunk = after(study_run._save_chunk, die)
+        pipeline._save_chunk = after(pipeline._save_chunk, die)
     elif phase == "before-analysis":
-        study_run.write_analysis = on_call(study_run.write_analysis, 1, die)
+        pipeline.write_analysis = on_call(pipeline.write_analysis, 1, die)
     elif phase == "after-finished":
-        tracking.register = register_unless_finished
+        store.register = register_unless_finished
     elif phase == "rm-before-registry":
         registry.delete_run = on_call(registry.delete_run, 1, die)
     elif phase == "slow-chunks":
-        study_run._save_chunk = after(study_run._save_chunk, lambda: time.sleep(SLOW_CHUNK_S))
+        pipeline._save_chunk = after(pipeline._save_chunk, lambda: time.sleep(SLOW_CHUNK_S))
     else:
         raise SystemExit(f"unknown phase {phase!r}")
 

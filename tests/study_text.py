@@ -10,8 +10,8 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from studies.plan import plan_text
-from studies.runner import evaluate
+from studies.define.plan import plan_text
+from studies.run.runner import evaluate
 from studies.scenes import SceneOutput
 
 README = Path(__file__).resolve().parents[1] / "README.md"

@@ -3,26 +3,26 @@
 One physical concept per module:
 
 * :mod:`~engine_kernels.valvetrain.rocker` — rocker kinematics [R1]–[R6], tappet law;
-* :mod:`~engine_kernels.valvetrain.layout` — parameter, output, curve and settings rows of
+* :mod:`~engine_kernels.valvetrain.valve.layout` — parameter, output, curve and settings rows of
   the valve kernels, and the case record (coefficients, time steps, observations) they share;
-* :mod:`~engine_kernels.valvetrain.model` — coefficients, forces, energy and stiffest mode of
+* :mod:`~engine_kernels.valvetrain.valve.model` — coefficients, forces, energy and stiffest mode of
   [V2], the excitation table;
 * :mod:`~engine_kernels.valvetrain.rk4` — RK4 stability and Hermite interpolation;
-  :mod:`~engine_kernels.valvetrain.step` — one RK4 step of [V2];
-* :mod:`~engine_kernels.valvetrain.guard` — input checks and stable sub-step counts;
-* :mod:`~engine_kernels.valvetrain.observations` and
-  :mod:`~engine_kernels.valvetrain.energy_balance` — running observations, outputs and the
+  :mod:`~engine_kernels.valvetrain.valve.step` — one RK4 step of [V2];
+* :mod:`~engine_kernels.valvetrain.valve.guard` — input checks and stable sub-step counts;
+* :mod:`~engine_kernels.valvetrain.valve.observations` and
+  :mod:`~engine_kernels.valvetrain.valve.energy_balance` — running observations, outputs and the
   physics check of a run;
-* :mod:`~engine_kernels.valvetrain.modes` and :mod:`~engine_kernels.valvetrain.switching` —
+* :mod:`~engine_kernels.valvetrain.valve.modes` and :mod:`~engine_kernels.valvetrain.valve.switching` —
   switch-aware RK4 with located contact and seat switches;
-* :mod:`~engine_kernels.valvetrain.dopri` with :mod:`~engine_kernels.valvetrain.dopri_step`
-  and :mod:`~engine_kernels.valvetrain.dopri_observe` — adaptive Dormand–Prince 5(4) with
+* :mod:`~engine_kernels.valvetrain.dopri.integrate` with :mod:`~engine_kernels.valvetrain.dopri.step`
+  and :mod:`~engine_kernels.valvetrain.dopri.observe` — adaptive Dormand–Prince 5(4) with
   switches located on its dense output, one case at a time (imported as its own module);
-* :mod:`~engine_kernels.valvetrain.integrator` — one case at a time;
-  :mod:`~engine_kernels.valvetrain.jump` — jump-speed search;
-* :mod:`~engine_kernels.valvetrain.lanes` and :mod:`~engine_kernels.valvetrain.lane_batch` —
+* :mod:`~engine_kernels.valvetrain.valve.one_case` — one case at a time;
+  :mod:`~engine_kernels.valvetrain.valve.jump` — jump-speed search;
+* :mod:`~engine_kernels.valvetrain.valve.lanes` and :mod:`~engine_kernels.valvetrain.valve.lane_batch` —
   blocks of cases in SIMD lanes;
-* the multi-mass spring [V4]: :mod:`~engine_kernels.valvetrain.spring_chain` (model),
+* the multi-mass spring [V4]: :mod:`~engine_kernels.valvetrain.spring_chain.model` (model),
   ``spring_chain_layout`` (rows), ``spring_chain_guard`` (input checks, sub-steps, status),
   ``spring_chain_response`` (one case at a time, and the batch entry
   ``spring_chain_response_batch``), ``spring_chain_lanes`` with ``spring_chain_lane_layout``,
@@ -34,25 +34,20 @@ so ``from engine_kernels import valvetrain`` is the one import a caller of them 
 
 from __future__ import annotations
 
-from engine_kernels.valvetrain.energy_balance import (
+from engine_kernels.valvetrain.valve.energy_balance import (
     ENERGY_FLOOR_FRACTION,
     ENERGY_INTERVAL,
     ENERGY_REST_RISE,
     ENERGY_SLACK,
 )
-from engine_kernels.valvetrain.guard import (
+from engine_kernels.valvetrain.valve.guard import (
     STEP_RATIO_TARGET,
     prepare_case,
     stability_substeps,
     stability_substeps_batch,
     valid_valve_parameters,
 )
-from engine_kernels.valvetrain.integrator import (
-    valve_lift_batch,
-    valve_response,
-    valve_response_batch,
-)
-from engine_kernels.valvetrain.jump import (
+from engine_kernels.valvetrain.valve.jump import (
     JUMP_AT_LOWER_BOUND,
     JUMP_FOUND,
     JUMP_NONE_IN_RANGE,
@@ -60,7 +55,7 @@ from engine_kernels.valvetrain.jump import (
     JUMP_STATUS_NAMES,
     jump_speed,
 )
-from engine_kernels.valvetrain.layout import (
+from engine_kernels.valvetrain.valve.layout import (
     C_ACCELERATION,
     C_DRIVE_FORCE,
     C_LIFT,
@@ -115,7 +110,7 @@ from engine_kernels.valvetrain.layout import (
     VALVE_STATUS_NAMES,
     valve_settings,
 )
-from engine_kernels.valvetrain.model import (
+from engine_kernels.valvetrain.valve.model import (
     TRANSITION_BAND,
     equivalent_mass,
     excitation_at,
@@ -124,10 +119,15 @@ from engine_kernels.valvetrain.model import (
     valve_energy,
     valve_spectral_radius,
 )
-from engine_kernels.valvetrain.step import (
+from engine_kernels.valvetrain.valve.one_case import (
+    valve_lift_batch,
+    valve_response,
+    valve_response_batch,
+)
+from engine_kernels.valvetrain.valve.step import (
     rk4_valve_step,
 )
-from engine_kernels.valvetrain.switching import (
+from engine_kernels.valvetrain.valve.switching import (
     SWITCH_OVERSHOOT,
     SWITCHES_PER_STEP,
 )

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from studies.units import UNITS, to_si
+from studies.common.units import UNITS, to_si
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -287,12 +287,12 @@ class Scene(ABC):
     def figures(self) -> dict[str, FigureBuilder]:
         """The scene's own figures beside the generic ones, by file stem: each builder draws
         from a results Dataset, or returns None when the Dataset lacks what it needs. None by
-        default; :mod:`studies.figure_layout` has the helpers."""
+        default; :mod:`studies.common.figure_layout` has the helpers."""
         return {}
 
     def summaries(self, ds: xr.Dataset) -> list[str]:
         """Text blocks for ``analysis.txt`` beside the range analysis and ANOVA (tables a user
-        of this scene reads). None by default; :mod:`studies.summary_tables` has helpers."""
+        of this scene reads). None by default; :mod:`studies.common.summary_tables` has helpers."""
         return []
 
     def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray:

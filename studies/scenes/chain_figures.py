@@ -8,7 +8,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from studies.figure_layout import (
+from studies.common.figure_layout import (
     Layout,
     design_factors,
     line_levels,

@@ -7,7 +7,7 @@ import numpy as np
 import xarray as xr
 
 from engine_kernels.valvetrain import rocker
-from studies.summary_tables import runs_line
+from studies.common.summary_tables import runs_line
 
 
 def chain_status_summary(ds: xr.Dataset) -> list[str]:

@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 
 from engine_kernels import valvetrain as valve
-from engine_kernels.valvetrain import spring_chain as chain
-from engine_kernels.valvetrain import spring_chain_layout as layout
-from engine_kernels.valvetrain.spring_chain_lane_layout import LANES
-from engine_kernels.valvetrain.spring_chain_response import (
+from engine_kernels.valvetrain.spring_chain import layout
+from engine_kernels.valvetrain.spring_chain import model as chain
+from engine_kernels.valvetrain.spring_chain.lane_layout import LANES
+from engine_kernels.valvetrain.spring_chain.one_case import (
     spring_chain_response,
     spring_chain_response_batch,
 )

@@ -22,17 +22,15 @@ from hypothesis import strategies as st
 
 from engine_kernels import valvetrain as valve
 from engine_kernels._jit import FASTMATH
-from engine_kernels.valvetrain import spring_chain_lane_batch as lane_batch
-from engine_kernels.valvetrain import spring_chain_lane_layout as lane_layout
-from engine_kernels.valvetrain import spring_chain_lanes as lane_loops
-from engine_kernels.valvetrain import spring_chain_layout as layout
-from engine_kernels.valvetrain.lane_batch import block_starts
-from engine_kernels.valvetrain.spring_chain_guard import prepare_chain_case
-from engine_kernels.valvetrain.spring_chain_response import (
+from engine_kernels.valvetrain.spring_chain import lane_batch, lane_layout, layout
+from engine_kernels.valvetrain.spring_chain import lanes as lane_loops
+from engine_kernels.valvetrain.spring_chain.guard import prepare_chain_case
+from engine_kernels.valvetrain.spring_chain.one_case import (
     spring_chain_one_case_batch,
     spring_chain_response_batch,
 )
-from studies.simd import host_lanes, target_features, widest_vector
+from engine_kernels.valvetrain.valve.lane_batch import block_starts
+from studies.run.simd import host_lanes, target_features, widest_vector
 
 RPM = 2 * math.pi / 60
 VALVE_MASS = 0.033 + 5e-6 / 33.28e-3**2

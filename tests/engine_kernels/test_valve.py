@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from engine_kernels import valvetrain as valve
-from engine_kernels.valvetrain import lane_batch as valve_lanes
 from engine_kernels.valvetrain import rocker
+from engine_kernels.valvetrain.valve import lane_batch as valve_lanes
 from studies.scenes.valve.reference.valve_ivp import valve_reference
 from studies.scenes.valve.reference.valve_outputs import reference_outputs
 
@@ -415,7 +415,7 @@ def hermite_maximum(lift, velocity, interval):
 def test_curves_agree_with_scalar_outputs():
     out, curve = run(*table(cosine_event, 0.5), PARAMS, curves=True)
     # max lift is located between grid points on the cubic Hermite through the grid's lift
-    # and velocity (engine_kernels.valvetrain.located): that cubic's maximum, by brute force
+    # and velocity (engine_kernels.valvetrain.valve.located): that cubic's maximum, by brute force
     interval = math.radians(0.5) / PARAMS[valve.P_SPEED]
     peak = hermite_maximum(curve[valve.C_LIFT], curve[valve.C_VELOCITY], interval)
     assert curve[valve.C_LIFT].max() < out[valve.O_MAX_LIFT]
@@ -455,7 +455,7 @@ def test_thesis_reference_speeds():
 def test_case_coefficients_are_the_record_rows_in_order(width) -> None:
     # The hot arithmetic indexes the tuple with the K_* row names: element r must be row r of
     # the record at stride ``width`` (1 for one case, LANES for a lane block), for every K_*.
-    from engine_kernels.valvetrain import layout, model
+    from engine_kernels.valvetrain.valve import layout, model
 
     names = sorted((v, k) for k, v in vars(layout).items() if k.startswith("K_"))
     assert [v for v, _ in names] == list(range(len(names)))  # rows 0, 1, … without gaps

@@ -1,4 +1,4 @@
-"""Adaptive Dormand–Prince 5(4) for the valve model [V2] (engine_kernels.valvetrain.dopri).
+"""Adaptive Dormand–Prince 5(4) for the valve model [V2] (engine_kernels.valvetrain.dopri.integrate).
 
 Expected values come from scipy's event-restarted ``solve_ivp`` (DOP853, rtol 1e-12,
 studies.scenes.valve.reference.valve_ivp) on the same model and the same excitation: the
@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from engine_kernels import valvetrain as valve
-from engine_kernels.valvetrain import dopri
+from engine_kernels.valvetrain.dopri import integrate as dopri
 from studies.scenes.valve.reference.valve_ivp import table_excitation, valve_reference
 from studies.scenes.valve.reference.valve_outputs import reference_outputs
 

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from studies.study_run import run_study
+from studies.pipeline import run_study
 
 BASELINE = Path(__file__).parent / "data" / "isac_l9_baseline.nc"
 KEEP_ATTRS = (

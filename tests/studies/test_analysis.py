@@ -19,10 +19,10 @@ from hypothesis import strategies as st
 from statsmodels.formula.api import ols
 from statsmodels.stats.anova import anova_lm
 
-from studies.analysis import analyze, anova, range_analysis
-from studies.analysis_text import format_tables
-from studies.designs.orthogonal_arrays import orthogonal_array
-from studies.plots import main_effects_figure, save_main_effects
+from studies.analysis.analyze import analyze, anova, range_analysis
+from studies.define.designs.orthogonal_arrays import orthogonal_array
+from studies.report.plots import main_effects_figure, save_main_effects
+from studies.report.text import format_tables
 
 # Physical values of the 12V150 L9 study (physics §9): A, B, C; D is the empty column.
 VALUES = {"A": [7.0, 9.0, 11.0], "B": [3.5, 4.5, 5.5], "C": [12.0, 14.0, 16.0]}

@@ -12,10 +12,10 @@ from pathlib import Path
 
 import pytest
 
-from studies.bounded_files import STUDY_FILE_BYTES
 from studies.cli import main
-from studies.definition import MAX_NESTING, parse_study
-from studies.plan import plan_text
+from studies.common.bounded_files import STUDY_FILE_BYTES
+from studies.define.definition import MAX_NESTING, parse_study
+from studies.define.plan import plan_text
 
 HEAD = 'name = "bounded"\nscene = "cam"\nresponses = ["max_jerk"]\n'
 SPEED = "[factors.cam_speed]\nlevels = [1000.0, 1300.0]\n"

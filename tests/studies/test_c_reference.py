@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from engine_kernels import valvetrain as valve
-from engine_kernels.valvetrain import lane_batch as valve_lanes
+from engine_kernels.valvetrain.valve import lane_batch as valve_lanes
 from studies.scenes.valve.reference import c_valve
 
 RPM = 2 * math.pi / 60

@@ -9,7 +9,7 @@ import re
 import numpy as np
 import pytest
 
-from studies.plan import plan_text
+from studies.define.plan import plan_text
 from studies.scenes import chain, chain_tappet
 from studies.scenes.chain import chain_groups
 from studies.scenes.chain_checks import chain_point_problems

@@ -16,9 +16,9 @@ import pytest
 import xarray as xr
 
 from studies.cli import main
-from studies.definition import catalog_names, find_study
+from studies.common.units import CANONICAL, UNITS, canonical
+from studies.define.definition import catalog_names, find_study
 from studies.scenes import SCENES, get_scene
-from studies.units import CANONICAL, UNITS, canonical
 from study_text import readme_study
 
 CORPUS = Path(__file__).parent / "data" / "corpus"

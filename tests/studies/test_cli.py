@@ -37,7 +37,7 @@ def test_unknown_study_is_exit_code_2(capsys: pytest.CaptureFixture[str]) -> Non
 
 
 def test_bench_summary_lines() -> None:
-    from studies.bench import summarize
+    from studies.bench.benchmarks import summarize
 
     figures = {
         "kernel": {"window_lanes": {"cases": 10, "seconds": 0.5, "cases_per_s": 20.0}},
@@ -53,7 +53,7 @@ def test_bench_summary_lines() -> None:
 
 
 def test_bench_figure_has_one_bar_per_timing(tmp_path) -> None:
-    from studies.bench_plots import save_bench_figure, source, timings
+    from studies.bench.plots import save_bench_figure, source, timings
 
     figures = {
         "kernel": {
@@ -81,7 +81,7 @@ def test_bench_figure_has_one_bar_per_timing(tmp_path) -> None:
 
 
 def test_bench_study_runs_the_valve_study_end_to_end() -> None:
-    from studies.bench_study import bench_study, level_counts
+    from studies.bench.study import bench_study, level_counts
 
     assert level_counts(10**6) == (40, 25, 25, 40)
     assert level_counts(10**7) == (100, 40, 50, 50)

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from studies import cluster, provenance
 from studies.cli import main
+from studies.run import cluster, provenance
 from studies.scenes import SCENES, get_scene
 
 distributed = pytest.importorskip("dask.distributed")

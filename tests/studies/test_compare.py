@@ -8,13 +8,13 @@ from pathlib import Path
 import pytest
 
 from studies.cli import main
-from studies.compare import compare, load_run
-from studies.compare_plots import overlay_figure
-from studies.definition import find_study
-from studies.registry import run_values
-from studies.study_run import run_study
-from studies.tolerances import Tolerance
-from studies.tracking import list_runs
+from studies.compare.plots import overlay_figure
+from studies.compare.runs import compare, load_run
+from studies.compare.tolerances import Tolerance
+from studies.define.definition import find_study
+from studies.pipeline import run_study
+from studies.tracking.registry import run_values
+from studies.tracking.store import list_runs
 
 CAM = """
 name = "cam_grid"

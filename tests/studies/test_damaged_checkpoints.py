@@ -19,9 +19,10 @@ import numpy as np
 import pytest
 from run_faults import failing_on_call
 
-from studies import study_run, tracking
+from studies import pipeline
 from studies.cli import EXIT_OUTPUT_ERROR, EXIT_STUDY_ERROR, main
-from studies.results import open_results
+from studies.run.results import open_results
+from studies.tracking import store
 
 STUDY = """
 name = "chunks"
@@ -50,7 +51,7 @@ def expected(tmp_path_factory: pytest.TempPathFactory) -> dict[str, np.ndarray]:
     study = tmp / "chunks.toml"
     study.write_text(STUDY)
     assert run(study, tmp / "out") == 0
-    (row,) = tracking.list_runs(tmp / "out")
+    (row,) = store.list_runs(tmp / "out")
     ds = open_results(Path(row["folder"]) / "results.nc")
     return {name: ds[name].values for name in RESPONSES}
 
@@ -63,9 +64,9 @@ def failed(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> tuple[Path, Path]
     outputs = tmp_path / "out"
     full = OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
     with monkeypatch.context() as patch:
-        patch.setattr(study_run, "_save_chunk", failing_on_call(study_run._save_chunk, 3, full))
+        patch.setattr(pipeline, "_save_chunk", failing_on_call(pipeline._save_chunk, 3, full))
         assert run(study, outputs, "--chunk-size", "3") == EXIT_OUTPUT_ERROR
-    (row,) = tracking.list_runs(outputs)
+    (row,) = store.list_runs(outputs)
     return outputs, Path(row["folder"])
 
 

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from studies.definition import StudyError
-from studies.plan import plan_text
+from studies.define.definition import StudyError
+from studies.define.plan import plan_text
 
 GOOD = """
 name = "ok"
@@ -187,7 +187,7 @@ def test_cli_prints_message_without_traceback_and_writes_nothing(
 
 
 def test_missing_file_is_a_clear_error(tmp_path: Path) -> None:
-    from studies.plan import plan_study
+    from studies.define.plan import plan_study
 
     with pytest.raises(StudyError, match="no such file"):
         plan_study(tmp_path / "nope.toml")

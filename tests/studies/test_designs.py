@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from studies import designs
+from studies.define import designs
 
 
 def test_full_factorial_is_every_combination() -> None:
@@ -215,9 +215,9 @@ levels = [12.0, 14.0, 16.0]
 
 
 def test_study_interactions_reach_the_design_and_the_dataset() -> None:
-    from studies.plan import plan_text
-    from studies.results import build_dataset
-    from studies.runner import Evaluation
+    from studies.define.plan import plan_text
+    from studies.run.results import build_dataset
+    from studies.run.runner import Evaluation
 
     text = INTERACTION_STUDY.format(design="auto",
                                     interactions='[["seg2_width", "seg2_amplitude"]]')  # fmt: skip
@@ -254,8 +254,8 @@ def test_study_interactions_reach_the_design_and_the_dataset() -> None:
     ],
 )
 def test_study_interaction_mistakes_are_reported(design, interactions, words) -> None:
-    from studies.definition import StudyError
-    from studies.plan import plan_text
+    from studies.define.definition import StudyError
+    from studies.define.plan import plan_text
 
     with pytest.raises(StudyError, match=re.escape(words)):
         plan_text(INTERACTION_STUDY.format(design=design, interactions=interactions))

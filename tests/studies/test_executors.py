@@ -9,8 +9,8 @@ from concurrent.futures import Executor, Future, ProcessPoolExecutor, ThreadPool
 import numpy as np
 import pytest
 
-from studies.plan import plan_text
-from studies.runner import evaluate
+from studies.define.plan import plan_text
+from studies.run.runner import evaluate
 
 STUDY = """
 name = "executors"
@@ -111,8 +111,8 @@ def test_an_unreachable_scheduler_is_one_line_and_writes_nothing(
     tmp_path, monkeypatch, capsys
 ) -> None:
     pytest.importorskip("dask.distributed")
-    from studies import runner
     from studies.cli import main
+    from studies.run import runner
 
     monkeypatch.setattr(runner, "SCHEDULER_TIMEOUT_S", 0.5)
     study = tmp_path / "executors.toml"

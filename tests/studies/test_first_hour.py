@@ -13,10 +13,10 @@ import pytest
 import xarray as xr
 
 from studies.cli import main
-from studies.plan import plan_study
+from studies.common.units import UNITS, conversion_factor
+from studies.define.plan import plan_study
 from studies.scenes import SCENES, get_scene
 from studies.scenes.chain_tappet import nose_tappet_lift
-from studies.units import UNITS, conversion_factor
 from study_text import readme_study
 
 

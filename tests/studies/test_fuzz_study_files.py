@@ -25,8 +25,8 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from studies.cli import main
+from studies.common.units import UNITS
 from studies.scenes import get_scene
-from studies.units import UNITS
 
 settings.register_profile(
     "fuzz-ci",

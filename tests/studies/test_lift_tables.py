@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from studies.plan import plan_text
-from studies.runner import evaluate
+from studies.define.plan import plan_text
+from studies.run.runner import evaluate
 from studies.scenes.cam.lift_tables import read_lift_table, table_kinematics
 
 H, BETA = 8e-3, np.deg2rad(60.0)  # 8 mm cycloidal rise over 60 deg cam, nose at 0
@@ -95,7 +95,7 @@ levels = [15.0, 20.0]
 
 
 def test_missing_table_is_a_study_problem(tmp_path: Path) -> None:
-    from studies.definition import StudyError
+    from studies.define.definition import StudyError
 
     text = f"""
 name = "table"

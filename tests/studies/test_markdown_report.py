@@ -1,6 +1,6 @@
 """report.md, the S/N and interaction figures, and what a run writes for orthogonal-array studies.
 
-Datasets are built as :mod:`studies.results` lays them out, with synthetic responses, so the
+Datasets are built as :mod:`studies.run.results` lays them out, with synthetic responses, so the
 report is checked without running kernels. Expected best levels come from numpy level means
 (direct computation); figure data from numpy cell means and the S/N definition; the study
 structure from the shipped TOML files read with tomllib.
@@ -18,11 +18,11 @@ import pytest
 import xarray as xr
 
 from results_datasets import CATALOG, l27_dataset, study_dataset
-from studies import designs
-from studies.analysis import analyze
-from studies.markdown_report import report_text, write_report
-from studies.plots import interaction_figure, sn_figure
-from studies.report import write_analysis
+from studies.analysis.analyze import analyze
+from studies.define import designs
+from studies.report.markdown_report import report_text, write_report
+from studies.report.plots import interaction_figure, sn_figure
+from studies.report.write import write_analysis
 
 PNG = b"\x89PNG\r\n\x1a\n"
 

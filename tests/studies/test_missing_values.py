@@ -16,13 +16,13 @@ import pandas as pd
 import pytest
 import xarray as xr
 
-from studies.analysis import analyze
-from studies.analysis_text import format_tables
-from studies.markdown_report import report_text
-from studies.plan import plan_study
-from studies.plots import main_effects_figure
-from studies.results import build_dataset
-from studies.runner import evaluate
+from studies.analysis.analyze import analyze
+from studies.define.plan import plan_study
+from studies.report.markdown_report import report_text
+from studies.report.plots import main_effects_figure
+from studies.report.text import format_tables
+from studies.run.results import build_dataset
+from studies.run.runner import evaluate
 
 NAME = "first_crossing_order"
 

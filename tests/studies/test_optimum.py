@@ -17,13 +17,13 @@ import pytest
 import xarray as xr
 
 from results_datasets import CATALOG, study_dataset
-from studies import confirmation
-from studies.analysis import analyze
-from studies.markdown_report import report_text
-from studies.plan import plan_text
-from studies.report import write_analysis
-from studies.results import build_dataset
-from studies.runner import evaluate
+from studies.analysis import confirmation
+from studies.analysis.analyze import analyze
+from studies.define.plan import plan_text
+from studies.report.markdown_report import report_text
+from studies.report.write import write_analysis
+from studies.run.results import build_dataset
+from studies.run.runner import evaluate
 from study_text import scene_study
 
 SIDE_FORCE = scene_study(
@@ -180,7 +180,7 @@ def test_a_tied_optimum_takes_the_levels_with_the_best_main_effects() -> None:
     """Five control combinations tie at 0 (smaller is better). Brute force: the main effect of
     each level is the mean of its row or column; among the tied cells the one with the smallest
     sum of its two main effects is (a=1, b=0) — not the first tied cell in grid order (0, 0)."""
-    from studies.grid_optimum import Grid
+    from studies.analysis.grid_optimum import Grid
 
     y = np.array([[0.0, 5.0, 9.0], [0.0, 0.0, 0.0], [7.0, 6.0, 0.0]])
     tied = [(i, j) for i in range(3) for j in range(3) if y[i, j] == y.min()]
@@ -194,7 +194,7 @@ def test_a_tied_optimum_takes_the_levels_with_the_best_main_effects() -> None:
 def test_a_study_of_operating_conditions_only_has_no_trade_off_section() -> None:
     """luffing_sizing: every factor is an operating condition, so there is nothing to choose
     and no trade-off to print (the section used to print its sentence with no table)."""
-    from studies.plan import plan_study
+    from studies.define.plan import plan_study
 
     plan = plan_study("luffing_sizing")
     ds = build_dataset(plan, evaluate(plan, progress=False), {})

@@ -15,7 +15,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from studies.designs.orthogonal_arrays import (
+from studies.define.designs.orthogonal_arrays import (
     interaction_columns,
     list_orthogonal_arrays,
     orthogonal_array,

@@ -14,9 +14,10 @@ import numpy as np
 import pytest
 from run_faults import failing_on_call
 
-from studies import study_run, tracking
+from studies import pipeline
 from studies.cli import EXIT_OUTPUT_ERROR, main
-from studies.results import open_results
+from studies.run.results import open_results
+from studies.tracking import store
 
 STUDY = """
 name = "disk"
@@ -85,10 +86,10 @@ def one_line_error(capsys: pytest.CaptureFixture[str]) -> str:
 
 
 def assert_identical_to_an_uninterrupted_run(outputs: Path, study: Path, tmp_path: Path) -> None:
-    (row,) = tracking.list_runs(outputs)
+    (row,) = store.list_runs(outputs)
     assert row["status"] == "finished"
     assert run(study, tmp_path / "fresh", "--force") == 0
-    (fresh,) = tracking.list_runs(tmp_path / "fresh")
+    (fresh,) = store.list_runs(tmp_path / "fresh")
     resumed = open_results(Path(row["folder"]) / "results.nc")
     expected = open_results(Path(fresh["folder"]) / "results.nc")
     for name in RESPONSES:
@@ -119,14 +120,14 @@ def test_a_disk_that_fills_during_chunk_writes_leaves_a_resumable_run(
     code: int,
 ) -> None:
     outputs = tmp_path / "outputs"
-    save = study_run._save_chunk
+    save = pipeline._save_chunk
     full = OSError(code, os.strerror(code), "chunks/000002.npz")
-    monkeypatch.setattr(study_run, "_save_chunk", failing_on_call(save, 3, full))
+    monkeypatch.setattr(pipeline, "_save_chunk", failing_on_call(save, 3, full))
     assert run(study, outputs, "--chunk-size", "3") == EXIT_OUTPUT_ERROR
     err = one_line_error(capsys)
-    (row,) = tracking.list_runs(outputs)
+    (row,) = store.list_runs(outputs)
     assert err.startswith(f"error: {os.strerror(code)}: chunks/000002.npz; run {row['run_id']}")
-    assert err.endswith(tracking.resume_command(row["run_id"], outputs))
+    assert err.endswith(store.resume_command(row["run_id"], outputs))
     folder = Path(row["folder"])
     assert row["status"] == "failed"
     assert sorted(p.name for p in (folder / "chunks").glob("*.npz")) == [
@@ -134,7 +135,7 @@ def test_a_disk_that_fills_during_chunk_writes_leaves_a_resumable_run(
         "000001.npz",
     ]
     assert not (folder / "results.nc").exists()
-    monkeypatch.setattr(study_run, "_save_chunk", save)  # space freed
+    monkeypatch.setattr(pipeline, "_save_chunk", save)  # space freed
     assert resume(row["run_id"], outputs) == 0
     record = json.loads((folder / "run.json").read_text())
     assert record["timings"]["points_computed"] == 6  # chunks 2 and 3 only
@@ -143,12 +144,12 @@ def test_a_disk_that_fills_during_chunk_writes_leaves_a_resumable_run(
 
 def failed_run(outputs: Path, study: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     """A run that stopped after checkpointing chunks 0 and 1 of 4 (its folder)."""
-    save = study_run._save_chunk
+    save = pipeline._save_chunk
     full = OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
     with monkeypatch.context() as patch:
-        patch.setattr(study_run, "_save_chunk", failing_on_call(save, 3, full))
+        patch.setattr(pipeline, "_save_chunk", failing_on_call(save, 3, full))
         assert run(study, outputs, "--chunk-size", "3") == EXIT_OUTPUT_ERROR
-    (row,) = tracking.list_runs(outputs)
+    (row,) = store.list_runs(outputs)
     return Path(row["folder"])
 
 

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from studies.plan import plan_text
-from studies.results import as_grid
-from studies.study_run import run_plan, run_study
+from studies.define.plan import plan_text
+from studies.pipeline import run_plan, run_study
+from studies.run.results import as_grid
 from study_text import recorded_stages
 
 SMALL = """
@@ -92,7 +92,7 @@ def test_isac_run_record(isac) -> None:
 def test_kinematic_response_runs_only_the_kinematics_stage() -> None:
     plan = plan_text(small(responses=["max_jerk", "fullness"]))
     assert plan.stages == ("kinematics",)
-    from studies.runner import evaluate
+    from studies.run.runner import evaluate
 
     with recorded_stages(plan.scene) as calls:
         evaluate(plan, progress=False)
@@ -160,7 +160,7 @@ def test_analyze_cli_writes_tables_and_plots(isac, capsys: pytest.CaptureFixture
 def test_pooling_from_the_study_and_from_the_cli(tmp_path: Path, capsys) -> None:
     # 2 × 3 full factorial: error dof 6 − 1 − 1 − 2 = 2; pooling cam_speed (dof 2) gives 4,
     # pooling base_radius (dof 1) gives 3 (counting from the design, not from the code).
-    from studies.analysis import anova
+    from studies.analysis.analyze import anova
     from studies.cli import main
 
     text = small(responses=("max_contact_stress",)).replace(

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from studies import provenance
+from studies.run import provenance
 
 ROOT = Path(__file__).resolve().parents[2]
 PRINT_STATE = (

@@ -16,8 +16,8 @@ import pytest
 import xarray as xr
 
 from studies.cli import main
+from studies.pipeline import run_study
 from studies.scenes import get_scene
-from studies.study_run import run_study
 
 STUDY = """
 name = "speeds"
@@ -214,7 +214,7 @@ def test_export_writes_the_curves_in_long_format(
     tmp_path: Path, file_format: str, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     pytest.importorskip("pyarrow")
-    from studies import export
+    from studies.tracking import export
 
     monkeypatch.setattr(export, "CURVE_CHUNK", 2)  # 3 design points: blocks of 2 and 1
     study = tmp_path / "curved.toml"

@@ -17,9 +17,10 @@ from pathlib import Path
 import pytest
 from registry_writers import RUNS_EACH, register_many, run_id
 
-from studies import labels, registry, tracking, trash
 from studies.cli import main
-from studies.study_run import run_study
+from studies.common import labels
+from studies.pipeline import run_study
+from studies.tracking import registry, store, trash
 
 STUDY = """
 name = "tiny"
@@ -71,7 +72,7 @@ def test_a_version_1_registry_is_migrated_in_place(tmp_path: Path) -> None:
         "rpm",
     )
     assert values["max_jerk.max"]["units"] == "m/rad^3"
-    assert [r["run_id"] for r in tracking.list_runs(outputs)] == [run_id]
+    assert [r["run_id"] for r in store.list_runs(outputs)] == [run_id]
 
 
 def test_a_version_2_registry_is_indexed_again_in_si(tmp_path: Path) -> None:
@@ -172,7 +173,7 @@ def test_tags_and_notes_work_wherever_a_run_id_does(
     assert "fixed parameter cam_speed  1000 rpm → 1200 rpm" in capsys.readouterr().out
     assert main(["tag", second, "baseline", *out]) == 0  # a tag names one run: it moves
     assert f"moved from {first}" in capsys.readouterr().out
-    assert tracking.find_run(outputs, "baseline")["run_id"] == second
+    assert store.find_run(outputs, "baseline")["run_id"] == second
     assert main(["export", "baseline", *out]) == 0
     assert main(["tag", first, "nothing", "--remove", *out]) == 2
     assert "no tag 'nothing'" in capsys.readouterr().err
@@ -192,7 +193,7 @@ def test_rm_of_a_tagged_run_needs_force_and_restore_brings_it_back_bit_identical
 ) -> None:
     outputs = tmp_path / "out"
     run_id = tiny_run(tmp_path, outputs)
-    folder = Path(tracking.find_run(outputs, run_id)["folder"])
+    folder = Path(store.find_run(outputs, run_id)["folder"])
     out = ["--outputs", str(outputs)]
     assert main(["tag", run_id, "keepme", *out]) == 0
     assert main(["note", "keepme", "the review's run", *out]) == 0
@@ -204,7 +205,7 @@ def test_rm_of_a_tagged_run_needs_force_and_restore_brings_it_back_bit_identical
     assert main(["rm", "keepme", "--force", *out]) == 0
     assert "restore" in capsys.readouterr().out
     assert not folder.exists()
-    assert tracking.list_runs(outputs) == []
+    assert store.list_runs(outputs) == []
     assert registry.run_values(outputs, run_id) == []
     assert registry.tagged_run(outputs, "keepme") is None
     assert main(["trash", *out]) == 0
@@ -221,18 +222,18 @@ def test_rm_of_a_tagged_run_needs_force_and_restore_brings_it_back_bit_identical
 def test_rm_keeps_the_folder_when_the_registry_cannot_change(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    from studies.housekeeping import remove_run
+    from studies.tracking.housekeeping import remove_run
 
     outputs = tmp_path / "out"
-    row = tracking.find_run(outputs, tiny_run(tmp_path, outputs))
-    monkeypatch.setattr("studies.registry_file.BUSY_TIMEOUT_S", 0.2)
+    row = store.find_run(outputs, tiny_run(tmp_path, outputs))
+    monkeypatch.setattr("studies.tracking.registry_file.BUSY_TIMEOUT_S", 0.2)
     with closing(sqlite3.connect(outputs / registry.REGISTRY, isolation_level=None)) as other:
         other.execute("BEGIN IMMEDIATE")  # another writer holds the write lock; reads go on
         with pytest.raises(registry.RegistryUnusable, match="is locked by another process"):
             remove_run(outputs, row)
         other.execute("ROLLBACK")
     assert (Path(row["folder"]) / "results.nc").exists()
-    assert tracking.find_run(outputs, row["run_id"]) is not None
+    assert store.find_run(outputs, row["run_id"]) is not None
     assert trash.entries(outputs) == []
 
 
@@ -248,13 +249,13 @@ def test_gc_moves_old_runs_to_the_trash_and_empties_it_by_age(
     out = ["--outputs", str(outputs)]
     assert main(["gc", "--older-than", "30d", "--keep-tagged", "--dry-run", *out]) == 0
     assert f"would move {old}" in capsys.readouterr().out
-    assert len(tracking.list_runs(outputs)) == 3
+    assert len(store.list_runs(outputs)) == 3
     assert main(["gc", "--older-than", "30d", "--keep-tagged", *out]) == 0
-    assert {r["run_id"] for r in tracking.list_runs(outputs)} == {tagged, new}
+    assert {r["run_id"] for r in store.list_runs(outputs)} == {tagged, new}
     assert sorted(p.name for p in (outputs / "tiny").iterdir()) == sorted([tagged, new])
     assert [e.run_id for e in trash.entries(outputs)] == [old]
     assert main(["gc", "--older-than", "30d", *out]) == 0  # trashed just now: kept 30 days
-    assert [r["run_id"] for r in tracking.list_runs(outputs)] == [new]
+    assert [r["run_id"] for r in store.list_runs(outputs)] == [new]
     assert {e.run_id for e in trash.entries(outputs)} == {old, tagged}
     assert main(["gc", "--older-than", "0s", "--dry-run", *out]) == 0
     assert "would delete 2 from it" in capsys.readouterr().out
@@ -284,4 +285,4 @@ def test_gc_collects_what_killed_processes_left_and_nothing_else(tmp_path: Path)
     assert not stillborn.exists()
     assert starting.exists()
     assert not (outputs / trash.TRASH / "20200101T000000000000").exists()
-    assert len(tracking.list_runs(outputs)) == 1
+    assert len(store.list_runs(outputs)) == 1

@@ -16,9 +16,9 @@ from pathlib import Path
 
 import pytest
 
-from studies import registry, registry_file, tracking
 from studies.cli import main
-from studies.study_run import run_study
+from studies.pipeline import run_study
+from studies.tracking import registry, registry_file, store
 
 STUDY = """
 name = "tiny"
@@ -49,7 +49,7 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, list
     outputs = base / "out"
     ids = [run_study(study, outputs=outputs, progress=False).record.run_id for _ in range(2)]
     registry.set_tag(outputs, ids[0], "baseline")
-    registry.add_note(outputs, ids[0], tracking.now(), "the design review's run")
+    registry.add_note(outputs, ids[0], store.now(), "the design review's run")
     return study, outputs, ids
 
 
@@ -135,10 +135,10 @@ def test_a_damaged_registry_gives_one_line_and_reindex_loses_nothing(
     said = capsys.readouterr().out
     assert "reindexed 2 run(s), 1 tag(s) and 1 note(s)" in said
     assert "the old registry is kept as" in said  # moved aside, never deleted
-    rows = {r["run_id"]: r for r in tracking.list_runs(outputs)}
+    rows = {r["run_id"]: r for r in store.list_runs(outputs)}
     assert set(rows) == set(ids)
     assert {r["status"] for r in rows.values()} == {"finished"}
-    assert tracking.find_run(outputs, "baseline")["run_id"] == ids[0]
+    assert store.find_run(outputs, "baseline")["run_id"] == ids[0]
     _, notes = registry.tags_and_notes(outputs)
     assert notes[ids[0]][0].endswith("the design review's run")
     assert {v["name"] for v in registry.run_values(outputs, ids[1])} >= {"max_jerk.max"}
@@ -220,7 +220,7 @@ def test_a_full_disk_under_the_registry_gives_one_line(
         line = one_line(done.stderr)
         assert "could not be written" in line
     assert fingerprint(outputs) == before
-    assert {r["run_id"] for r in tracking.list_runs(outputs)} == set(ids)
+    assert {r["run_id"] for r in store.list_runs(outputs)} == set(ids)
 
 
 def test_sqlite_full_is_said_as_a_full_disk(tmp_path: Path) -> None:
@@ -239,5 +239,5 @@ def test_a_deleted_registry_is_rebuilt_on_sight(
 ) -> None:
     _, _, ids = recorded
     (outputs / registry.REGISTRY).unlink()
-    assert {r["run_id"] for r in tracking.list_runs(outputs)} == set(ids)
-    assert tracking.find_run(outputs, "baseline")["run_id"] == ids[0]  # from labels.json
+    assert {r["run_id"] for r in store.list_runs(outputs)} == set(ids)
+    assert store.find_run(outputs, "baseline")["run_id"] == ids[0]  # from labels.json

@@ -1,4 +1,4 @@
-"""regress and studies.testing.assert_results_close: a changed kernel fails, a rerun passes."""
+"""regress and studies.compare.testing.assert_results_close: a changed kernel fails, a rerun passes."""
 
 from __future__ import annotations
 
@@ -14,9 +14,9 @@ import pytest
 import xarray as xr
 
 from studies.cli import main
-from studies.study_run import run_study
-from studies.testing import assert_results_close
-from studies.tracking import list_runs
+from studies.compare.testing import assert_results_close
+from studies.pipeline import run_study
+from studies.tracking.store import list_runs
 
 ROOT = Path(__file__).resolve().parents[2]
 HERTZ = "return math.sqrt(force * modulus / (math.pi * width * radius))"

@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from studies.study_run import run_study
-from studies.testing import assert_results_close
+from studies.compare.testing import assert_results_close
+from studies.pipeline import run_study
 
 BASELINE = Path(__file__).parent / "data" / "isac_l9_baseline.nc"
 RTOL = {

@@ -12,21 +12,13 @@ import pytest
 import xarray as xr
 
 from results_datasets import CATALOG, l27_dataset, study_dataset
-from studies import (
-    analysis,
-    analysis_text,
-    markdown_report,
-    plots,
-    prediction,
-    sensitivity,
-    statistics,
-    sums_of_squares,
-    taguchi,
-    tradeoff,
-)
-from studies.plan import plan_text
-from studies.results import build_dataset
-from studies.runner import evaluate
+from studies.analysis import analyze as analysis
+from studies.analysis import prediction, sensitivity, statistics, sums_of_squares, taguchi, tradeoff
+from studies.define.plan import plan_text
+from studies.report import markdown_report, plots
+from studies.report import text as analysis_text
+from studies.run.results import build_dataset
+from studies.run.runner import evaluate
 
 FACTORIAL = """
 name = "factorial"

@@ -23,8 +23,8 @@ import xarray as xr
 from markdown_it import MarkdownIt
 
 from studies.cli import main
-from studies.html_report import SORT_SCRIPT
-from studies.text_safety import TerminalText
+from studies.common.text_safety import TerminalText
+from studies.report.html import SORT_SCRIPT
 
 SCRIPT = "<script>alert(1)</script>"
 IMG = "<img src=x onerror=alert(1)>"

@@ -12,8 +12,8 @@ import numpy as np
 import xarray as xr
 
 from results_datasets import CATALOG, study_dataset
-from studies import designs
-from studies.report import write_analysis
+from studies.define import designs
+from studies.report.write import write_analysis
 
 
 def grid(counts: dict[str, int], y: np.ndarray, units: dict[str, str]) -> xr.Dataset:

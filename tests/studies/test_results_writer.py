@@ -1,5 +1,5 @@
-"""results.nc streamed chunk by chunk (studies.results_writer) against the Dataset built in
-memory from the same evaluation (studies.results.build_dataset, the independent path)."""
+"""results.nc streamed chunk by chunk (studies.run.results_writer) against the Dataset built in
+memory from the same evaluation (studies.run.results.build_dataset, the independent path)."""
 
 from __future__ import annotations
 
@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from studies.plan import plan_text
-from studies.results import build_dataset
-from studies.results_writer import ResultsWriter
-from studies.runner import chunks, evaluate
-from studies.study_run import run_plan
+from studies.define.plan import plan_text
+from studies.pipeline import run_plan
+from studies.run.results import build_dataset
+from studies.run.results_writer import ResultsWriter
+from studies.run.runner import chunks, evaluate
 
 STUDY = """
 name = "streamed"

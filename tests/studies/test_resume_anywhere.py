@@ -17,9 +17,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from run_faults import failing_on_call
 
-from studies import study_run, tracking
+from studies import pipeline
 from studies.cli import EXIT_OUTPUT_ERROR, main
-from studies.results import open_results
+from studies.run.results import open_results
+from studies.tracking import store
 
 STUDIES = {
     "cam": (
@@ -38,7 +39,7 @@ POINTS = 12
 
 
 def results(outputs: Path) -> dict[str, np.ndarray]:
-    (row,) = tracking.list_runs(outputs)
+    (row,) = store.list_runs(outputs)
     assert row["status"] == "finished"
     ds = open_results(Path(row["folder"]) / "results.nc")
     return {str(name): ds[name].values for name in ds.data_vars}
@@ -74,10 +75,10 @@ def test_a_run_stopped_at_any_checkpoint_resumes_to_the_same_numbers(
         study.write_text(STUDIES[scene], encoding="utf-8")
         outputs = Path(tmp) / "outputs"
         crash = OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
-        failing = failing_on_call(study_run._save_chunk, dies_at, crash)
-        with mock.patch.object(study_run, "_save_chunk", failing):
+        failing = failing_on_call(pipeline._save_chunk, dies_at, crash)
+        with mock.patch.object(pipeline, "_save_chunk", failing):
             assert run(study, outputs, "--chunk-size", str(chunk)) == EXIT_OUTPUT_ERROR
-        (row,) = tracking.list_runs(outputs)
+        (row,) = store.list_runs(outputs)
         assert row["status"] == "failed"
         kept = sorted((Path(row["folder"]) / "chunks").glob("*.npz"))
         assert len(kept) == dies_at - 1  # every chunk before the failing one was kept

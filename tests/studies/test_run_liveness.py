@@ -18,12 +18,13 @@ import numpy as np
 import pytest
 from run_faults import fail_on_call
 
-from studies import registry, study_run, tracking, trash
+from studies import pipeline
 from studies.cli import main
-from studies.liveness import lock_folder
-from studies.plan import plan_text
-from studies.results import open_results
-from studies.study_run import run_plan
+from studies.define.plan import plan_text
+from studies.pipeline import run_plan
+from studies.run.results import open_results
+from studies.tracking import registry, store, trash
+from studies.tracking.liveness import lock_folder
 
 STUDY = """
 name = "alive"
@@ -43,15 +44,15 @@ def another_host_sees(outputs: Path) -> str:
     (path,) = outputs.glob("alive/*/run.json")
     record = json.loads(path.read_text(encoding="utf-8"))
     record["host"] = {"node": "another-host"}
-    return tracking.liveness(record)
+    return store.liveness(record)
 
 
 @pytest.mark.parametrize("phase", ["compile", "chunk", "analysis"])
 def test_another_host_sees_a_run_alive_through_a_long_phase(
     phase: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setattr(tracking, "HEARTBEAT_S", 0.05)
-    monkeypatch.setattr(tracking, "STALE_S", 1.0)
+    monkeypatch.setattr(store, "HEARTBEAT_S", 0.05)
+    monkeypatch.setattr(store, "STALE_S", 1.0)
     seen: list[str] = []
 
     def long_phase() -> None:  # 2.5 heartbeat ages of silence, were it not for the thread
@@ -60,13 +61,13 @@ def test_another_host_sees_a_run_alive_through_a_long_phase(
 
     plan = plan_text(STUDY)
     if phase == "analysis":
-        original = study_run.write_analysis
+        original = pipeline.write_analysis
 
         def slow_analysis(*args: Any, **kwargs: Any) -> Any:
             long_phase()
             return original(*args, **kwargs)
 
-        monkeypatch.setattr(study_run, "write_analysis", slow_analysis)
+        monkeypatch.setattr(pipeline, "write_analysis", slow_analysis)
     else:  # the first call of a stage is the warm-up (compile), the second the first chunk
         call = 1 if phase == "compile" else 2
         original_stage = plan.scene.stages["geometry"]
@@ -114,7 +115,7 @@ def test_a_resume_is_refused_while_another_holds_the_run_folder(
         assert "is being run or resumed by another process" in one_line(capsys.readouterr().err)
         assert main(["rm", run_id, "--outputs", str(tmp_path)]) == 2
         assert "is still running" in one_line(capsys.readouterr().err)
-        assert tracking.current_status(tracking.find_run(tmp_path, run_id))[0] == "running"
+        assert store.current_status(store.find_run(tmp_path, run_id))[0] == "running"
     assert main(command) == 0
 
 
@@ -148,12 +149,12 @@ def test_a_run_killed_at_a_phase_boundary_is_listed_and_resumes_bit_identical(
             "--chunk-size", "2")  # fmt: skip
     assert main(["runs", "--outputs", str(outputs)]) == 0  # registered on sight
     listed = capsys.readouterr().out
-    (row,) = tracking.list_runs(outputs)
+    (row,) = store.list_runs(outputs)
     assert " interrupted " in listed
     assert f"run --resume {row['run_id']}" in listed
     command = ["run", "--resume", row["run_id"], "--outputs", str(outputs), "--no-progress"]
     assert main(command) == 0
-    (row,) = tracking.list_runs(outputs)
+    (row,) = store.list_runs(outputs)
     assert row["status"] == "finished"
     with open_results(Path(row["folder"]) / "results.nc") as ds:
         for name, values in fresh.items():
@@ -170,7 +171,7 @@ def test_a_run_killed_after_finishing_is_finished_everywhere(
     kill_at("after-finished", "run", str(study), "--outputs", str(outputs), "--no-progress")
     with closing(sqlite3.connect(outputs / registry.REGISTRY)) as con:
         assert con.execute("SELECT status FROM runs").fetchall() == [("running",)]
-    (row,) = tracking.list_runs(outputs)  # seeing it mends the registry row
+    (row,) = store.list_runs(outputs)  # seeing it mends the registry row
     with closing(sqlite3.connect(outputs / registry.REGISTRY)) as con:
         assert con.execute("SELECT status FROM runs").fetchall() == [("finished",)]
     assert main(["runs", "--where", "max_jerk.max>0", "--outputs", str(outputs)]) == 0
@@ -186,9 +187,9 @@ def test_an_rm_killed_between_the_trash_and_the_registry_loses_nothing(
     run_id = run_plan(plan_text(STUDY), tmp_path, progress=False).record.run_id
     kill_at("rm-before-registry", "rm", run_id, "--outputs", str(tmp_path))
     assert [e.run_id for e in trash.entries(tmp_path)] == [run_id]
-    assert tracking.list_runs(tmp_path) == []  # its rows are deleted on sight
+    assert store.list_runs(tmp_path) == []  # its rows are deleted on sight
     assert main(["restore", run_id, "--outputs", str(tmp_path)]) == 0
-    assert [r["run_id"] for r in tracking.list_runs(tmp_path)] == [run_id]
+    assert [r["run_id"] for r in store.list_runs(tmp_path)] == [run_id]
 
 
 @pytest.mark.slow
@@ -203,7 +204,7 @@ def test_two_resumes_started_together_one_runs_the_other_is_refused(
     assert [code for code, _ in answers] == [0, 2]
     refused = one_line(answers[1][1])
     assert "not resumed" in refused or "nothing to resume" in refused
-    assert tracking.list_runs(tmp_path)[0]["status"] == "finished"
+    assert store.list_runs(tmp_path)[0]["status"] == "finished"
 
 
 def fingerprint(folder: Path) -> dict[str, bytes]:
@@ -226,9 +227,9 @@ def test_gc_of_a_copied_outputs_tree_removes_the_copys_runs_never_the_originals(
     assert main(["gc", "--older-than", "0s", "--outputs", str(b)]) == 0  # empties B's trash
     assert trash.entries(b) == []
     assert not (b / "alive" / run_id).exists()
-    assert tracking.list_runs(b) == []
+    assert store.list_runs(b) == []
     assert fingerprint(a) == before
-    assert [r["run_id"] for r in tracking.list_runs(a)] == [run_id]
+    assert [r["run_id"] for r in store.list_runs(a)] == [run_id]
 
 
 def test_a_tag_cannot_take_the_form_of_a_run_id_nor_hijack_one(
@@ -243,7 +244,7 @@ def test_a_tag_cannot_take_the_form_of_a_run_id_nor_hijack_one(
     # a registry written before tags were checked may hold one: the id still names its run
     with closing(sqlite3.connect(tmp_path / registry.REGISTRY)) as con, con:
         con.execute("INSERT INTO tags (tag, run_id) VALUES (?, ?)", (a, b))
-    assert tracking.find_run(tmp_path, a)["run_id"] == a
+    assert store.find_run(tmp_path, a)["run_id"] == a
     assert main(["rm", a, *out]) == 0
     assert [e.run_id for e in trash.entries(tmp_path)] == [a]
-    assert [r["run_id"] for r in tracking.list_runs(tmp_path)] == [b]
+    assert [r["run_id"] for r in store.list_runs(tmp_path)] == [b]

@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from studies.definition import StudyError
-from studies.plan import plan_study, plan_text
-from studies.runner import evaluate
-from studies.study_run import run_plan
+from studies.define.definition import StudyError
+from studies.define.plan import plan_study, plan_text
+from studies.pipeline import run_plan
+from studies.run.runner import evaluate
 from study_text import recorded_stages, run, scene_study
 
 RPM = math.pi / 30.0

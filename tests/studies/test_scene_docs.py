@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 
 from studies import scenes
-from studies.definition import StudyError
-from studies.plan import plan_text
-from studies.results import build_dataset
-from studies.runner import evaluate
+from studies.define.definition import StudyError
+from studies.define.plan import plan_text
+from studies.run.results import build_dataset
+from studies.run.runner import evaluate
 
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "scenes.md"
 STUDY = """

@@ -9,14 +9,14 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from studies.definition import StudyError
-from studies.figure_layout import save_figures
-from studies.plan import plan_study, plan_text
-from studies.results import build_dataset
-from studies.runner import evaluate
+from studies.common.figure_layout import save_figures
+from studies.define.definition import StudyError
+from studies.define.plan import plan_study, plan_text
+from studies.pipeline import run_plan
+from studies.run.results import build_dataset
+from studies.run.runner import evaluate
 from studies.scenes import get_scene
 from studies.scenes.reed.campbell import campbell_figure
-from studies.study_run import run_plan
 from study_text import scene_study
 
 # Material table documented in studies/scenes/reed.py: E [Pa], ρ [kg/m³].

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from numpy.polynomial import polynomial as poly
 
-from studies.definition import StudyError
-from studies.plan import plan_text
-from studies.runner import evaluate
+from studies.define.definition import StudyError
+from studies.define.plan import plan_text
+from studies.run.runner import evaluate
 from studies.scenes import chain as rocker_scene
 from studies.scenes import chain_tappet as rocker_tappet
 from studies.scenes.chain_parameters import CONVEX_POLYDYNE

@@ -14,16 +14,17 @@ import pytest
 import xarray as xr
 
 from engine_kernels import valvetrain as valve
-from engine_kernels.valvetrain import layout, rocker
-from studies.bench import run_benchmark
-from studies.definition import StudyError
-from studies.plan import plan_study, plan_text
-from studies.runner import evaluate
+from engine_kernels.valvetrain import rocker
+from engine_kernels.valvetrain.valve import layout
+from studies.bench.benchmarks import run_benchmark
+from studies.define.definition import StudyError
+from studies.define.plan import plan_study, plan_text
+from studies.pipeline import run_plan
+from studies.run.runner import evaluate
 from studies.scenes.valve import accuracy_reference as acc
 from studies.scenes.valve.figures import jump_speed_map_figure
 from studies.scenes.valve.parameters import INTEGRATORS, STATUS_NOT_RUN
 from studies.scenes.valve.scene import valve_rows
-from studies.study_run import run_plan
 from study_text import recorded_stages, run, scene_study
 
 RPM = math.pi / 30.0

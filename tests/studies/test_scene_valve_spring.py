@@ -12,13 +12,13 @@ import numpy as np
 import pytest
 
 from engine_kernels import valvetrain as valve
-from engine_kernels.valvetrain import spring_chain_layout as sc
-from engine_kernels.valvetrain.spring_chain_response import spring_chain_response
-from studies.definition import StudyError
-from studies.plan import plan_study, plan_text
-from studies.runner import evaluate
+from engine_kernels.valvetrain.spring_chain import layout as sc
+from engine_kernels.valvetrain.spring_chain.one_case import spring_chain_response
+from studies.define.definition import StudyError
+from studies.define.plan import plan_study, plan_text
+from studies.pipeline import run_plan
+from studies.run.runner import evaluate
 from studies.scenes.valve import spring
-from studies.study_run import run_plan
 from study_text import run, scene_study
 
 SPRING_MASS = 0.015  # kg, scene default

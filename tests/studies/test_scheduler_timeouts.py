@@ -12,7 +12,7 @@ from collections.abc import Iterator
 import pytest
 from dask.distributed import LocalCluster
 
-from studies import runner
+from studies.run import runner
 
 
 @pytest.fixture

@@ -1,4 +1,4 @@
-"""Variance decomposition and Sobol indices of a full factorial (studies.sensitivity).
+"""Variance decomposition and Sobol indices of a full factorial (studies.analysis.sensitivity).
 
 Expected values: an independent projection on the grid (explicit functional-ANOVA effects by
 broadcasting, whose residual must carry exactly the higher-order remainder); the Ishigami
@@ -14,7 +14,7 @@ import itertools
 import numpy as np
 import pytest
 
-from studies.sensitivity import decompose
+from studies.analysis.sensitivity import decompose
 
 A, B = 7.0, 0.1  # Ishigami constants
 VARIANCE = A**2 / 8 + B * np.pi**4 / 5 + B**2 * np.pi**8 / 18 + 0.5

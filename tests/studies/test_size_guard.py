@@ -8,9 +8,9 @@ import tracemalloc
 
 import pytest
 
-from studies import plan as planning
-from studies.definition import StudyError
-from studies.plan import full_factorial_size_problem, plan_text
+from studies.define import plan as planning
+from studies.define.definition import StudyError
+from studies.define.plan import full_factorial_size_problem, plan_text
 
 FACTORS = ("cam_speed", "spring_preload", "spring_rate", "drive_stiffness")
 GB = 1e9

@@ -1,4 +1,4 @@
-"""Sums of squares from level sums (studies.sums_of_squares) and the ANOVA built on them.
+"""Sums of squares from level sums (studies.analysis.sums_of_squares) and the ANOVA built on them.
 
 Expected values: statsmodels ``ols`` + ``anova_lm(typ=1)`` (an independent least-squares
 ANOVA) on random responses over every catalogue orthogonal array and over full factorials of
@@ -19,10 +19,10 @@ import xarray as xr
 from statsmodels.formula.api import ols
 from statsmodels.stats.anova import anova_lm
 
-from studies.analysis import anova
-from studies.designs import list_orthogonal_arrays
-from studies.designs.orthogonal_arrays import orthogonal_array
-from studies.sums_of_squares import is_balanced, term_sums_of_squares
+from studies.analysis.analyze import anova
+from studies.analysis.sums_of_squares import is_balanced, term_sums_of_squares
+from studies.define.designs import list_orthogonal_arrays
+from studies.define.designs.orthogonal_arrays import orthogonal_array
 
 
 def dataset(levels: np.ndarray, y: np.ndarray, factors: int) -> xr.Dataset:

@@ -25,15 +25,16 @@ from scipy import stats
 from statsmodels.formula.api import ols
 from statsmodels.stats.anova import anova_lm
 
-from studies import confirmation, designs, prediction, taguchi, tradeoff
-from studies.analysis import range_analysis
-from studies.designs.orthogonal_arrays import list_orthogonal_arrays, orthogonal_array
+from studies.analysis import confirmation, prediction, taguchi, tradeoff
+from studies.analysis.analyze import range_analysis
+from studies.define import designs
+from studies.define.designs.orthogonal_arrays import list_orthogonal_arrays, orthogonal_array
 
 
 def make_dataset(
     design: designs.Design, y: np.ndarray | dict[str, np.ndarray], **attrs
 ) -> xr.Dataset:
-    """A results Dataset as :mod:`studies.results` writes it, values 10·(level + 1) in mm."""
+    """A results Dataset as :mod:`studies.run.results` writes it, values 10·(level + 1) in mm."""
     coords = {}
     for f in design.factors:
         coords[f] = ("run", 10.0 * (design.levels[f] + 1), {"units": "mm"})

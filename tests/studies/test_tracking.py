@@ -14,11 +14,11 @@ import numpy as np
 import pytest
 from run_faults import fail_on_call
 
-from studies import registry, tracking
 from studies.cli import main
-from studies.plan import plan_text
-from studies.results import open_results
-from studies.study_run import resume_run, run_plan
+from studies.define.plan import plan_text
+from studies.pipeline import resume_run, run_plan
+from studies.run.results import open_results
+from studies.tracking import registry, store
 
 STUDY = """
 name = "resumable"
@@ -61,7 +61,7 @@ def test_failed_run_resumes_from_its_last_finished_chunk(
 def test_identical_definition_on_clean_commit_is_reused(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    monkeypatch.setattr("studies.provenance.git_state", lambda: ("c0ffee" * 6 + "cafe", False))
+    monkeypatch.setattr("studies.run.provenance.git_state", lambda: ("c0ffee" * 6 + "cafe", False))
     study = tmp_path / "resumable.toml"
     study.write_text(STUDY)
     outputs = tmp_path / "outputs"
@@ -69,9 +69,9 @@ def test_identical_definition_on_clean_commit_is_reused(
     assert main(args) == 0
     assert main(args) == 0
     assert "reusing run" in capsys.readouterr().out
-    assert len(tracking.list_runs(outputs)) == 1
+    assert len(store.list_runs(outputs)) == 1
     assert main([*args, "--force"]) == 0
-    assert len(tracking.list_runs(outputs)) == 2
+    assert len(store.list_runs(outputs)) == 2
 
 
 def failed_run(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
@@ -112,7 +112,7 @@ def test_a_checkpoint_left_mid_write_does_not_stop_a_resume(
 
 
 def test_runs_of_one_definition_started_together_get_distinct_ids(tmp_path: Path) -> None:
-    ids = [tracking.run_folder(tmp_path, "same", "20260101T000000000-abcdef")[0] for _ in range(3)]
+    ids = [store.run_folder(tmp_path, "same", "20260101T000000000-abcdef")[0] for _ in range(3)]
     assert ids == [
         "20260101T000000000-abcdef",
         "20260101T000000000-abcdef-1",
@@ -151,7 +151,7 @@ def test_ctrl_c_ends_with_one_line_naming_the_run_and_the_resume_command(
     plan = plan_text(STUDY)
     original = plan.scene.stages["geometry"]
     fail_on_call(monkeypatch, plan, 3, KeyboardInterrupt())
-    monkeypatch.setattr("studies.plan.plan_study", lambda _: plan)
+    monkeypatch.setattr("studies.define.plan.plan_study", lambda _: plan)
     outputs = tmp_path / "out"
     code = main(
         ["run", str(study), "--outputs", str(outputs), "--no-progress", "--chunk-size", "3"]
@@ -160,7 +160,7 @@ def test_ctrl_c_ends_with_one_line_naming_the_run_and_the_resume_command(
     err = capsys.readouterr().err.strip()
     assert "Traceback" not in err
     assert len(err.splitlines()) == 1
-    (row,) = tracking.list_runs(outputs)
+    (row,) = store.list_runs(outputs)
     assert f"python -m studies run --resume {row['run_id']} --outputs {outputs}" in err
     monkeypatch.setitem(plan.scene.stages, "geometry", original)
     assert main(["run", "--resume", row["run_id"], "--outputs", str(outputs), "--no-progress"]) == 0
@@ -168,7 +168,7 @@ def test_ctrl_c_ends_with_one_line_naming_the_run_and_the_resume_command(
 
 def registered(outputs: Path) -> bool:
     try:
-        return bool(tracking.list_runs(outputs))
+        return bool(store.list_runs(outputs))
     except registry.RegistryUnusable:  # the other process held the registry past the wait
         return False
 
@@ -191,7 +191,7 @@ def test_after_kill_9_runs_shows_interrupted_and_the_resume_command(
     assert json.loads(record.read_text())["status"] == "running"
     assert main(["runs", "--outputs", str(outputs)]) == 0
     out = capsys.readouterr().out
-    (row,) = tracking.list_runs(outputs)
+    (row,) = store.list_runs(outputs)
     assert " interrupted " in out
     command = f"python -m studies run --resume {row['run_id']} --outputs {outputs}"
     assert command in out
@@ -200,7 +200,7 @@ def test_after_kill_9_runs_shows_interrupted_and_the_resume_command(
     assert '"status": "interrupted"' in shown
     assert command in shown
     assert main(["run", "--resume", row["run_id"], "--outputs", str(outputs), "--no-progress"]) == 0
-    assert tracking.list_runs(outputs)[0]["status"] == "finished"
+    assert store.list_runs(outputs)[0]["status"] == "finished"
 
 
 def test_a_live_run_is_not_resumed_and_a_deleted_folder_is_marked(
@@ -222,9 +222,9 @@ def test_a_live_run_is_not_resumed_and_a_deleted_folder_is_marked(
 def test_a_stale_heartbeat_from_another_host_reads_as_interrupted() -> None:
     old = "2020-01-01T00:00:00+00:00"
     record = {"status": "running", "host": {"node": "elsewhere"}, "pid": 1, "heartbeat": old}
-    assert tracking.liveness(record) == "interrupted"
-    record["heartbeat"] = tracking.now()
-    assert tracking.liveness(record) == "running"
+    assert store.liveness(record) == "interrupted"
+    record["heartbeat"] = store.now()
+    assert store.liveness(record) == "running"
 
 
 def test_the_outputs_root_is_the_same_from_any_folder(
@@ -241,14 +241,14 @@ def test_the_outputs_root_is_the_same_from_any_folder(
     monkeypatch.chdir(tmp_path / "there")
     capsys.readouterr()
     assert main(["runs"]) == 0
-    (row,) = tracking.list_runs(root)
+    (row,) = store.list_runs(root)
     assert row["run_id"] in capsys.readouterr().out
     assert Path(row["folder"]).is_absolute()
     assert not (tmp_path / "here" / "outputs").exists()
     # without the variable: this checkout's outputs/ folder, wherever the command runs
     monkeypatch.delenv("ENGINE_STUDIES_OUTPUTS")
-    checkout = Path(tracking.__file__).resolve().parents[1] / "outputs"
-    assert tracking.default_outputs() == checkout
+    checkout = Path(store.__file__).resolve().parents[1] / "outputs"
+    assert store.default_outputs() == checkout
 
 
 def test_a_relative_outputs_folder_is_recorded_absolute(
@@ -258,7 +258,7 @@ def test_a_relative_outputs_folder_is_recorded_absolute(
     study.write_text(STUDY)
     monkeypatch.chdir(tmp_path)
     assert main(["run", str(study), "--no-progress", "--outputs", "rel"]) == 0
-    (row,) = tracking.list_runs(tmp_path / "rel")
+    (row,) = store.list_runs(tmp_path / "rel")
     assert Path(row["folder"]) == (tmp_path / "rel" / "resumable" / row["run_id"])
 
 
@@ -273,7 +273,7 @@ def lift_table(path: Path, peak_mm: float) -> Path:
 def test_the_cache_key_covers_the_contents_of_a_lift_table(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    monkeypatch.setattr("studies.provenance.git_state", lambda: ("c0ffee" * 6 + "cafe", False))
+    monkeypatch.setattr("studies.run.provenance.git_state", lambda: ("c0ffee" * 6 + "cafe", False))
     table = lift_table(tmp_path / "lift.csv", peak_mm=10.0)
     study = tmp_path / "table.toml"
     study.write_text(
@@ -287,7 +287,7 @@ def test_the_cache_key_covers_the_contents_of_a_lift_table(
     lift_table(table, peak_mm=5.0)  # the same file name, halved lifts
     assert main(args) == 0
     assert "reusing run" not in capsys.readouterr().out
-    newest, first = tracking.list_runs(outputs)
+    newest, first = store.list_runs(outputs)
     assert newest["definition_sha256"] != first["definition_sha256"]
     for row, peak in ((first, 10.0), (newest, 5.0)):  # the spline interpolates the table peak
         result = open_results(Path(row["folder"]) / "results.nc")
@@ -326,7 +326,7 @@ def test_resume_refuses_a_run_whose_code_changed_since_it_started(
     record = json.loads((folder / "run.json").read_text())
     assert record["code"]["scene"]["scene"] == "cam"
     edited = record["code"]["engine"] | {"source_sha256": "0" * 64}  # e.g. a kernel edited since
-    monkeypatch.setattr("studies.provenance.engine_code", lambda: edited)
+    monkeypatch.setattr("studies.run.provenance.engine_code", lambda: edited)
     with pytest.raises(ValueError, match="the code changed since run"):
         resume_run(record["run_id"], tmp_path, progress=False)
     assert not (folder / "results.nc").exists()

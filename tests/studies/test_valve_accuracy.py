@@ -12,10 +12,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from studies.definition import StudyError
-from studies.plan import plan_study, plan_text
+from studies.define.definition import StudyError
+from studies.define.plan import plan_study, plan_text
+from studies.pipeline import run_plan
 from studies.scenes.valve import accuracy_reference as acc
-from studies.study_run import run_plan
 from study_text import run
 
 # Issue #26's reproduction: a separating cycloidal cam on a very stiff seat, at three tolerances.

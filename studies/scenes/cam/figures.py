@@ -10,11 +10,11 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from studies.figure_layout import (
+from studies.common.figure_layout import (
     run_colours,
     shown_value,
 )
-from studies.figure_style import axis_label
+from studies.common.figure_style import axis_label
 
 MAX_LEGEND_RUNS = 12
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from studies.bounded_files import TABLE_FILE_BYTES, read_bounded_text
+from studies.common.bounded_files import TABLE_FILE_BYTES, read_bounded_text
 
 SPLINE_DEGREE = 5  # quintic: lift, velocity, acceleration and jerk all come from the spline
 MIN_POINTS = SPLINE_DEGREE + 2

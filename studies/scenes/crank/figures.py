@@ -9,7 +9,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from studies.figure_layout import (
+from studies.common.figure_layout import (
     PANEL,
     Layout,
     design_factors,
@@ -19,7 +19,7 @@ from studies.figure_layout import (
     runs_where,
     value_text,
 )
-from studies.figure_style import axis_label
+from studies.common.figure_style import axis_label
 
 CRANK_CYCLE_DEG = 720.0
 

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from studies.bounded_files import TABLE_FILE_BYTES, read_bounded_text
+from studies.common.bounded_files import TABLE_FILE_BYTES, read_bounded_text
 
 CYCLE_DEG = 720.0
 FIRING_TDC_DEG = 360.0  # firing TDC on the scene's cycle grid

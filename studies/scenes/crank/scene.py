@@ -28,6 +28,7 @@ from engine_kernels.crank import combustion as cb
 from engine_kernels.crank import forces as cf
 from engine_kernels.crank import kinematics as ck
 from engine_kernels.crank import multicylinder as cl
+from studies.common.units import UNITS
 from studies.scenes.base import Scene, SceneOutput
 from studies.scenes.checks import PointProblems
 from studies.scenes.crank import work
@@ -42,7 +43,6 @@ from studies.scenes.crank.parameters import (
     order_name,
 )
 from studies.scenes.crank.pressure_tables import read_pressure_table, resample_pressure
-from studies.units import UNITS
 
 if TYPE_CHECKING:
     from studies.scenes.base import FigureBuilder

@@ -10,7 +10,7 @@ from matplotlib import colormaps
 from matplotlib.colors import BoundaryNorm, ListedColormap, to_rgba
 from matplotlib.figure import Figure
 
-from studies.figure_layout import (
+from studies.common.figure_layout import (
     Layout,
     design_factors,
     factor_levels,
@@ -19,7 +19,7 @@ from studies.figure_layout import (
     raw_value,
     runs_where,
 )
-from studies.figure_style import text_colour
+from studies.common.figure_style import text_colour
 
 LUFFING_CHECKS = ("motor", "ratio", "coupling", "deflection", "slope", "key", "bearing")
 

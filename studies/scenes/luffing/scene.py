@@ -14,10 +14,10 @@ import numpy as np
 
 from engine_kernels.luffing import drive
 from engine_kernels.luffing import sizing as lf
+from studies.common.units import UNITS
 from studies.scenes.base import Scene, SceneOutput
 from studies.scenes.checks import LoopOrder, groups_of
 from studies.scenes.luffing.parameters import CHECKS, KERNEL_NAMES, NEEDS, PARAMETERS, RESPONSES
-from studies.units import UNITS
 
 if TYPE_CHECKING:
     import xarray as xr

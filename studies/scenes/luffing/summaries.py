@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from studies.summary_tables import factor_columns, sig4
+from studies.common.summary_tables import factor_columns, sig4
 
 # check → (value, limit) response names
 LUFFING_CHECKS = {

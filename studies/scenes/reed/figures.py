@@ -9,13 +9,13 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from studies.figure_layout import (
+from studies.common.figure_layout import (
     Layout,
     design_factors,
     grid_of,
     level_values,
 )
-from studies.figure_style import text_colour
+from studies.common.figure_style import text_colour
 
 
 def frequency_map_figure(ds: xr.Dataset) -> Figure | None:

@@ -38,9 +38,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from engine_kernels import reed as rd
+from studies.common.units import UNITS
 from studies.scenes.base import Curve, CurveAxis, Parameter, Response, Scene, SceneOutput
 from studies.scenes.checks import LoopOrder
-from studies.units import UNITS
 
 if TYPE_CHECKING:
     import xarray as xr

@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from studies.summary_tables import column_header, factor_columns, sig4
+from studies.common.summary_tables import column_header, factor_columns, sig4
 
 
 def reed_summary(ds: xr.Dataset) -> list[str]:

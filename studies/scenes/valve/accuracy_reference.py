@@ -31,7 +31,7 @@ from fractions import Fraction
 import numpy as np
 
 from engine_kernels import valvetrain as valve
-from engine_kernels.valvetrain import lane_batch as valve_lanes
+from engine_kernels.valvetrain.valve import lane_batch as valve_lanes
 from studies.scenes.valve.parameters import LANE_PRECISION
 from studies.scenes.valve.reference.valve_ivp import table_excitation, valve_reference
 

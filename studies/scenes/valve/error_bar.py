@@ -19,7 +19,7 @@ in double precision (``lanes`` computes the same numbers; ``lanes_f32`` round-of
 the bar).
 
 **Derived outputs** (max lift, jump start, seating velocity, bounce height) are located
-between the grid points by the kernels (:mod:`engine_kernels.valvetrain.located`), but their
+between the grid points by the kernels (:mod:`engine_kernels.valvetrain.valve.located`), but their
 step-halving difference still missed their error: the kinks of the excitation (lash take-up,
 the cam law's segment ends) make plain RK4's error in them jump from one step to the next (on
 the random samples the jump-start bar held in 89–92 %). Their bars (``DERIVED_BARS``) for the
@@ -36,7 +36,7 @@ only by the excitation table and the grid (``excitation_error``).
 stops at the first level whose bar is within the tolerance (that level's results are reported
 with that bar, ``tolerance_met`` = 1), or at ``MAX_HALVINGS`` with the last bar and 0.
 
-**dopri** (adaptive Dormand–Prince 5(4), :mod:`engine_kernels.valvetrain.dopri`) has no step
+**dopri** (adaptive Dormand–Prince 5(4), :mod:`engine_kernels.valvetrain.dopri.integrate`) has no step
 to halve: its companion runs at a tenth of the lift tolerance per step on a table of half the
 spacing (``dopri_table_deg``) with its steps capped at the grid step, so the difference sees
 the integration and the table error and shares neither the run's long steps over a resting

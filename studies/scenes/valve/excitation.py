@@ -7,7 +7,7 @@ any table. Interpolated from a clipped table, that kink is smeared over a table 
 error of 5–50 nm in Y and up to the whole jump of Y' there which does not shrink regularly
 with the spacing, so error bars from a finer table missed it. The dynamics therefore read the
 unclipped lift, a smooth curve that is negative while the lash is open, and the kernels clip it
-where they read it (:func:`engine_kernels.valvetrain.model.lash_clip`), exactly at its zero.
+where they read it (:func:`engine_kernels.valvetrain.valve.model.lash_clip`), exactly at its zero.
 
 The unclipped lift is the chain with no lash and the stem tip raised by the lash, less the lash:
 β0 = asin((Δ + ρb + z)/lb) is the same for (Δ, z) and (0, z + Δ), so its lift

@@ -10,7 +10,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter
 
-from studies.figure_layout import (
+from studies.common.figure_layout import (
     Layout,
     apart_labels,
     design_factors,
@@ -20,7 +20,7 @@ from studies.figure_layout import (
     runs_where,
     short_label,
 )
-from studies.figure_style import text_colour
+from studies.common.figure_style import text_colour
 
 
 def jump_speed_map_figure(ds: xr.Dataset) -> Figure | None:

@@ -17,14 +17,14 @@ import xarray as xr
 from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter
 
-from studies.figure_layout import (
+from studies.common.figure_layout import (
     apart_labels,
     design_factors,
     factor_levels,
     runs_where,
     value_text,
 )
-from studies.plots import axis_label
+from studies.common.figure_style import axis_label
 
 COMPARED = (
     "jump_speed",

@@ -14,7 +14,7 @@ rate 30 N/mm, seat stiffness 5e4 N/mm with 900 N s/m of seat damping, no externa
   ``rk4`` (the same scheme one case per prange iteration), ``rk4_switch_aware`` (contact and
   seat switches located inside steps: fourth order, much slower per step) or ``dopri``
   (adaptive Dormand–Prince 5(4), one case per prange iteration, contact and seat switches
-  located on its dense output, :mod:`engine_kernels.valvetrain.dopri`: lift tolerance
+  located on its dense output, :mod:`engine_kernels.valvetrain.dopri.integrate`: lift tolerance
   ``DOPRI_TOLERANCE`` per step, excitation table every ``DOPRI_TABLE_DEG``, results on the
   ``angle_step`` grid);
 * ``angle_step`` — the RK4 step in cam degrees (the excitation table is sampled at half of it);

@@ -5,7 +5,7 @@ scene extends :class:`~studies.scenes.chain.ChainScene` and adds two stages:
 
 * ``dynamics`` — fixed-step RK4 of [V2] over the integration window (valve opening − 2° …
   closure + ``closing_window``, snapped outward to whole multiples of 2°), with the integrator
-  of the settings: :func:`engine_kernels.valvetrain.lane_batch.valve_response_lanes` (``lanes``, and
+  of the settings: :func:`engine_kernels.valvetrain.valve.lane_batch.valve_response_lanes` (``lanes``, and
   ``lanes_f32`` on a float32 copy of the table), :func:`engine_kernels.valvetrain.valve_response_batch`
   (``rk4``, ``rk4_switch_aware``), or one :func:`engine_kernels.valvetrain.valve_response` call
   per point (double precision) when curves are stored;
@@ -28,7 +28,7 @@ import numpy as np
 
 from engine_kernels import valvetrain as valve
 from engine_kernels.valvetrain import rocker
-from engine_kernels.valvetrain.spring_chain_jump import chain_jump_speed
+from engine_kernels.valvetrain.spring_chain.jump import chain_jump_speed
 from studies.scenes.chain import (
     CACHE_SIZE,
     GRID_UNIT_DEG,

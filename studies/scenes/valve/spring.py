@@ -2,7 +2,7 @@
 
 :mod:`studies.scenes.valve.spring_parameters` says which responses need the chain and how the
 two rungs share their inputs. Here: the chain kernel's ``SC_*`` rows from the design points,
-one run of :func:`~engine_kernels.valvetrain.spring_chain_response.spring_chain_response_batch`
+one run of :func:`~engine_kernels.valvetrain.spring_chain.one_case.spring_chain_response_batch`
 per chain group (or one case at a time when curves are stored), the outputs that replace the
 lumped rung's under ``spring_model = "multi_mass"``, and the checks of a request.
 """
@@ -14,9 +14,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from engine_kernels import valvetrain as valve
-from engine_kernels.valvetrain import spring_chain_layout as sc
-from engine_kernels.valvetrain.spring_chain import chain_natural_frequency
-from engine_kernels.valvetrain.spring_chain_response import (
+from engine_kernels.valvetrain.spring_chain import layout as sc
+from engine_kernels.valvetrain.spring_chain.model import chain_natural_frequency
+from engine_kernels.valvetrain.spring_chain.one_case import (
     spring_chain_response,
     spring_chain_response_batch,
 )

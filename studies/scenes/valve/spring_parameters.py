@@ -7,7 +7,7 @@ Two rungs model the valve spring (physics §4):
   force at the retainer always the static ``Ps0 + ks·y``;
 * ``spring_model = "multi_mass"`` — the spring as ``spring_masses`` = N coil masses joined by
   N+1 segments with internal damping and coil clash at solid length
-  (:mod:`engine_kernels.valvetrain.spring_chain`). The valve-side mass is
+  (:mod:`engine_kernels.valvetrain.spring_chain.model`). The valve-side mass is
   ``equivalent_mass − spring_mass/3``, so both rungs describe the same valve train. Surge —
   the spring's standing waves — changes the force at the retainer, can bring jump early and
   clash coils.

@@ -7,8 +7,8 @@ import numpy as np
 import xarray as xr
 
 from engine_kernels import valvetrain as valve
+from studies.common.summary_tables import runs_line
 from studies.scenes.valve.parameters import STATUS_NOT_RUN
-from studies.summary_tables import runs_line
 
 
 def dynamics_status_summary(ds: xr.Dataset) -> list[str]:

@@ -13,7 +13,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from studies.figure_layout import design_factors, line_levels, runs_where, short_label
+from studies.common.figure_layout import design_factors, line_levels, runs_where, short_label
 
 SECONDS_PER_MINUTE = 60.0
 PANELS = ("surge_amplitude", "min_retainer_force_ratio")

@@ -63,7 +63,7 @@ def table_excitation(excitation: np.ndarray, table_step: float, table_start: flo
 
     Y is interpolated with slopes Y', Y' with slopes Y'', Y'' linearly (SI units, per rad),
     then clipped at the lash take-up as the kernels do
-    (:func:`engine_kernels.valvetrain.model.lash_clip`): 0 wherever the interpolated Y ≤ 0.
+    (:func:`engine_kernels.valvetrain.valve.model.lash_clip`): 0 wherever the interpolated Y ≤ 0.
     """
     nodes = table_start + table_step * np.arange(excitation.shape[1])
     lift = CubicHermiteSpline(nodes, excitation[0], excitation[1])

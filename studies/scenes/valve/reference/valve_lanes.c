@@ -1,7 +1,7 @@
 /* C reference of the valve lane kernel, for the speed comparison in `python -m studies bench
  * valve` (issue "Valve train": "a C -O3 kernel of this form"). Never used in studies.
  *
- * The same work as engine_kernels/valvetrain/lanes.py with one RK4 sub-step per grid step: model
+ * The same work as engine_kernels/valvetrain/valve/lanes.py with one RK4 sub-step per grid step: model
  * [V2] per unit mass, classic RK4 over the cam-angle grid from a shared excitation table,
  * branch-free contact switches, and the same running observations (extremes, jump, seat
  * phase, bounces, mode transitions, energy balance every ENERGY_INTERVAL grid points; maxima,

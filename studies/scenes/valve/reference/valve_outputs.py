@@ -1,7 +1,7 @@
 """The derived outputs of the valve model [V2] read off the scipy reference (physics §4).
 
 The kernels report max lift, jump start, seating velocity and bounce height from their
-observations (:mod:`engine_kernels.valvetrain.observations`); these are the same quantities
+observations (:mod:`engine_kernels.valvetrain.valve.observations`); these are the same quantities
 of the continuous reference solution (:func:`~studies.scenes.valve.reference.valve_ivp.valve_reference`),
 with the kernels' definitions: the seat phase is seated until the valve first rises above the
 seat plane δ0 = Ps0/kz, open until it returns onto it with the cam at or past its nose
@@ -29,7 +29,7 @@ SAMPLES_PER_RAD = 4096.0
 """Dense-output samples per radian of cam that seed the search for a maximum (1/72°)."""
 MIN_SAMPLES = 8
 SEATED, OPEN, CLOSED, BOUNCING = 0, 1, 2, 3
-"""Seat phases, as ``engine_kernels.valvetrain.layout.PHASE_*``."""
+"""Seat phases, as ``engine_kernels.valvetrain.valve.layout.PHASE_*``."""
 MAX_ANGLE_TOLERANCE = 1e-12
 """Bracket width [rad] of the search for a maximum: the lift there is off by ~y''·1e-24 m."""
 
@@ -69,7 +69,7 @@ def reference_outputs(
     solution : the reference over the whole integration window (``valve_reference``).
     params   : parameter row (``engine_kernels.valvetrain.P_*``, SI units).
     nose     : cam angle [rad] of the nose, the first maximum of the excitation Y (the kernels
-               take it from their table: :func:`engine_kernels.valvetrain.observations.nose_position`).
+               take it from their table: :func:`engine_kernels.valvetrain.valve.observations.nose_position`).
     """
     depth = params[valve.P_PRELOAD] / params[valve.P_SEAT_STIFFNESS]
     phase = SEATED

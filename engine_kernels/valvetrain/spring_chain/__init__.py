@@ -1,0 +1,1 @@
+"""The multi-mass valve spring [V4] (physics §4): N coil masses between the valve and the seat; model, rows (layout), input checks and status (guard), one case at a time (one_case), SIMD lanes (lanes, lane_layout, lane_observations, lane_batch) and its jump-speed search (jump)."""

@@ -1,0 +1,1 @@
+"""The single-mass valve model [V2] (physics §4): rows and case record (layout), coefficients, forces and excitation (model), the RK4 step, input checks and sub-steps (guard), observations and the energy balance, switch-aware RK4 (modes, switching, located), one case at a time (one_case), SIMD lanes (lanes, lane_batch) and the jump-speed search (jump)."""

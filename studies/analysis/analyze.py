@@ -1,0 +1,377 @@
+"""The analysis of a run, computed once: one ``xarray.Dataset`` that every renderer reads.
+
+:func:`analyze` computes, per analysed variable (the study's responses, run means of
+replicated ones, and their S/N ratios where Taguchi's S/N applies), everything that
+``analysis.txt``, ``report.md`` and the figures show; it is written as ``analysis.nc`` beside
+``results.nc``. The renderers (:mod:`studies.report.text`, :mod:`studies.report.markdown_report`,
+:mod:`studies.report.plots`) compute no statistics.
+
+Dimensions: ``response`` (the analysed variables), ``term`` (factors, then interaction
+columns), ``level`` (0-based), ``source`` (the ANOVA rows: terms, ``error``, ``total``),
+``interaction`` (assigned factor pairs of an orthogonal array), ``pair`` (every factor pair of
+a full factorial) and ``level_a`` × ``level_b`` for two-way tables of means.
+
+* range analysis: ``k``, ``R``, ``rank``, ``best_level`` (over the terms; -1 for operating
+  factors, interaction columns and a range of 0), ``grand_mean`` (``pass_fail`` marks 0/1
+  checks, whose means are shares passing);
+* runs without a finite value (:mod:`studies.analysis.missing`): ``none_means`` (response), per level
+  ``left_out`` (runs the analysis leaves out) and ``bounded`` (runs counted at the best or worst
+  value seen, ``best_bound`` / ``worst_bound``) on (response, term, level);
+* ANOVA: ``SS``, ``dof``, ``MS``, ``F``, ``P``, ``contribution`` [%], ``pooled`` on
+  (response, source), ``anova_note``;
+* the optimum of the control factors (:mod:`studies.analysis.optimum`): the best computed
+  point of a full factorial or the additive prediction of an array, per operating condition;
+* interactions of arrays: ``interaction_SS`` … and ``interaction_mean`` (response,
+  interaction, level_a, level_b);
+* full factorials (complete, the computer-experiment view): ``main_SS``, ``pair_SS``,
+  ``remainder_SS``, ``first_order`` and ``total_effect`` Sobol indices, and the two-way
+  mean over the strongest factor pair (``map_mean``, factors in ``map_x``/``map_y``);
+* status codes and bit masks (counted, never averaged): ``<response>_count`` on
+  ``<response>_flag`` (the CF flag meanings), the names in the attribute ``status_responses``;
+* several responses: the trade-off (``chosen_level``, ``decided_by``, ``conflict`` per term,
+  ``compromise``, ``compromise_worst``, ``compromise_half_width`` per response and
+  ``compromise_at`` per condition).
+
+Coordinates ``term_role`` ("control", "operating", "model" or "column") and ``condition`` (the
+labels of the operating conditions: model rungs count among them); attributes
+``operating_factors`` (model factors included), ``model_factors`` and ``optimum_basis``.
+
+Variables that hold a response's values carry its units in the ``units`` variable (per
+response); the ANOVA SS are in units².
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from studies.analysis import missing, prediction, taguchi
+from studies.analysis import optimum as analysis_optimum
+from studies.analysis.factorial import factorial, factorial_frame, grid_of
+from studies.analysis.grid_optimum import Grid
+from studies.analysis.statistics import (
+    SENSES,
+    UNRANKED,
+    anova,
+    has_values,
+    range_analysis,
+    status_counts,
+    sweep_runs,
+)
+from studies.run.results import NOT_EVALUATED, PASS_FAIL, is_status, write_netcdf
+
+__all__ = ["SENSES", "analyze", "anova", "has_values", "range_analysis", "sweep_runs"]
+
+ANALYSIS_NAME = "analysis.nc"
+SOURCE_COLUMNS = ("SS", "dof", "MS", "F", "P", "contribution")
+INTERACTION_COLUMNS = ("SS", "dof", "F", "P", "contribution")
+
+
+def presence(ds: xr.Dataset, responses: Sequence[str]) -> tuple[list[str], np.ndarray]:
+    """The responses with a finite value in some run, and the runs with a value (finite or
+    ±inf; for flags and status codes anything but -1 "not evaluated") in some response: the
+    others did not run. Reads each response once."""
+    present, any_value = [], np.zeros(ds.sizes["run"], dtype=bool)
+    for r in responses:
+        values = ds[r].values
+        integer = values.dtype.kind == "i"
+        has = values != NOT_EVALUATED if integer else ~np.isnan(values)
+        finite = has if integer else np.isfinite(values)
+        if finite.any():
+            present.append(r)
+        any_value |= has.reshape(values.shape[0], -1).any(axis=1)
+    return present, any_value
+
+
+def analyzed(ds: xr.Dataset, responses: Sequence[str]) -> tuple[xr.Dataset, list[str], np.ndarray]:
+    """The results with run means and S/N ratios added, the variables to analyse (each
+    response with a finite value, or its run mean when replicated, then its S/N ratio) and the
+    runs with a value in some response (:func:`presence`)."""
+    present, ran = presence(ds, responses)
+    present = [r for r in present if not is_status(ds[r])]
+    view = taguchi.with_sn(taguchi.with_means(ds, present), taguchi.sn_responses(ds, present))
+    names = [taguchi.mean_name(view, r) for r in present]
+    names += [taguchi.sn_name(r) for r in present if taguchi.sn_name(r) in view]
+    return view, names, ran
+
+
+def analyze(
+    ds: xr.Dataset, responses: Sequence[str] | None = None, pool: Sequence[str] | None = None
+) -> xr.Dataset:
+    """Everything the outputs of a run show, computed once (see the module docstring).
+
+    ``responses`` default to the study's (attribute ``responses``); ``pool`` is passed to every
+    ANOVA (default: the study's ``[design] pool``, else pool only when the error has no dof).
+    """
+    names = list(responses or json.loads(ds.attrs.get("responses", "[]")))
+    design = str(ds.attrs.get("design", ""))
+    attrs = {
+        "design": design,
+        "responses": json.dumps(names),
+        "alpha": taguchi.ALPHA,
+        "confirmation_runs": 1,
+    }
+    status = [r for r in names if is_status(ds[r])]
+    counts = {f"{r}_count": status_counts(ds[r]) for r in status}
+    attrs["status_responses"] = json.dumps(status)
+    if design == "sweep":  # tables and plots of the runs themselves: nothing to estimate
+        present, ran = presence(ds, names)
+        present = [r for r in present if r not in status]
+        attrs |= {"points": ds.sizes["run"], "points_without_value": int((~ran).sum())}
+        return xr.Dataset(counts, attrs=attrs | {"analysed": json.dumps(present)})
+    view, analysed, ran = analyzed(ds, names)
+    attrs |= {"points": ds.sizes["run"], "points_without_value": int((~ran).sum())}
+    terms = taguchi.model_terms(view)
+    operating = prediction.operating_factors(view)
+    models = [f for f in json.loads(view.attrs.get("model_factors", "[]")) if f in operating]
+    # The level codes once in memory, then one response at a time: a 10⁷-run result is never
+    # held whole.
+    base = view.drop_vars(list(view.data_vars))
+    base = base.assign_coords(
+        {f"{t}_level": base[f"{t}_level"].variable.copy(deep=False).load() for t in terms}
+    )  # the level codes stay in memory (4 B per run and term); factor values are read on use
+    out = _frame(base, view, analysed, terms, operating, models)
+    order = grid_of(base) if design == "full_factorial" else None
+    grid = None if order is None else Grid(*order, operating)
+    if order is not None:
+        factorial_frame(out, order)
+    attrs["optimum_basis"] = analysis_optimum.COMPUTED if grid else analysis_optimum.PREDICTED
+    tables, optima, replaced = {}, {}, {}
+    for name in analysed:
+        variable, beyond = _filled(out, base, view[name], ran, name, terms)
+        one = base.assign({name: variable})
+        if beyond is not None:
+            replaced[name] = variable
+        out["varies"].loc[name] = int(taguchi.varies(one, name))
+        tables[name] = anova(one, name, factors=terms, pool=pool)
+        _range(out, one, name, terms, operating)
+        _anova(out, tables[name], name)
+        if str(view[name].attrs.get("better")) != UNRANKED:
+            found = analysis_optimum.optimum(out, one, name, tables[name], grid, beyond)
+            if found is not None:
+                optima[name] = found
+        _interactions(out, one, name, tables[name])
+        if order is not None:
+            factorial(out, one, name, order)
+    sn = {taguchi.sn_name(r) for r in names}
+    optimised = [n for n in analysed if n not in sn and int(out["varies"].loc[n]) and n in optima]
+    if len(optimised) > 1:
+        lazy = base.assign({n: replaced.get(n, view[n].variable) for n in optimised})
+        analysis_optimum.trade(out, lazy, optimised, tables, optima, grid)
+    for r in names:  # run means of replicated responses, for the renderers' run tables
+        if taguchi.mean_name(view, r) != r and taguchi.mean_name(view, r) in analysed:
+            out[taguchi.mean_name(view, r)] = view[taguchi.mean_name(view, r)]
+    out = out.assign(counts)
+    out.attrs = attrs | {
+        "analysed": json.dumps(analysed),
+        "operating_factors": json.dumps(operating),
+        "model_factors": json.dumps(models),
+    }
+    return out
+
+
+def write_analysis_nc(an: xr.Dataset, folder: Path) -> Path:
+    """Write the analysis Dataset as ``analysis.nc`` in ``folder``."""
+    return write_netcdf(an, Path(folder) / ANALYSIS_NAME)
+
+
+# --- the frame ------------------------------------------------------------------------------
+def _frame(
+    base: xr.Dataset,
+    view: xr.Dataset,
+    names: list[str],
+    terms: list[str],
+    operating: list[str],
+    models: list[str],
+) -> xr.Dataset:
+    nlevels = max(int(base[f"{t}_level"].max()) + 1 for t in terms) if terms else 1
+    pairs = list(taguchi.interaction_pairs(view))
+    sources = [*terms, "error", "total"]
+    nan = np.nan
+
+    def full(dims: tuple[str, ...], value: Any = nan, dtype: Any = float) -> tuple:
+        shape = tuple(sizes[d] for d in dims)
+        return dims, np.full(shape, value, dtype=dtype)
+
+    sizes = {
+        "response": len(names),
+        "term": len(terms),
+        "level": nlevels,
+        "source": len(sources),
+        "interaction": len(pairs),
+        "level_a": nlevels,
+        "level_b": nlevels,
+    }
+    rt, rs = ("response", "term"), ("response", "source")
+    data = {
+        "varies": full(("response",), 0, np.int8),
+        "units": ("response", [str(view[n].attrs.get("units", "")) for n in names]),
+        "long_name": ("response", [str(view[n].attrs.get("long_name", n)) for n in names]),
+        "sense": ("response", [str(view[n].attrs.get("better", "smaller")) for n in names]),
+        "sn_kind": ("response", [str(view[n].attrs.get("sn_kind", "")) for n in names]),
+        "pass_fail": (
+            "response",
+            [int(view[n].attrs.get("flag_meanings") == PASS_FAIL) for n in names],
+        ),
+        "observations": ("response", [int(view[n].attrs.get("observations", 0)) for n in names]),
+        "grand_mean": full(("response",)),
+        "k": full(("response", "term", "level")),
+        "R": full(rt),
+        "rank": full(rt, 0, np.int32),
+        "best_level": full(rt, -1, np.int32),
+        **{c: full(rs) for c in SOURCE_COLUMNS},
+        "pooled": full(rs, 0, np.int8),
+        "anova_note": ("response", np.full(len(names), "", dtype=object)),
+        "none_means": ("response", [missing.none_means(view[n]) for n in names]),
+        "left_out": full(("response", "term", "level"), 0, np.int32),
+        "bounded": full(("response", "term", "level"), 0, np.int32),
+        "best_bound": full(("response",)),
+        "worst_bound": full(("response",)),
+        "optimum_level": full(rt, -1, np.int32),
+        "model_terms": ("response", np.full(len(names), "", dtype=object)),
+        **{
+            v: full(("response",))
+            for v in ("predicted", "half_width", "confirmation_half_width", "n_eff", "error_ms")
+        },
+        "error_dof": full(("response",), 0, np.int64),
+        **{f"interaction_{c}": full(("response", "interaction")) for c in INTERACTION_COLUMNS},
+        "interaction_pooled": full(("response", "interaction"), 0, np.int8),
+        "interaction_mean": full(("response", "interaction", "level_a", "level_b")),
+    }
+    value, label, units = _level_values(base, terms, nlevels)
+    coords = {
+        "response": names,
+        "term": terms,
+        "level": np.arange(nlevels),
+        "source": sources,
+        "interaction": [f"{a} x {b}" for a, b in pairs],
+        "level_value": (("term", "level"), value),
+        "level_label": (("term", "level"), label),
+        "term_units": ("term", units),
+        "is_factor": ("term", [int(t in taguchi.factor_names(view)) for t in terms]),
+        "term_role": ("term", [_role(view, t, operating, models) for t in terms]),
+        "level_runs": (("term", "level"), _level_runs(base, terms, nlevels)),
+        "interaction_a": ("interaction", [a for a, _ in pairs]),
+        "interaction_b": ("interaction", [b for _, b in pairs]),
+    }
+    out = xr.Dataset(data, coords=coords)
+    conditions = prediction.conditions(base)
+    shown = {
+        str(t): [f"{v:g}" if np.isfinite(v) else str(text) for v, text in zip(*pair, strict=True)]
+        for t, pair in zip(terms, zip(value, label, strict=True), strict=True)
+    }
+    term_units = dict(zip(terms, units, strict=True))
+    labels = analysis_optimum.condition_labels(conditions, shown, term_units)
+    model_labels = analysis_optimum.condition_labels(
+        [{f: c[f] for f in models} for c in conditions], shown, term_units
+    )
+    analysis_optimum.optimum_frame(out, labels, model_labels if models else None)
+    return out
+
+
+def _level_runs(base: xr.Dataset, terms: list[str], nlevels: int) -> np.ndarray:
+    """Runs at each level of each term (O(N), ``bincount``)."""
+    return np.array(
+        [np.bincount(base[f"{t}_level"].values, minlength=nlevels)[:nlevels] for t in terms],
+        dtype=np.int64,
+    ).reshape(len(terms), nlevels)
+
+
+def _role(view: xr.Dataset, term: str, operating: list[str], models: list[str]) -> str:
+    if term not in taguchi.factor_names(view):
+        return "column"
+    if term in models:
+        return "model"
+    return "operating" if term in operating else "control"
+
+
+def _level_values(
+    base: xr.Dataset, terms: list[str], nlevels: int
+) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """Each term's value at each level (NaN where not numeric or absent), its label ("" where
+    absent: the value as text, or the 1-based level number without a value) and its units."""
+    value = np.full((len(terms), nlevels), np.nan)
+    label = np.full((len(terms), nlevels), "", dtype=object)
+    units = []
+    for i, t in enumerate(terms):
+        numeric = t in base.coords and np.issubdtype(base[t].dtype, np.number)
+        for level, v in taguchi.level_values(base, t).items():
+            label[i, level] = str(v)
+            if numeric:
+                value[i, level] = float(v)
+        units.append(str(base[t].attrs.get("units", "")) if t in base.coords else "")
+    return value, label, units
+
+
+# --- per response ---------------------------------------------------------------------------
+def _filled(
+    out: xr.Dataset, base: xr.Dataset, y: xr.DataArray, ran: np.ndarray, name: str, terms: list[str]
+) -> tuple[xr.Variable, np.ndarray | None]:
+    """The values the analysis uses (runs without a finite value resolved by
+    :mod:`studies.analysis.missing`), with the per-level counts of what was done written into ``out``.
+    A bare Variable (no coordinates to compare and load on assignment; the view stays lazy),
+    and, when any value was resolved, which runs lie beyond every computed value
+    (``missing.Filled.beyond``), else None."""
+    variable = y.variable.copy(deep=False).load()
+    values = variable.values.astype(float)
+    if np.isfinite(values).all():
+        return variable, None
+    sense = str(y.attrs.get("better", "smaller"))
+    filled = missing.fill(values, ran, missing.none_means(y), sense)
+    i = out.indexes["response"].get_loc(name)
+    nlevels = out.sizes["level"]
+    for j, t in enumerate(terms):
+        codes = base[f"{t}_level"].values
+        out["left_out"].values[i, j] = missing.per_level(filled.left_out, codes, nlevels)
+        out["bounded"].values[i, j] = missing.per_level(filled.bounded, codes, nlevels)
+    out["best_bound"].values[i], out["worst_bound"].values[i] = (
+        filled.best_bound,
+        filled.worst_bound,
+    )
+    return xr.Variable(variable.dims, filled.values, variable.attrs), filled.beyond
+
+
+def _range(
+    out: xr.Dataset, view: xr.Dataset, name: str, terms: list[str], operating: list[str]
+) -> None:
+    ra = range_analysis(view, name, terms)
+    at = {"response": name}
+    out["k"].loc[at] = np.pad(
+        ra.k.values, ((0, 0), (0, out.sizes["level"] - ra.sizes["level"])), constant_values=np.nan
+    )
+    for v in ("R", "rank"):
+        out[v].loc[at] = ra[v].values
+    ranked = str(view[name].attrs.get("better")) != UNRANKED
+    chosen = [ranked and t not in operating and t in taguchi.factor_names(view) for t in terms]
+    best = np.where(np.asarray(chosen) & (ra["R"].values > 0), ra["best_level"].values, -1)
+    out["best_level"].loc[at] = best
+    y = view[name].values.astype(float)
+    out["grand_mean"].loc[at] = float(np.mean(y[np.isfinite(y)]))
+
+
+def _anova(out: xr.Dataset, table: Any, name: str) -> None:
+    at = {"response": name}
+    for c in SOURCE_COLUMNS:
+        out[c].loc[at] = table[c].to_numpy(dtype=float)
+    out["pooled"].loc[at] = table["pooled"].to_numpy(dtype=np.int8)
+    out["anova_note"].loc[at] = table.attrs["note"]
+
+
+def _interactions(out: xr.Dataset, view: xr.Dataset, name: str, table: Any) -> None:
+    if not out.sizes["interaction"]:
+        return
+    inter = taguchi.interaction_anova(table, view)
+    at = {"response": name}
+    for c in INTERACTION_COLUMNS:
+        out[f"interaction_{c}"].loc[at] = inter[c].to_numpy(dtype=float)
+    out["interaction_pooled"].loc[at] = inter["pooled"].to_numpy(dtype=np.int8)
+    for i, (a, b) in enumerate(taguchi.interaction_pairs(view)):
+        means = taguchi.interaction_means(view, name, a, b)
+        la, lb = means[f"{a}_level"].values, means[f"{b}_level"].values
+        block = out["interaction_mean"].values[out.indexes["response"].get_loc(name), i]
+        block[np.ix_(la, lb)] = means.values

@@ -1,0 +1,287 @@
+"""A study made ready to run: validated definition + design + SI inputs per design point.
+
+:func:`plan_study` is the single gate before any computation: it gathers the definition's own
+problems, the design-fit problems and the scene's per-point physical checks into one
+:class:`~studies.define.definition.StudyError`. Nothing is written and no kernel runs unless the
+plan is clean.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from studies.define import designs
+from studies.define.definition import (
+    StudyDefinition,
+    StudyError,
+    find_study,
+    parse_study,
+    read_study,
+)
+from studies.scenes import Scene, get_scene
+
+BYTES_PER_FACTOR = 48
+BYTES_PER_RESPONSE = 16
+MEMORY_SHARE = 0.8  # of the available memory a study may plan to use
+MAX_POINTS_VARIABLE = "ENGINE_STUDIES_MAX_POINTS"
+
+
+@dataclass(frozen=True)
+class Plan:
+    """Everything the runner needs; ``points`` are SI values per parameter, one per run."""
+
+    definition: StudyDefinition
+    scene: Scene
+    design: designs.Design
+    points: dict[str, np.ndarray]
+    settings: dict[str, Any]
+    stages: tuple[str, ...]
+    responses: tuple[str, ...]  # stored: the study's, then the scene's status responses
+    max_chunk: int = sys.maxsize  # design points per chunk that fit the memory (settings)
+
+    @property
+    def runs(self) -> int:
+        return self.design.runs
+
+    def factor_values(self, name: str, part: slice = slice(None)) -> np.ndarray:
+        """The factor's value (as written in the study) in the runs ``part``."""
+        factor = next(f for f in self.definition.factors if f.name == name)
+        return np.asarray(factor.levels)[self.design.levels[name][part]]
+
+
+def plan_study(name_or_path: str | Path) -> Plan:
+    """Read, validate and plan a catalogue study or a TOML file (StudyError if not runnable)."""
+    definition, problems = read_study(name_or_path)
+    return _plan(definition, problems, str(find_study(name_or_path)))
+
+
+def plan_text(text: str, source: str = "<string>") -> Plan:
+    """Like :func:`plan_study` for TOML text."""
+    definition, problems = parse_study(text, source)
+    return _plan(definition, problems, source)
+
+
+def _plan(definition: StudyDefinition | None, problems: list[str], source: str) -> Plan:
+    if definition is None or (problems and not definition.factors):
+        raise StudyError(source, problems)
+    scene = get_scene(definition.scene)
+    design = None
+    try:
+        design = _design(definition)
+    except designs.DesignError as exc:
+        problems = problems + exc.problems
+    if design is None or problems:
+        raise StudyError(source, problems)
+    points = _points(scene, definition, design, design.runs)
+    settings = {
+        s.name: s.to_si(definition.settings[s.name])
+        if s.kind == "number"
+        else definition.settings[s.name]
+        for s in scene.settings
+    }
+    asked, curves = list(definition.responses), list(definition.curves)
+    max_chunk, work_problem = settings_fit(scene, definition, settings, design.runs)
+    if work_problem:
+        raise StudyError(source, [work_problem])
+    point_problems = scene.check_points(points, settings)
+    point_problems += scene.request_problems(settings, asked, curves)
+    if point_problems:
+        raise StudyError(source, point_problems)
+    stages = scene.stages_for(asked, curves)
+    stored = scene.stored_responses(asked, curves)
+    clashes = _name_clashes(definition, scene, design, stored)
+    if clashes:
+        raise StudyError(source, clashes)
+    return Plan(
+        definition, scene, design, points, settings, tuple(stages), tuple(stored), max_chunk
+    )
+
+
+def settings_fit(
+    scene: Scene, definition: StudyDefinition, settings: dict[str, Any], runs: int
+) -> tuple[int, str]:
+    """The design points per chunk that fit this machine's memory at the study's settings,
+    and why not even one does ("" if it does), with the memory and time estimates."""
+    asked, curves = list(definition.responses), list(definition.curves)
+    work = scene.work_estimate(settings, asked, curves)
+    share = MEMORY_SHARE * available_memory()
+    if work.per_point <= 0.0:
+        return sys.maxsize, ""
+    if work.fixed + work.per_point <= share:
+        return max(1, int((share - work.fixed) / work.per_point)), ""
+    defaults = {
+        s.name: s.to_si(s.default) if s.kind == "number" else s.default for s in scene.settings
+    }
+    usual = scene.work_estimate(defaults, asked, curves)
+    ratio = (work.fixed + work.per_point) / (usual.fixed + usual.per_point)
+    seconds = scene.seconds_per_point * ratio * runs  # compute grows with the grids
+    changed = ", ".join(
+        f"{name} = {value:g}" if isinstance(value, float) else f"{name} = {value!r}"
+        for name, value in definition.settings.items()
+        if definition.settings[name] != scene.setting(name).default  # type: ignore[union-attr]
+    )
+    return 0, (
+        f"settings {changed or '(defaults)'} need about {(work.fixed + work.per_point) / 1e9:.3g} "
+        f"GB for a single design point (the scene's grids and tables) and about "
+        f"{duration(seconds)} to compute {runs} points; this machine has "
+        f"{available_memory() / 1e9:.3g} GB of memory available: use a coarser setting"
+    )
+
+
+def full_factorial_size_problem(
+    counts: dict[str, int], responses: int, seconds_per_point: float = 1e-3
+) -> str:
+    """Why a full factorial of ``counts`` will not fit this machine's memory, or "".
+
+    Checked from the level counts alone, before anything is allocated. The estimate per design
+    point (``BYTES_PER_FACTOR`` per factor for its levels, values and analysis, plus
+    ``BYTES_PER_RESPONSE`` per response) is about twice what the 10⁷-point valve study of
+    ``bench study`` measured; ``ENGINE_STUDIES_MAX_POINTS`` overrides the limit. The message
+    also estimates the compute time from the scene's ``seconds_per_point``.
+    """
+    runs = math.prod(counts.values())
+    per_point = BYTES_PER_FACTOR * len(counts) + BYTES_PER_RESPONSE * (responses + 2)
+    available = available_memory()
+    override = os.environ.get(MAX_POINTS_VARIABLE)
+    limit = max_points(override) if override else int(MEMORY_SHARE * available / per_point)
+    if runs <= limit:
+        return ""
+    shape = " x ".join(f"{n} {name}" for name, n in counts.items())
+    return (
+        f"full factorial of {shape} = {runs:.4g} design points needs about "
+        f"{runs * per_point / 1e9:.3g} GB to plan, run and analyse and about "
+        f"{duration(runs * seconds_per_point)} to compute ({seconds_per_point:g} s per point); "
+        f"this machine allows {limit:.4g} points ({available / 1e9:.3g} GB of memory available"
+        + (f", {MAX_POINTS_VARIABLE}={override}" if override else "")
+        + '). Use fewer levels, an orthogonal array (type = "auto"), or raise the limit '
+        f"with the environment variable {MAX_POINTS_VARIABLE}"
+    )
+
+
+DURATION_UNITS = (("years", 365.25 * 86400.0), ("days", 86400.0), ("h", 3600.0), ("min", 60.0))
+
+
+def duration(seconds: float) -> str:
+    """A duration in the largest unit it reaches, to 3 significant digits ("2.3 h")."""
+    for name, size in DURATION_UNITS:
+        if seconds >= size:
+            return f"{seconds / size:.3g} {name}"
+    return f"{seconds:.3g} s"
+
+
+def max_points(text: str) -> int:
+    """The value of ``ENGINE_STUDIES_MAX_POINTS`` (ValueError naming it if not a count)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not 1 <= value < math.inf:
+        msg = f"{MAX_POINTS_VARIABLE}={text!r} must be a number of design points, e.g. 5e7"
+        raise ValueError(msg)
+    return int(value)
+
+
+def available_memory() -> int:
+    """Memory the system can give this process now [bytes] (Linux MemAvailable)."""
+    meminfo = Path("/proc/meminfo")
+    lines = meminfo.read_text(encoding="ascii").splitlines() if meminfo.exists() else []
+    for line in lines:
+        if line.startswith("MemAvailable:"):
+            return int(line.split()[1]) * 1024
+    return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")  # other systems
+
+
+def _name_clashes(
+    d: StudyDefinition, scene: Scene, design: designs.Design, stored: list[str]
+) -> list[str]:
+    """Names that two variables of ``results.nc`` would share (one message per clash)."""
+    owners: dict[str, list[str]] = {}
+    named = [("coordinate", "run")]
+    for f in d.factors:
+        named += [("factor", f.name), ("coordinate", f"{f.name}_level")]
+    named += [("array column", f"{e}_level") for e in design.error_columns]
+    named += [("interaction column", f"{n}_level") for n in design.interactions]
+    named += [("design label", label) for label in design.labels]
+    named += [("response", r) for r in stored]
+    named += [("curve", c) for c in d.curves]
+    if d.curves and scene.curve_axis is not None:
+        named.append(("curve axis", scene.curve_axis.name))
+    for kind, name in named:
+        owners.setdefault(name, []).append(kind)
+    return [
+        f"{' and '.join(kinds)} share the name {name!r} in results.nc: "
+        + (
+            f"leave {name!r} out of curves (the factor keeps its value per run)"
+            if "curve" in kinds
+            else "rename or drop one of them"
+        )
+        for name, kinds in owners.items()
+        if len(kinds) > 1
+    ]
+
+
+def _design(d: StudyDefinition) -> designs.Design:
+    counts = {f.name: len(f.levels) for f in d.factors}
+    if d.design == "full_factorial":
+        size_problem = full_factorial_size_problem(
+            counts, len(d.responses), get_scene(d.scene).seconds_per_point
+        )
+        if size_problem:
+            raise designs.DesignError([size_problem])
+        return designs.full_factorial(counts)
+    if d.design == "sweep":
+        base = {
+            f.name: f.levels.index(f.base) if f.base is not None else (len(f.levels) - 1) // 2
+            for f in d.factors
+        }
+        return designs.sweep(counts, base)
+    if d.design == "auto" or designs.is_orthogonal_array_name(d.design):
+        columns = {f.name: f.column for f in d.factors}
+        return designs.orthogonal(d.design, counts, columns, d.error_columns, d.interactions)
+    known = ", ".join(i.name.split("(")[0] for i in designs.list_orthogonal_arrays())
+    problem = (
+        f"unknown design {d.design!r}: use full_factorial, sweep, auto or an orthogonal "
+        f"array ({known})"
+    )
+    raise designs.DesignError([problem])
+
+
+def _points(
+    scene: Scene, d: StudyDefinition, design: designs.Design, runs: int
+) -> dict[str, np.ndarray]:
+    """SI values per parameter and run. A factor's levels are converted once and indexed by
+    the design; a fixed parameter is one value broadcast over the runs (a read-only view that
+    costs no memory per run)."""
+    factors = {f.name: f for f in d.factors}
+    points: dict[str, np.ndarray] = {}
+    for p in scene.parameters:
+        if p.name in factors:
+            f = factors[p.name]
+            levels = np.asarray(f.levels)
+            if p.kind == "number":
+                levels = np.array([p.to_si(v, f.units) for v in f.levels])
+            points[p.name] = levels[design.levels[p.name]]
+            continue
+        value, units = d.parameters.get(p.name, (p.default, p.units))
+        if p.kind == "number":
+            points[p.name] = np.broadcast_to(p.to_si(value, units), (runs,))
+        elif p.kind == "vector":
+            row = np.asarray(value, dtype=float) * p.to_si(1.0)
+            points[p.name] = np.broadcast_to(row, (runs, row.size))
+        else:
+            points[p.name] = np.broadcast_to(np.array(value, dtype=object), (runs,))
+    return points
+
+
+def first_runs(codes: np.ndarray, levels: int) -> np.ndarray:
+    """The first run at each level 0…levels-1 of ``codes`` (-1 where a level has none)."""
+    first = np.full(levels, -1, dtype=np.int64)
+    first[codes[::-1]] = np.arange(codes.size)[::-1]  # repeated indices: the last write wins
+    return first

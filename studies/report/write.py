@@ -1,0 +1,111 @@
+"""What a run writes beside its results: ``analysis.txt``, ``report.md`` and the figures.
+
+The analysis is computed once (:func:`studies.analysis.analyze.analyze`, saved as ``analysis.nc``);
+everything else renders it. Orthogonal-array and full-factorial runs get range analysis and
+ANOVA per response (interaction columns as terms), main-effect, S/N and interaction plots, and
+for full factorials the variance decomposition and a map over the strongest factor pair;
+sweeps get a table and a response-vs-factor plot per swept factor. ``report.md``
+(:mod:`studies.report.markdown_report`) adds S/N ratios, the optimum and the confirmation (arrays) or
+refinement (full factorials) study;
+``report.html`` (:mod:`studies.report.html`) is the same report as one self-contained page.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import xarray as xr
+
+from studies.analysis import analyze as analysis
+from studies.analysis.missing import nothing_to_analyse
+from studies.common.figure_layout import save_figures
+from studies.report import html as html_report
+from studies.report import markdown_report, plots
+from studies.report import text as analysis_text
+from studies.scenes import SCENES, get_scene
+
+
+def write_analysis(
+    ds: xr.Dataset,
+    folder: Path,
+    responses: list[str] | None = None,
+    pool: list[str] | None = None,
+) -> list[Path]:
+    """Analyse once (``analysis.nc``), then render ``analysis.txt``, ``report.md`` and the PNG
+    figures into ``folder``; return the paths (text first).
+
+    A response that is NaN in every run (e.g. ``jump_start`` when no design point separates)
+    gets a line saying so instead of tables and figures.
+    """
+    names = responses or json.loads(ds.attrs.get("responses", "[]")) or list(ds.data_vars)
+    scalar = [r for r in names if r in ds and ds[r].dims == ("run",)]
+    missing = [r for r in names if r not in ds]
+    if missing:
+        raise KeyError(
+            f"responses not in the results: {', '.join(missing)} "
+            f"(available: {', '.join(map(str, ds.data_vars))})"
+        )
+    folder.mkdir(parents=True, exist_ok=True)
+    an = analysis.analyze(ds, scalar, pool)
+    done = json.loads(an.attrs["analysed"])
+    analysed = [r for r in scalar if r in done]
+    header = _header(ds) + not_run_line(an, "\n")
+    if ds.attrs.get("design") == "sweep":
+        body = [analysis_text.format_sweep(ds, analysed)]
+        figures = plots.save_sweep_plots(ds, analysed, folder)
+    else:
+        body = [analysis_text.format_tables(an, r) for r in analysed]
+        varying = [r for r in analysed if int(an["varies"].sel(response=r))]
+        figures = plots.save_main_effects(an, varying, folder)
+        sn = [r for r in analysed if f"{r}_sn" in an["response"].values]
+        figures += plots.save_sn_plots(an, sn, folder)
+        figures += plots.save_interaction_plots(an, analysed, folder)
+        figures += plots.save_maps(an, varying, folder)
+    status = json.loads(an.attrs.get("status_responses", "[]"))
+    body += [analysis_text.wrap(analysis_text.status_line(an, r)) for r in status]
+    body += [
+        analysis_text.wrap(_no_value_note(ds[r]))
+        for r in scalar
+        if r not in analysed and r not in status
+    ]
+    scene_name = str(ds.attrs.get("scene", ""))
+    if scene_name in SCENES:  # a plugin scene that is not installed here: generic outputs only
+        scene = get_scene(scene_name)
+        body += scene.summaries(ds)
+        figures += save_figures(ds, folder, scene.figures())
+    text_path = folder / "analysis.txt"
+    text_path.write_text("\n\n".join([header, *body]) + "\n", encoding="utf-8")
+    reports = markdown_report.write_report(ds, an, folder, scalar, figures)
+    page = html_report.write_html(reports[0], figures)
+    nc = analysis.write_analysis_nc(an, folder)
+    return [text_path, *reports, page, nc, *figures]
+
+
+def not_run_line(an: xr.Dataset, before: str = "") -> str:
+    """A sentence on the design points that gave no value for any response ("" if none)."""
+    without = int(an.attrs.get("points_without_value", 0))
+    if not without:
+        return ""
+    return (
+        f"{before}{without} of {an.attrs['points']} design points gave no value for any "
+        "response (they did not run: the reasons are listed further down where the scene "
+        "records them)"
+    )
+
+
+def _no_value_note(y: xr.DataArray) -> str:
+    """A response that is NaN (or ±inf) in every run is a result (no jump anywhere, a concave
+    cam everywhere), not an error."""
+    meaning = y.attrs.get("long_name", y.name)
+    return f"{y.name} ({meaning}): {nothing_to_analyse(y)}, so there is nothing to analyse."
+
+
+def _header(ds: xr.Dataset) -> str:
+    title = ds.attrs.get("title", "results")
+    run = ds.attrs.get("run_id", "")
+    return (
+        f"{title}\nrun {run} — design {ds.attrs.get('design', '?')}, "
+        f"{ds.sizes['run']} design points, commit {ds.attrs.get('git_commit', '?')[:10]}"
+        f"{' (dirty)' if ds.attrs.get('git_dirty') else ''}"
+    )

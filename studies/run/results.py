@@ -1,0 +1,256 @@
+"""Labelled results: one ``xarray.Dataset`` per run, written to compressed netCDF4.
+
+Layout (dimension ``run`` = design point):
+
+* coordinates ``<factor>`` (physical value, ``units`` as written in the study) and
+  ``<factor>_level`` (0-based level index) for every factor; ``<name>_level`` alone for the
+  empty orthogonal-array columns (error columns) and for the interaction columns (named in the
+  attribute ``interaction_columns``: column name → the two factors); design labels such as
+  ``swept_factor``; the attribute ``array_columns`` maps every name to its 1-based column;
+* scalar responses on ``run``; curves on ``run × <angle>`` only when the study asks;
+* ``units`` and ``long_name`` on every variable; the study text, design, provenance and
+  timings as global attributes (str/number only: dicts as JSON strings, booleans as ints).
+"""
+
+from __future__ import annotations
+
+import errno
+import json
+from pathlib import Path
+from typing import Any, Final
+
+import netCDF4
+import numpy as np
+import xarray as xr
+
+from studies.define.plan import Plan, first_runs
+from studies.run.runner import Evaluation
+
+COMPRESSION_LEVEL: Final = 4
+COMPRESSION = {"zlib": True, "complevel": COMPRESSION_LEVEL}
+# netCDF-C keeps a cache of decompressed chunks per variable (64 MiB by default): reading or
+# writing every variable of a 10⁷-run file once, in order, would fill a gigabyte of them. One
+# mebibyte holds the few chunks that sequential access touches.
+CHUNK_CACHE_BYTES = 1 << 20
+NOT_EVALUATED: Final = -1  # stored value of a flag or status code at a point that did not run
+PASS_FAIL: Final = "not_evaluated fails passes"
+
+
+def small_chunk_cache() -> None:
+    """Make netCDF files opened from now on keep a small chunk cache per variable."""
+    netCDF4.set_chunk_cache(CHUNK_CACHE_BYTES)
+
+
+def open_results(path: Path) -> xr.Dataset:
+    """A results file opened lazily, memory flat in its size: variables are read when used
+    and not kept (``cache=False``), with a small chunk cache."""
+    small_chunk_cache()
+    return xr.open_dataset(path, cache=False)
+
+
+def build_dataset(plan: Plan, ev: Evaluation, attrs: dict[str, Any]) -> xr.Dataset:
+    """The Dataset of a finished evaluation held in memory; ``attrs`` are added as global
+    attributes. (A run streams the same layout to disk: :mod:`studies.run.results_writer`.)"""
+    ds = layout(plan, attrs)
+    data_vars: dict[str, Any] = {}
+    for name in plan.responses:
+        if name not in ev.scalars:
+            continue  # a status response missing from chunks an older version checkpointed
+        dims, dtype, attrs_r = response_layout(plan, name)
+        data_vars[name] = (dims, stored_values(ev.scalars[name], dtype), attrs_r)
+    for name in plan.definition.curves:
+        dims, _, attrs_c = curve_layout(plan, name)
+        data_vars[name] = (dims, ev.curves[name], attrs_c)
+    return ds.assign(data_vars)
+
+
+def layout(plan: Plan, attrs: dict[str, Any]) -> xr.Dataset:
+    """Coordinates and global attributes of a run's results, without its responses."""
+    d, scene, design = plan.definition, plan.scene, plan.design
+    coords: dict[str, Any] = {"run": ("run", np.arange(plan.runs), {"long_name": "design point"})}
+    for f in d.factors:
+        param = scene.parameter(f.name)
+        long_name = param.long_name if param else f.name
+        coords[f.name] = (
+            "run",
+            plan.factor_values(f.name),
+            {"units": f.units, "long_name": long_name, "role": f.role},
+        )
+        coords[f"{f.name}_level"] = (
+            "run",
+            design.levels[f.name].astype(np.int32),
+            {"units": "1", "long_name": f"level index of {f.name}"},
+        )
+    for e in design.error_columns:
+        coords[f"{e}_level"] = (
+            "run",
+            design.levels[e].astype(np.int32),
+            {"units": "1", "long_name": f"empty array column {e} (error)"},
+        )
+    for name, (a, b) in design.interactions.items():
+        coords[f"{name}_level"] = (
+            "run",
+            design.levels[name].astype(np.int32),
+            {"units": "1", "long_name": f"interaction column {a} x {b}"},
+        )
+    for label, values in design.labels.items():
+        coords[label] = ("run", values.astype(str), {"long_name": label.replace("_", " ")})
+    if d.curves:
+        axis = scene.curve_axis
+        assert axis is not None
+        coords[axis.name] = (
+            axis.name,
+            scene.curve_coordinate(plan.settings),
+            {"units": axis.units, "long_name": axis.long_name},
+        )
+    ds = xr.Dataset(coords=coords)
+    ds.attrs = {
+        "title": f"{d.name}: {d.description}".strip(": "),
+        "study_name": d.name,
+        "scene": d.scene,
+        "design": design.name,
+        "factors": json.dumps([f.name for f in d.factors]),
+        "operating_factors": json.dumps(
+            [f.name for f in d.factors if f.role in ("operating", "model")]
+        ),
+        "model_factors": json.dumps([f.name for f in d.factors if f.role == "model"]),
+        "error_columns": json.dumps(list(design.error_columns)),
+        "interaction_columns": json.dumps({k: list(v) for k, v in design.interactions.items()}),
+        **({} if d.pool is None else {"pool": json.dumps(list(d.pool))}),
+        "array_columns": json.dumps(design.columns),
+        "responses": json.dumps(list(d.responses)),
+        "settings": json.dumps(d.settings),
+        "study_toml": d.text,
+        "Conventions": "CF-1.10",
+        **global_attributes(attrs),
+    }
+    return ds
+
+
+def global_attributes(attrs: dict[str, Any]) -> dict[str, Any]:
+    """Attributes netCDF can hold: dicts and lists as JSON strings, booleans as ints."""
+    return {
+        k: json.dumps(v) if isinstance(v, dict | list) else int(v) if isinstance(v, bool) else v
+        for k, v in attrs.items()
+    }
+
+
+def response_layout(plan: Plan, name: str) -> tuple[tuple[str, ...], type, dict[str, Any]]:
+    """Dimensions, stored type and attributes of a scalar response."""
+    r = plan.scene.response(name)
+    assert r is not None
+    attrs_r: dict[str, Any] = {
+        "units": r.units,
+        "long_name": r.long_name,
+        "better": plan.definition.sense.get(name, r.sense),
+        "none_means": plan.definition.none_means.get(name, r.none_means),
+    }
+    if r.used_for:
+        attrs_r["used_for"] = r.used_for
+    if r.none_label:
+        attrs_r["none_label"] = r.none_label.format(**plan.definition.settings)
+    if r.bits:
+        masks = {
+            "flag_masks": np.array([1 << i for i in range(len(r.bits))], dtype=np.int8),
+            "flag_meanings": " ".join(r.bits),
+            "valid_range": np.array([0, (1 << len(r.bits)) - 1], dtype=np.int8),
+            "comment": f"0: none of the bits set; {NOT_EVALUATED}: not evaluated",
+        }
+        return ("run",), np.int8, attrs_r | masks
+    meanings = ("fails", "passes") if r.flag else r.codes
+    if not meanings:
+        return ("run",), np.float64, attrs_r
+    flags = {
+        "flag_values": np.arange(NOT_EVALUATED, len(meanings), dtype=np.int8),
+        "flag_meanings": " ".join(("not_evaluated", *meanings)),
+    }
+    return ("run",), np.int8, attrs_r | flags
+
+
+def is_status(da: xr.DataArray) -> bool:
+    """Whether a stored response is a status code or bit mask (counted, never averaged): it
+    has CF flag attributes other than a pass/fail flag's."""
+    meanings = str(da.attrs.get("flag_meanings", ""))
+    return "flag_masks" in da.attrs or ("flag_values" in da.attrs and meanings != PASS_FAIL)
+
+
+def curve_layout(plan: Plan, name: str) -> tuple[tuple[str, ...], type, dict[str, Any]]:
+    """Dimensions, stored type and attributes of a curve."""
+    c, axis = plan.scene.curve(name), plan.scene.curve_axis
+    assert c is not None
+    assert axis is not None
+    return ("run", axis.name), np.float64, {"units": c.units, "long_name": c.long_name}
+
+
+def stored_values(values: np.ndarray, dtype: type) -> np.ndarray:
+    """A response as stored: flags and status codes as int8 with -1 where not evaluated."""
+    if dtype is np.int8:
+        return np.where(np.isnan(values), NOT_EVALUATED, values).astype(np.int8)
+    return values
+
+
+def write_netcdf(ds: xr.Dataset, path: Path, atomic: bool = True) -> Path:
+    """Write compressed netCDF4 (every numeric variable zlib-compressed); ``atomic``: under a
+    temporary name renamed into place, so an interrupted write leaves no partial file."""
+    encoding = {
+        name: dict(COMPRESSION)
+        for name in list(ds.data_vars) + list(ds.coords)
+        if ds[name].dtype.kind in "fiu"
+    }
+    path.parent.mkdir(parents=True, exist_ok=True)
+    target = path.with_name(path.name + ".writing") if atomic else path
+    try:
+        ds.to_netcdf(target, engine="netcdf4", format="NETCDF4", encoding=encoding)
+    except RuntimeError as exc:  # the netCDF library's "HDF error" of a full disk
+        target.unlink(missing_ok=True)
+        raise netcdf_write_error(exc, path) from None
+    if atomic:
+        target.replace(path)
+    return path
+
+
+def netcdf_write_error(exc: RuntimeError, path: Path) -> OSError:
+    """The netCDF library's write failure (it says "HDF error", not why) as an OSError
+    naming the file, with the likely cause."""
+    return OSError(errno.EIO, f"could not write netCDF ({exc}; is the disk full?)", str(path))
+
+
+def grid_order(ds: xr.Dataset) -> tuple[list[str], tuple[int, ...], np.ndarray]:
+    """Factors, level counts and the run at each grid cell (C order) of a complete full
+    factorial; ValueError for any other design or an incomplete one."""
+    if ds.attrs.get("design") != "full_factorial":
+        msg = f"a grid view needs a full_factorial result, this one is {ds.attrs.get('design')!r}"
+        raise ValueError(msg)
+    factors = json.loads(ds.attrs["factors"])
+    codes = [ds[f"{f}_level"].values.astype(np.int64) for f in factors]
+    counts = tuple(int(c.max()) + 1 for c in codes)
+    flat = np.ravel_multi_index(codes, counts)
+    order = np.full(int(np.prod(counts)), -1, dtype=np.int64)
+    order[flat] = np.arange(flat.size)
+    if flat.size != order.size or (order < 0).any():
+        msg = f"the full factorial is incomplete: {flat.size} runs for {order.size} grid cells"
+        raise ValueError(msg)
+    return factors, counts, order
+
+
+def as_grid(ds: xr.Dataset) -> xr.Dataset:
+    """A full-factorial result with one dimension per factor instead of ``run``.
+
+    Each factor is a dimension whose coordinate is its value at each level (so
+    ``grid.sel(cam_speed=5000)`` works), with ``<factor>_level`` beside it; every variable on
+    ``run`` is reshaped in O(N) (curves keep their angle dimension).
+    """
+    factors, counts, order = grid_order(ds)
+    coords: dict[str, Any] = {}
+    for f, n in zip(factors, counts, strict=True):
+        first = first_runs(ds[f"{f}_level"].values, n)
+        coords[f] = (f, ds[f].values[first], dict(ds[f].attrs))
+        coords[f"{f}_level"] = (f, np.arange(n, dtype=np.int32), {"units": "1"})
+    data_vars = {}
+    for name, da in ds.data_vars.items():
+        if da.dims[:1] != ("run",):
+            continue
+        values = da.values[order].reshape(counts + da.shape[1:])
+        data_vars[name] = ((*factors, *da.dims[1:]), values, dict(da.attrs))
+    coords |= {str(c): ds[c] for c in ds.coords if "run" not in ds[c].dims}
+    return xr.Dataset(data_vars, coords=coords, attrs=dict(ds.attrs))

@@ -1,0 +1,222 @@
+"""Evaluate a planned study in chunks, with a progress bar, timing compile and run separately.
+
+Chunks bound memory (curves are runs × angles) and are the unit of work for executors. The
+first design point is evaluated alone first: that call compiles (or loads from the on-disk
+cache) every kernel the study needs, so ``compile_s`` and ``run_s`` are reported apart.
+
+By default chunks run here, one after another (each chunk is already parallel inside its
+compiled kernels). Any ``concurrent.futures.Executor`` can run them instead — a Dask cluster's
+``Client.get_executor()`` (see :func:`dask_executor`) or a process pool started with the
+``spawn`` method (the kernels' threading layer must not be forked). Every chunk is the
+same pure function of its design points, so results are identical whichever executor ran
+them; a task carries only its chunk's points (never the whole plan).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable, Iterator, Mapping
+from concurrent.futures import Executor, Future, as_completed
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from studies.define.plan import Plan
+from studies.scenes import Scene, SceneOutput, get_scene
+
+DEFAULT_CHUNK_SIZE = 2048
+SCHEDULER_TIMEOUT_S = 5.0  # connecting to a --scheduler address; Dask's default is 30 s
+HANDSHAKE_GRACE_S = 2.0  # beyond it, an address that accepted but never answered is given up
+WORKERS_TIMEOUT_S = 30.0  # a scheduler with no worker: how long to wait for one to join
+
+
+@dataclass
+class Evaluation:
+    """Concatenated scene outputs of a whole study, plus timings [s]."""
+
+    scalars: dict[str, np.ndarray]
+    curves: dict[str, np.ndarray]
+    timings: dict[str, float] = field(default_factory=dict)
+
+
+def chunks(runs: int, size: int) -> Iterator[slice]:
+    for start in range(0, runs, size):
+        yield slice(start, min(start + size, runs))
+
+
+def chunk_points(plan: Plan, part: slice) -> dict[str, np.ndarray]:
+    """The SI parameter values of the design points ``part``."""
+    return {k: v[part] for k, v in plan.points.items()}
+
+
+def evaluate_chunk(plan: Plan, part: slice) -> SceneOutput:
+    d = plan.definition
+    return plan.scene.evaluate(
+        chunk_points(plan, part), plan.settings, list(plan.responses), list(d.curves)
+    )
+
+
+_WORKER_SCENES: dict[str, Scene] = {}
+
+
+def evaluate_part(
+    scene: str,
+    points: dict[str, np.ndarray],
+    settings: dict[str, Any],
+    responses: list[str],
+    curves: list[str],
+) -> SceneOutput:
+    """One chunk on an executor's worker: only the chunk's points travel with the task; the
+    scene is built once per worker process (its caches are reused across chunks)."""
+    if scene not in _WORKER_SCENES:
+        _WORKER_SCENES[scene] = get_scene(scene)
+    return _WORKER_SCENES[scene].evaluate(points, settings, responses, curves)
+
+
+def evaluate(
+    plan: Plan,
+    chunk_size: int = DEFAULT_CHUNK_SIZE,
+    progress: bool = True,
+    on_chunk: Callable[[int, SceneOutput], None] | None = None,
+    done: Mapping[int, SceneOutput | None] | None = None,
+    executor: Executor | None = None,
+    collect: bool = True,
+) -> Evaluation:
+    """Evaluate every design point of ``plan``.
+
+    ``on_chunk(index, output)`` sees each newly finished chunk (the run record checkpoints it
+    and streams it into results.nc); ``done`` holds chunks finished by an earlier, interrupted
+    run, which are not recomputed; ``executor`` runs the chunks elsewhere (``compile_s`` then
+    counts only the local warm-up). With ``collect=False`` no chunk is kept (``on_chunk`` has
+    them all; the Evaluation holds the timings only), so memory does not grow with the study,
+    and ``done`` needs only its keys.
+    """
+    if chunk_size < 1:
+        msg = f"chunk_size = {chunk_size} must be a positive number of design points"
+        raise ValueError(msg)
+    finished = set(done or {})
+    parts: dict[int, SceneOutput] = {i: o for i, o in (done or {}).items() if o is not None}
+    todo = [(i, part) for i, part in enumerate(chunks(plan.runs, chunk_size)) if i not in finished]
+    t0 = time.perf_counter()
+    if todo:
+        evaluate_chunk(plan, slice(todo[0][1].start, todo[0][1].start + 1))
+    compile_s = time.perf_counter() - t0
+    t1 = time.perf_counter()
+    computed = sum(part.stop - part.start for _, part in todo)
+    bar = tqdm(
+        total=plan.runs,
+        initial=plan.runs - computed,
+        unit="pt",
+        desc=plan.definition.name,
+        disable=not progress,
+        leave=False,
+    )
+    with bar:
+        for index, part, out in _results(plan, todo, executor):
+            if collect:
+                parts[index] = out
+            if on_chunk is not None:
+                on_chunk(index, out)
+            bar.update(part.stop - part.start)
+    run_s = time.perf_counter() - t1
+    ordered = [parts[i] for i in sorted(parts)] if collect else []
+    first = ordered[0] if ordered else SceneOutput({}, {})
+    scalars = {k: np.concatenate([p.scalars[k] for p in ordered]) for k in first.scalars}
+    curves = {k: np.concatenate([p.curves[k] for p in ordered]) for k in first.curves}
+    timings = {
+        "compile_s": compile_s,
+        "run_s": run_s,
+        "points_computed": computed,
+        "points_per_s": computed / run_s if run_s > 0 else float("inf"),
+    }
+    return Evaluation(scalars, curves, timings)
+
+
+def _results(
+    plan: Plan, todo: list[tuple[int, slice]], executor: Executor | None
+) -> Iterator[tuple[int, slice, SceneOutput]]:
+    """Finished chunks, here in order, or from ``executor`` as they complete."""
+    if executor is None:
+        for index, part in todo:
+            yield index, part, evaluate_chunk(plan, part)
+        return
+    d = plan.definition
+    futures: dict[Future[SceneOutput], tuple[int, slice]] = {
+        executor.submit(
+            evaluate_part,
+            d.scene,
+            chunk_points(plan, part),
+            plan.settings,
+            list(plan.responses),
+            list(d.curves),
+        ): (index, part)
+        for index, part in todo
+    }
+    for future in as_completed(futures):
+        index, part = futures[future]
+        yield index, part, future.result()
+
+
+def dask_executor(scheduler: str) -> Executor:
+    """An executor on a Dask cluster: ``scheduler`` is an address or ``local``
+    (:func:`dask_client`)."""
+    return dask_client(scheduler).get_executor()
+
+
+def dask_client(scheduler: str) -> Any:
+    """A client of a Dask cluster: ``scheduler`` is an address or ``local``.
+
+    ``local`` starts a cluster of worker processes on this machine. Needs the ``cluster``
+    extra (``pip install -e '.[cluster]'``). An address is given up after
+    :data:`SCHEDULER_TIMEOUT_S` (:func:`_connect`), a scheduler without workers after
+    :data:`WORKERS_TIMEOUT_S`.
+    """
+    try:
+        from dask.distributed import Client  # noqa: PLC0415  (optional dependency)
+    except ImportError:
+        msg = "--scheduler needs dask.distributed: pip install -e '.[cluster]'"
+        raise ValueError(msg) from None
+    if scheduler == "local":
+        return Client(dashboard_address=None)
+    client = _connect(Client, scheduler)
+    try:
+        client.wait_for_workers(1, timeout=WORKERS_TIMEOUT_S)
+    except (TimeoutError, OSError):
+        client.close()
+        msg = (
+            f"--scheduler {scheduler}: the scheduler has no workers (none joined within "
+            f"{WORKERS_TIMEOUT_S:g} s): start one with `dask worker {scheduler}`"
+        )
+        raise ValueError(msg) from None
+    return client
+
+
+def _connect(client: Callable[..., Any], scheduler: str) -> Any:
+    """A Dask client of ``scheduler`` within ``SCHEDULER_TIMEOUT_S`` (ValueError otherwise),
+    even when the address accepts a connection and never answers (Dask's own timeout covers
+    the connection, not the handshake): the client is made in a thread given a deadline."""
+    result: dict[str, Any] = {}
+
+    def connect() -> None:
+        try:
+            result["client"] = client(scheduler, timeout=SCHEDULER_TIMEOUT_S)
+        except Exception as exc:  # noqa: BLE001  unreachable, malformed, or not a scheduler
+            result["error"] = exc
+
+    thread = threading.Thread(target=connect, daemon=True, name="dask-connect")
+    thread.start()
+    thread.join(SCHEDULER_TIMEOUT_S + HANDSHAKE_GRACE_S)
+    if "client" in result:
+        return result["client"]
+    exc = result.get("error")
+    detail = (str(exc).splitlines() or ["no detail"])[0] if exc else "no answer"
+    kind = type(exc).__name__ if exc else "timeout"
+    msg = (
+        f"--scheduler {scheduler}: could not connect to a Dask scheduler within "
+        f"{SCHEDULER_TIMEOUT_S:g} s ({kind}: {detail[:200]}); "
+        "check the address (e.g. tcp://host:8786) or use --scheduler local"
+    )
+    raise ValueError(msg)

@@ -1,0 +1,171 @@
+"""Remove and restore runs: the folder moves to the trash and back, the registry follows.
+
+``rm`` takes the run folder's lock (a live run or resume holds it: refused), moves the folder
+into the trash (:mod:`studies.tracking.trash`, one rename) and deletes the run's registry rows in one
+transaction; if the registry refuses, the folder is moved back. A tagged run needs ``force``.
+``restore`` moves the folder back and registers it with its tags and notes (from its
+``labels.json``). ``gc`` moves runs older than an age to the trash and deletes for good what
+has been in the trash longer than that age, plus what killed processes left behind.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import re
+import shutil
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from studies.common import labels
+from studies.tracking import registry, store, trash
+from studies.tracking.liveness import is_locked, lock_folder
+from studies.tracking.registry_file import writing
+from studies.tracking.reindex import read_record, run_folders
+
+REMOVING = ".removing"  # left by versions that deleted runs at once
+AGE = re.compile(r"^\s*(\d+(?:\.\d+)?)\s*([smhdw])\s*$")
+UNIT_S = {"s": 1, "m": 60, "h": 3600, "d": 86400, "w": 7 * 86400}
+MAX_AGE = dt.timedelta(days=1000 * 365)  # older runs than this cannot exist; datetime ends at 9999
+LOCK_WAIT_S = 0.5  # a listing may hold a run folder's lock for an instant
+STILLBORN_S = 60.0  # a run folder without run.json this old was left by a killed start
+
+
+def parse_age(text: str) -> dt.timedelta:
+    """``30d``, ``12h``, ``2w``, ``90m``, ``45s`` → a timedelta (ValueError otherwise); ages
+    beyond a century are a century."""
+    match = AGE.match(text)
+    if not match:
+        raise ValueError(f"--older-than {text!r}: write a number and s, m, h, d or w, e.g. 30d")
+    seconds = float(match[1]) * UNIT_S[match[2]]
+    if seconds > MAX_AGE.total_seconds():
+        msg = f"--older-than {text.strip()} is more than {MAX_AGE.days // 365} years: give a shorter age"
+        raise ValueError(msg)
+    return dt.timedelta(seconds=seconds)
+
+
+def remove_run(outputs: Path, row: dict[str, Any], force: bool = False) -> Path | None:
+    """Move a run to the trash and delete its registry rows; return where it went (None when
+    its folder was gone already). ValueError while it runs, or if tagged and not ``force``;
+    KeyError if another process moved it meanwhile."""
+    run_id = row["run_id"]
+    tags = registry.tags_and_notes(outputs)[0].get(run_id, [])
+    if tags and not force:
+        msg = (
+            f"run {run_id} is tagged ({', '.join(tags)}): not removed; `rm --force` moves it "
+            "to the trash all the same (`restore` brings it back)"
+        )
+        raise ValueError(msg)
+    folder = Path(row["folder"])
+    try:
+        lock = lock_folder(folder, LOCK_WAIT_S)
+    except FileNotFoundError:
+        with registry.connection(outputs) as con, writing(con):
+            registry.delete_run(con, run_id)
+        return None
+    if lock is None:
+        raise ValueError(f"run {run_id} is still running (its folder is locked): not removed")
+    with lock:
+        if not lock.holds(folder):
+            raise KeyError(f"run {run_id} was moved by another process meanwhile: not removed")
+        record = read_record(folder)
+        if record is not None and store.liveness(record) == "running":
+            raise ValueError(f"run {run_id} is still running: not removed")
+        target = trash.move_in(outputs, folder, str(row["study"]))
+        try:
+            with registry.connection(outputs) as con, writing(con):
+                registry.delete_run(con, run_id)
+        except BaseException:
+            target.rename(folder)
+            raise
+    return target
+
+
+def restore_run(outputs: Path, ref: str) -> tuple[trash.Trashed, Path, list[str]]:
+    """Bring a run back from the trash, bit-identical, and register it; return the entry, its
+    folder and the tags it could not take back (they name another run now)."""
+    entry = trash.find(outputs, ref)
+    folder = outputs / entry.study / entry.run_id
+    if folder.exists():
+        raise ValueError(f"{folder} exists: run {entry.run_id} is not restored over it")
+    try:
+        lock = lock_folder(entry.folder, LOCK_WAIT_S)  # held across the rename: same inode
+    except FileNotFoundError:
+        lock = None
+    if lock is None or not lock.holds(entry.folder):
+        raise KeyError(f"run {entry.run_id} left the trash meanwhile: not restored")
+    with lock:
+        record = read_record(entry.folder)
+        if record is None:
+            raise ValueError(f"{entry.folder} holds no readable run.json: not restored")
+        folder.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            entry.folder.rename(folder)
+        except FileNotFoundError:
+            raise KeyError(f"run {entry.run_id} left the trash meanwhile: not restored") from None
+        try:
+            with registry.connection(outputs) as con:
+                lost = registry.index_folder(con, outputs, record, folder)
+        except BaseException:
+            entry.folder.parent.mkdir(parents=True, exist_ok=True)
+            folder.rename(entry.folder)
+            raise
+    for tag in lost:
+        labels.drop_tag(folder, tag)
+    return entry, folder, lost
+
+
+@dataclass
+class Collected:
+    """What ``gc`` moved to the trash and what it deleted from it."""
+
+    trashed: list[dict[str, Any]] = field(default_factory=list)
+    purged: list[trash.Trashed] = field(default_factory=list)
+
+
+def collect_garbage(
+    outputs: Path, older_than: dt.timedelta, keep_tagged: bool, dry_run: bool = False
+) -> Collected:
+    """Move the runs that started more than ``older_than`` ago to the trash (not running ones;
+    not tagged ones with ``keep_tagged``), delete for good the runs removed more than
+    ``older_than`` ago, and what killed processes left behind."""
+    cutoff = dt.datetime.now(dt.UTC) - older_than
+    tags, _ = registry.tags_and_notes(outputs)
+    chosen = []
+    for row in store.list_runs(outputs):
+        started = dt.datetime.fromisoformat(row["started"]) if row["started"] else cutoff
+        if started >= cutoff or (keep_tagged and row["run_id"] in tags):
+            continue
+        if store.current_status(row)[0] == "running":
+            continue
+        chosen.append(row)
+    expired = [e for e in trash.entries(outputs) if e.removed < cutoff]
+    if dry_run:
+        return Collected(chosen, expired)
+    done = Collected()
+    for row in chosen:
+        try:
+            remove_run(outputs, row, force=True)
+        except (ValueError, KeyError):
+            continue  # started again (a resume), or removed by another process, since listed
+        done.trashed.append(row)
+    done.purged = [e for e in expired if trash.purge(e)]
+    trash.sweep(outputs)
+    _sweep_leftovers(outputs)
+    return done
+
+
+def _sweep_leftovers(outputs: Path) -> None:
+    """Delete ``.removing`` folders of older versions, and run folders that a start killed
+    before writing ``run.json`` left (unlocked and older than :data:`STILLBORN_S`)."""
+    for leftover in outputs.glob(f"*/*{REMOVING}"):
+        shutil.rmtree(leftover, ignore_errors=True)
+    settled = dt.datetime.now(dt.UTC).timestamp() - STILLBORN_S
+    for folder in run_folders(outputs):
+        if (folder / "run.json").exists() or is_locked(folder):
+            continue
+        try:
+            if folder.stat().st_mtime < settled:
+                shutil.rmtree(folder, ignore_errors=True)
+        except OSError:
+            continue
