@@ -29,10 +29,16 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from studies.common.errors import (
+    EXIT_OUTPUT_ERROR,
+    EXIT_STUDY_ERROR,
+    EngineError,
+    StudyError,
+)
 from studies.common.text_safety import TerminalText, printable_dataset
-from studies.define.definition import StudyError, catalog_names, read_study
+from studies.define.definition import StudyFileError, catalog_names, read_study
 from studies.tracking.registry_file import RegistryUnusable, unusable
-from studies.tracking_cli import add_commands
+from studies.tracking_cli import add_commands, check_mlflow, track_run
 
 if TYPE_CHECKING:
     from concurrent.futures import Executor
@@ -40,12 +46,14 @@ if TYPE_CHECKING:
     from studies.define.plan import Plan
     from studies.pipeline import RunResult
 
-EXIT_STUDY_ERROR = 2
 OUTPUTS_HELP = (
     "run-folder root (default: $ENGINE_STUDIES_OUTPUTS, else this checkout's outputs/ folder)"
 )
 EXIT_POINTS_NOT_RUN = 3
-EXIT_OUTPUT_ERROR = 4  # a file could not be written or read (full disk, permissions, damage)
+BUG = (
+    "error: this is a bug in the engine or in a scene, not in your input; please report it "
+    "with the traceback below"
+)
 EXIT_INTERRUPTED = 130  # the shell's code for a process ended by SIGINT
 
 
@@ -68,17 +76,13 @@ def _main(argv: list[str] | None) -> int:
         args.outputs = (args.outputs or _default_outputs()).resolve()
     try:
         return int(args.func(args) or 0)
-    except StudyError as exc:
+    except StudyFileError as exc:
         print(f"error: {exc}", file=sys.stderr)
         print(
             "(nothing was run or written; `python -m studies scenes` documents every name)",
             file=sys.stderr,
         )
-        return EXIT_STUDY_ERROR
-    except (FileNotFoundError, ValueError, KeyError) as exc:
-        message = exc.args[0] if isinstance(exc, KeyError) and exc.args else exc
-        print(f"error: {message}", file=sys.stderr)
-        return EXIT_STUDY_ERROR
+        return exc.exit_code
     except BrokenPipeError:  # output piped into `head` and the like
         sys.stderr.close()
         return 0
@@ -92,10 +96,17 @@ def _main(argv: list[str] | None) -> int:
         notes = "; ".join(getattr(exc, "__notes__", [])) or ("" if said else "nothing was recorded")
         print(f"error: {what}" + (f"; {notes}" if notes else ""), file=sys.stderr)
         return EXIT_OUTPUT_ERROR
+    except EngineError as exc:  # the input or a run's state: one line, what to do
+        notes = "; ".join(getattr(exc, "__notes__", []))
+        print(f"error: {exc}" + (f"; {notes}" if notes else ""), file=sys.stderr)
+        return exc.exit_code
     except KeyboardInterrupt as exc:  # Ctrl-C: one line, and how to go on
         notes = "; ".join(getattr(exc, "__notes__", [])) or "nothing was recorded"
         print(f"\ninterrupted: {notes}", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except Exception:
+        print(BUG, file=sys.stderr)
+        raise
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -137,7 +148,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--mlflow",
         metavar="URI",
-        help="also log the run to MLflow (store URI, e.g. sqlite:///mlflow.db; the [mlflow] "
+        help="also log the run to MLflow (tracking URI, e.g. sqlite:///mlflow.db; the [mlflow] "
         "extra); a reused run is logged too, once",
     )
     run.add_argument("--tag", action="append", default=[], help="tag the run (repeat for more)")
@@ -210,9 +221,9 @@ def positive_int(text: str) -> int:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
-    from studies.bench.benchmarks import BENCHMARKS, run_benchmark, summarize
+    from studies.bench.benchmarks import benchmarks, run_benchmark, summarize
 
-    names = list(BENCHMARKS) if args.name == "all" else [args.name]
+    names = list(benchmarks()) if args.name == "all" else [args.name]
     for name in names:
         cases = int(args.points) if name == "study" else args.cases
         path = run_benchmark(name, cases, args.step, args.repeat, args.outputs)
@@ -231,28 +242,20 @@ def _cmd_run(args: argparse.Namespace) -> int:
         print("error: name one study, --resume RUN_ID or --all", file=sys.stderr)
         return EXIT_STUDY_ERROR
     if args.resume:
-        _check_mlflow(args)
+        check_mlflow(args)
         result = resume_run(args.resume, args.outputs, progress=not args.no_progress)
         _report(result)
-        _track(args, Path(result.folder), result.record.run_id)
+        track_run(args, Path(result.folder), result.record.run_id)
         return 0
     names = catalog_names() if args.all else [args.study]
     plans = [plan_study(n) for n in names]
-    _check_mlflow(args)
+    check_mlflow(args)
     if not args.scheduler:
         return _run_plans(args, plans, None)
     from studies.run.cluster import cluster_executor
 
     with cluster_executor(args.scheduler, sorted({p.definition.scene for p in plans})) as pool:
         return _run_plans(args, plans, pool)
-
-
-def _check_mlflow(args: argparse.Namespace) -> None:
-    """Before anything runs: a store MLflow refuses records nothing."""
-    if args.mlflow:
-        from studies.tracking.mlflow_export import check_store
-
-        check_store(args.mlflow)
 
 
 def _run_plans(args: argparse.Namespace, plans: list[Plan], executor: Executor | None) -> int:
@@ -274,7 +277,7 @@ def _run_plans(args: argparse.Namespace, plans: list[Plan], executor: Executor |
                 f"{earlier['run_id']} (--force recomputes)"
             )
             print(f"  {Path(earlier['folder']) / 'results.nc'}")
-            _track(args, Path(earlier["folder"]), earlier["run_id"])
+            track_run(args, Path(earlier["folder"]), earlier["run_id"])
             continue
         warned = _warn(plan) > 0
         result = run_plan(
@@ -285,7 +288,7 @@ def _run_plans(args: argparse.Namespace, plans: list[Plan], executor: Executor |
             executor,
         )
         _report(result)
-        _track(args, result.folder, result.record.run_id)
+        track_run(args, result.folder, result.record.run_id)
         flagged += warned or result.record.points_without_value > 0
     if args.strict and flagged:
         print(
@@ -295,35 +298,6 @@ def _run_plans(args: argparse.Namespace, plans: list[Plan], executor: Executor |
         )
         return EXIT_POINTS_NOT_RUN
     return 0
-
-
-def _track(args: argparse.Namespace, folder: Path, run_id: str) -> None:
-    """``run --tag/--note/--mlflow``: tag and note the run, then log it to MLflow."""
-    from studies.tracking import registry
-    from studies.tracking.store import now
-
-    for tag in args.tag:
-        registry.set_tag(args.outputs, run_id, tag)
-        print(f"  tagged {tag}")
-    if args.note:
-        registry.add_note(args.outputs, run_id, now(), args.note)
-    if args.mlflow:
-        from studies.tracking.mlflow_export import log_run
-
-        tags, notes = registry.tags_and_notes(args.outputs)
-        try:
-            mlflow_id, new = log_run(
-                args.mlflow, folder, tags.get(run_id, []), notes.get(run_id, [])
-            )
-        except (ValueError, OSError) as exc:
-            msg = (
-                f"run {run_id} is recorded, but its MLflow export failed ({exc}); log it "
-                f"later with: python -m studies mlflow {run_id} --to {args.mlflow} "
-                f"--outputs {args.outputs}"
-            )
-            raise ValueError(msg) from None
-        verb = "logged to" if new else "already logged to"
-        print(f"  {verb} MLflow at {args.mlflow} as run {mlflow_id}")
 
 
 def _report(result: RunResult) -> None:
@@ -395,15 +369,15 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
     from studies.run.results import open_results
 
     if not args.results.exists():
-        raise FileNotFoundError(f"no such results file: {args.results}")
+        raise StudyError(f"no such results file: {args.results}")
     stamp = dt.datetime.now(dt.UTC).strftime("%Y%m%dT%H%M%S")
     folder = args.to or args.results.parent / f"analysis-{stamp}"
     if folder.resolve() == args.results.parent.resolve():
         msg = f"--to {folder} is the run's own folder: its recorded analysis would be overwritten"
-        raise ValueError(msg)
+        raise StudyError(msg)
     if (folder / "run.json").exists() or (folder / "results.nc").exists():
         msg = f"--to {folder} holds a run's results: its recorded analysis would be overwritten"
-        raise ValueError(msg)
+        raise StudyError(msg)
     ds = printable_dataset(open_results(args.results))
     if args.no_pool or args.pool:
         ds.attrs["pool"] = json.dumps([] if args.no_pool else args.pool)

@@ -25,6 +25,7 @@ from pathlib import Path
 import xarray as xr
 
 from studies.analysis.analyze import ANALYSIS_NAME
+from studies.common.errors import RunNotFound, RunStateError
 from studies.define.definition import parse_study
 from studies.define.plan import Plan, plan_study
 from studies.report.write import write_analysis
@@ -116,7 +117,7 @@ def resume_run(run_id: str, outputs: Path | None = None, progress: bool = True) 
     outputs = (outputs or store.default_outputs()).resolve()
     row = store.find_run(outputs, run_id)
     if row is None:
-        raise KeyError(f"no unique run matches {run_id!r} under {outputs}")
+        raise RunNotFound(f"no unique run matches {run_id!r} under {outputs}")
     folder = Path(row["folder"])
     lock = lock_folder(folder, RESUME_WAIT_S)
     if lock is None:
@@ -124,20 +125,20 @@ def resume_run(run_id: str, outputs: Path | None = None, progress: bool = True) 
             f"run {row['run_id']} is being run or resumed by another process (its folder "
             f"{folder} is locked): not resumed"
         )
-        raise ValueError(msg)
+        raise RunStateError(msg)
     try:
         if not lock.holds(folder):
-            raise KeyError(f"run {row['run_id']} was moved by another process: not resumed")
+            raise RunStateError(f"run {row['run_id']} was moved by another process: not resumed")
         record = read_run_record(folder / "run.json")
         record.folder = str(folder)  # where it was found (a copied tree records another)
         if record.status == "finished":
-            raise ValueError(f"run {record.run_id} is already finished: nothing to resume")
+            raise RunStateError(f"run {record.run_id} is already finished: nothing to resume")
         if store.liveness(asdict(record)) == "running":
             msg = (
                 f"run {record.run_id} is still running (process {record.pid} on "
                 f"{record.host.get('node', '?')}, last heartbeat {record.heartbeat}): not resumed"
             )
-            raise ValueError(msg)
+            raise RunStateError(msg)
         _check_unchanged(folder / "study.toml", record.definition_sha256)
         plan = plan_study(folder / "study.toml")
         code = provenance.code(type(plan.scene))
@@ -148,7 +149,7 @@ def resume_run(run_id: str, outputs: Path | None = None, progress: bool = True) 
                 "with). Resuming would mix design points computed by two codes; run the study "
                 f"anew: python -m studies run {folder / 'study.toml'}"
             )
-            raise ValueError(msg)
+            raise RunStateError(msg)
         done = {
             int(path.stem): path
             for path in sorted((folder / CHECKPOINTS).glob("*.npz"))
@@ -161,7 +162,7 @@ def resume_run(run_id: str, outputs: Path | None = None, progress: bool = True) 
                 f"run {record.run_id}: chunk size {record.chunk_size} gives {count} chunks, but "
                 f"{', '.join(beyond[:3]) or 'none'} lie beyond them: delete those and resume"
             )
-            raise ValueError(msg)
+            raise RunStateError(msg)
     except BaseException:
         lock.release()
         raise
@@ -293,7 +294,7 @@ def _check_unchanged(study: Path, sha256: str) -> None:
             "started. Resuming would mix design points of two inputs; run the study anew: "
             f"python -m studies run {study}"
         )
-        raise ValueError(msg)
+        raise RunStateError(msg)
     changed = [
         line
         for line in difflib.unified_diff(original.splitlines(), text.splitlines(), lineterm="", n=0)
@@ -305,7 +306,7 @@ def _check_unchanged(study: Path, sha256: str) -> None:
         f"design points of two definitions; run the edited study anew: "
         f"python -m studies run {study}"
     )
-    raise ValueError(msg)
+    raise RunStateError(msg)
 
 
 def _recorded_text(folder: Path) -> str:

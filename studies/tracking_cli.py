@@ -15,6 +15,8 @@ import json
 from pathlib import Path
 from typing import Any
 
+from studies.common.errors import RunNotFound, RunStateError, StudyError
+
 EXIT_REGRESSED = 1
 
 
@@ -162,7 +164,7 @@ def _show(args: argparse.Namespace) -> int:
     row = resolve_run(args.outputs, args.run_id)
     status, record = current_status(row)
     if record is None:
-        raise FileNotFoundError(
+        raise RunStateError(
             f"run {row['run_id']} is in the registry but its folder {row['folder']} is gone"
         )
     record["status"], record["folder"] = status, row["folder"]  # where it is now
@@ -210,7 +212,7 @@ def _tag(args: argparse.Namespace) -> int:
 
     if args.remove:
         if not registry.remove_tag(args.outputs, args.tag):
-            raise KeyError(f"no tag {args.tag!r} under {args.outputs}")
+            raise RunNotFound(f"no tag {args.tag!r} under {args.outputs}")
         print(f"removed tag {args.tag}")
         return 0
     row = resolve_run(args.outputs, args.run_id)
@@ -301,7 +303,7 @@ def _mlflow(args: argparse.Namespace) -> int:
     rows = [resolve_run(args.outputs, ref) for ref in args.run_ids]
     unfinished = [r["run_id"] for r in rows if current_status(r)[0] != "finished"]
     if unfinished:
-        raise ValueError(f"only finished runs are logged: {', '.join(unfinished)} is not")
+        raise RunStateError(f"only finished runs are logged: {', '.join(unfinished)} is not")
     check_store(args.to)
     tags, notes = registry.tags_and_notes(args.outputs)
     for row in rows:
@@ -320,8 +322,45 @@ def _export(args: argparse.Namespace) -> int:
     row = resolve_run(args.outputs, args.run_id)
     results = Path(row["folder"]) / "results.nc"
     if not results.exists():
-        raise FileNotFoundError(f"run {row['run_id']} has no results.nc: nothing to export")
+        raise RunStateError(f"run {row['run_id']} has no results.nc: nothing to export")
     to = args.to or results.with_suffix(f".{args.format}")
     for path in export_results(results, to, args.format):
         print(f"wrote {path}")
     return 0
+
+
+def check_mlflow(args: argparse.Namespace) -> None:
+    """``run --mlflow``, before anything runs: a store MLflow refuses records nothing."""
+    if args.mlflow:
+        from studies.tracking.mlflow_export import check_store
+
+        check_store(args.mlflow)
+
+
+def track_run(args: argparse.Namespace, folder: Path, run_id: str) -> None:
+    """``run --tag/--note/--mlflow``: tag and note the run, then log it to MLflow."""
+    from studies.tracking import registry
+    from studies.tracking.store import now
+
+    for tag in args.tag:
+        registry.set_tag(args.outputs, run_id, tag)
+        print(f"  tagged {tag}")
+    if args.note:
+        registry.add_note(args.outputs, run_id, now(), args.note)
+    if args.mlflow:
+        from studies.tracking.mlflow_export import log_run
+
+        tags, notes = registry.tags_and_notes(args.outputs)
+        try:
+            mlflow_id, new = log_run(
+                args.mlflow, folder, tags.get(run_id, []), notes.get(run_id, [])
+            )
+        except (ValueError, OSError) as exc:
+            msg = (
+                f"run {run_id} is recorded, but its MLflow export failed ({exc}); log it "
+                f"later with: python -m studies mlflow {run_id} --to {args.mlflow} "
+                f"--outputs {args.outputs}"
+            )
+            raise StudyError(msg) from None
+        verb = "logged to" if new else "already logged to"
+        print(f"  {verb} MLflow at {args.mlflow} as run {mlflow_id}")

@@ -120,14 +120,9 @@ def segment_widths(widths, shapes, half_event, out):
 
 @batch
 def segment_widths_batch(widths, shapes, half_event, out, valid):
-    """:func:`segment_widths` for many profiles (one per prange row).
-
-    widths    : array  (n, 6) nominal widths w_k [rad].
-    shapes    : array  (n, 6) int64 shape codes [-].
-    half_event: array  (n,) working half-events [rad].
-    out       : array  (n, 6) adjusted widths [rad] (written).
-    valid     : array  (n,) bool, True where every adjusted width is ≥ 0 (written).
-    """
+    """:func:`segment_widths` for many profiles (one per prange row): nominal ``widths``
+    (n, 6) [rad], ``shapes`` (n, 6) int64 codes, working ``half_event`` (n,) [rad]; writes the
+    adjusted widths ``out`` (n, 6) [rad] and ``valid`` (n,) bool (every width ≥ 0)."""
     for i in prange(widths.shape[0]):
         valid[i] = segment_widths(widths[i], shapes[i], half_event[i], out[i])
 

@@ -1,32 +1,23 @@
-"""Valve-train kernels: rocker, valve model [V1], [V2], RK4 integrators, lanes (physics §3, §4).
+"""Valve-train kernels (physics §3, §4), one folder per model family:
 
-One physical concept per module:
-
-* :mod:`~engine_kernels.valvetrain.rocker` — rocker kinematics [R1]–[R6], tappet law;
-* :mod:`~engine_kernels.valvetrain.valve.layout` — parameter, output, curve and settings rows of
-  the valve kernels, and the case record (coefficients, time steps, observations) they share;
-* :mod:`~engine_kernels.valvetrain.valve.model` — coefficients, forces, energy and stiffest mode of
-  [V2], the excitation table;
-* :mod:`~engine_kernels.valvetrain.rk4` — RK4 stability and Hermite interpolation;
-  :mod:`~engine_kernels.valvetrain.valve.step` — one RK4 step of [V2];
-* :mod:`~engine_kernels.valvetrain.valve.guard` — input checks and stable sub-step counts;
-* :mod:`~engine_kernels.valvetrain.valve.observations` and
-  :mod:`~engine_kernels.valvetrain.valve.energy_balance` — running observations, outputs and the
-  physics check of a run;
-* :mod:`~engine_kernels.valvetrain.valve.modes` and :mod:`~engine_kernels.valvetrain.valve.switching` —
-  switch-aware RK4 with located contact and seat switches;
-* :mod:`~engine_kernels.valvetrain.dopri.integrate` with :mod:`~engine_kernels.valvetrain.dopri.step`
-  and :mod:`~engine_kernels.valvetrain.dopri.observe` — adaptive Dormand–Prince 5(4) with
-  switches located on its dense output, one case at a time (imported as its own module);
-* :mod:`~engine_kernels.valvetrain.valve.one_case` — one case at a time;
-  :mod:`~engine_kernels.valvetrain.valve.jump` — jump-speed search;
-* :mod:`~engine_kernels.valvetrain.valve.lanes` and :mod:`~engine_kernels.valvetrain.valve.lane_batch` —
-  blocks of cases in SIMD lanes;
-* the multi-mass spring [V4]: :mod:`~engine_kernels.valvetrain.spring_chain.model` (model),
-  ``spring_chain_layout`` (rows), ``spring_chain_guard`` (input checks, sub-steps, status),
-  ``spring_chain_response`` (one case at a time, and the batch entry
-  ``spring_chain_response_batch``), ``spring_chain_lanes`` with ``spring_chain_lane_layout``,
-  ``spring_chain_lane_observations`` and ``spring_chain_lane_batch`` (SIMD lanes).
+* :mod:`~engine_kernels.valvetrain.rocker` — rocker kinematics [R1]–[R6], tappet law, and
+  :mod:`~engine_kernels.valvetrain.rocker_batches` — its drivers for many chains at once;
+* :mod:`~engine_kernels.valvetrain.rk4` — RK4 stability and Hermite interpolation, and
+  :mod:`~engine_kernels.valvetrain.jump_search` — the jump-speed search, both shared by the
+  two models;
+* :mod:`~engine_kernels.valvetrain.valve` — the single-mass valve [V1], [V2]: rows and case
+  record (``layout``), coefficients, forces and excitation (``model``), one RK4 step
+  (``step``), input checks and stable sub-steps (``guard``), ``observations`` and the
+  ``energy_balance``, switch-aware RK4 (``modes``, ``switching``, ``located``), one case at a
+  time (``one_case``), SIMD lanes (``lanes``, ``lane_batch``) and the jump-speed search
+  (``jump``);
+* :mod:`~engine_kernels.valvetrain.spring_chain` — the multi-mass spring [V4]: ``model``,
+  rows (``layout``), input checks, sub-steps and status (``guard``), one case at a time and
+  the batch entry (``one_case``), SIMD lanes (``lanes``, ``lane_layout``,
+  ``lane_observations``, ``lane_batch``) and its jump-speed search (``jump``);
+* :mod:`~engine_kernels.valvetrain.dopri` — adaptive Dormand–Prince 5(4) with switches
+  located on its dense output, one case at a time (``integrate``, ``step``, ``observe``;
+  imported as its own package).
 
 This package re-exports the public API of the one-case valve kernels and their data layout,
 so ``from engine_kernels import valvetrain`` is the one import a caller of them needs.
@@ -34,6 +25,13 @@ so ``from engine_kernels import valvetrain`` is the one import a caller of them 
 
 from __future__ import annotations
 
+from engine_kernels.valvetrain.jump_search import (
+    JUMP_AT_LOWER_BOUND,
+    JUMP_FOUND,
+    JUMP_NONE_IN_RANGE,
+    JUMP_RUN_FAILED,
+    JUMP_STATUS_NAMES,
+)
 from engine_kernels.valvetrain.valve.energy_balance import (
     ENERGY_FLOOR_FRACTION,
     ENERGY_INTERVAL,
@@ -47,14 +45,7 @@ from engine_kernels.valvetrain.valve.guard import (
     stability_substeps_batch,
     valid_valve_parameters,
 )
-from engine_kernels.valvetrain.valve.jump import (
-    JUMP_AT_LOWER_BOUND,
-    JUMP_FOUND,
-    JUMP_NONE_IN_RANGE,
-    JUMP_RUN_FAILED,
-    JUMP_STATUS_NAMES,
-    jump_speed,
-)
+from engine_kernels.valvetrain.valve.jump import jump_speed
 from engine_kernels.valvetrain.valve.layout import (
     C_ACCELERATION,
     C_DRIVE_FORCE,

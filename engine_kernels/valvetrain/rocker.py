@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from engine_kernels._jit import batch, jit, prange
+from engine_kernels._jit import jit
 from engine_kernels.valvetrain.rk4 import hermite_slope, hermite_value
 
 PAD_AHEAD = 1
@@ -378,36 +378,3 @@ def _central_difference(x, y, dydx):
         dydx[q] = ((y[q + 1] - y[q]) * left / right + (y[q] - y[q - 1]) * right / left) / (
             left + right
         )
-
-
-@batch
-def rocker_valve_lift_batch(
-    phi, lift, lift_velocity, lift_acceleration, geometry, side, theta, out, status
-):
-    """:func:`rocker_valve_lift` for many rocker geometries on one cam (one per prange row).
-
-    phi, lift, lift_velocity, lift_acceleration : 1-D arrays  The shared tappet table
-                                                  ([rad], [m], [m/rad], [m/rad²]).
-    geometry : 2-D array  (n_cases, 8) rows indexed by the ``G_*`` constants [m].
-    side     : int        ``PAD_AHEAD`` or ``PAD_BEHIND``.
-    theta    : 1-D array  Output cam rotation angles [rad].
-    out      : 3-D array  (n_cases, 6, len(theta)) curves, ``ROW_*`` order.
-    status   : 1-D int array  (n_cases,) status flags.
-    """
-    for i in prange(geometry.shape[0]):
-        status[i] = rocker_valve_lift(
-            phi, lift, lift_velocity, lift_acceleration, geometry[i], side, theta, out[i]
-        )
-
-
-@batch
-def tappet_lift_for_valve_lift_batch(valve_lift, geometry, out):
-    """:func:`tappet_lift_for_valve_lift` for many chains (one per prange row) [R3], [R6].
-
-    valve_lift : 1-D array  (n_cases,) theoretical valve lift Y [m].
-    geometry   : 2-D array  (n_cases, 8) rows indexed by the ``G_*`` constants [m].
-    out        : 1-D array  (n_cases,) tappet lift at the nose [m] (written; NaN where the
-                            valve arm cannot reach Y).
-    """
-    for i in prange(geometry.shape[0]):
-        out[i] = tappet_lift_for_valve_lift(valve_lift[i], geometry[i])

@@ -41,6 +41,7 @@ from studies.analysis.taguchi import (
     model_terms,
     number,
 )
+from studies.common.errors import StudyError
 
 
 @dataclass(frozen=True)
@@ -99,7 +100,7 @@ class _Model:
         unknown = [t for t in terms if t not in available]
         if unknown:
             msg = f"unknown model term(s) {unknown}; terms are {available}"
-            raise ValueError(msg)
+            raise StudyError(msg)
         self.terms = tuple(terms)
         self.pairs = interaction_columns(ds)
         y = ds[response].values.astype(float)
@@ -128,7 +129,7 @@ class _Model:
         found = np.unique(self.ds[f"{term}_level"].values[hit])
         if found.size != 1:
             msg = f"column {term} does not carry the interaction {a} x {b}: levels {found}"
-            raise ValueError(msg)
+            raise StudyError(msg)
         return int(found[0])
 
     def value(self, levels: Mapping[str, int]) -> float:
@@ -214,7 +215,7 @@ def predict(
     missing = sorted({f for f in control_factors(ds) if f not in levels})
     if missing:
         msg = f"levels missing for factor(s) {missing}"
-        raise ValueError(msg)
+        raise StudyError(msg)
     held = [c for c in conditions(ds) if all(levels.get(f, v) == v for f, v in c.items())]
     sense = str(ds[response].attrs.get("better", "smaller"))
     return model.prediction(levels, sense, alpha, confirmation_runs, held)
@@ -242,7 +243,7 @@ def predict_optimum(
     chosen = sense or str(ds[response].attrs.get("better", "smaller"))
     if chosen not in SENSES:
         msg = f"sense must be one of {SENSES}, got {chosen!r}"
-        raise ValueError(msg)
+        raise StudyError(msg)
     sign = 1.0 if chosen == "smaller" else -1.0
     model = _Model(ds, response, pool, terms, table)
     factors = control_factors(ds)

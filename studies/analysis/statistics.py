@@ -31,6 +31,7 @@ from studies.analysis.sums_of_squares import (
     term_sums_of_squares,
     without_round_off,
 )
+from studies.common.errors import StudyError
 from studies.define.plan import first_runs
 
 SENSES = ("smaller", "larger")
@@ -52,13 +53,13 @@ def _level_names(
         text = ds.attrs.get(attribute, default)
         if text is None:
             msg = f"the Dataset has no {attribute!r} attribute: pass {attribute}=[...]"
-            raise ValueError(msg)
+            raise StudyError(msg)
         names = json.loads(text)
     chosen = list(names)
     missing = [n for n in chosen if f"{n}_level" not in ds.coords]
     if missing:
         msg = f"no level coordinate for {what}(s) {missing} (expected '<{what}>_level' on run)"
-        raise ValueError(msg)
+        raise StudyError(msg)
     return chosen
 
 
@@ -79,15 +80,15 @@ def _response(ds: xr.Dataset, response: str) -> tuple[xr.DataArray, np.ndarray]:
     """The response and the mask of runs where it is finite."""
     if response not in ds.data_vars:
         msg = f"no response {response!r}; the Dataset has {sorted(map(str, ds.data_vars))}"
-        raise ValueError(msg)
+        raise StudyError(msg)
     y = ds[response]
     if y.dims != ("run",):
         msg = f"{response!r} has dims {y.dims}; analysis needs a scalar response on 'run'"
-        raise ValueError(msg)
+        raise StudyError(msg)
     finite = np.isfinite(y.values.astype(float))
     if not finite.any():
         msg = f"{response!r} has no finite value to analyse"
-        raise ValueError(msg)
+        raise StudyError(msg)
     return y, finite
 
 
@@ -97,7 +98,7 @@ def _sense(y: xr.DataArray, sense: str | None) -> str:
         return "smaller"
     if chosen not in SENSES:
         msg = f"sense must be one of {SENSES}, got {chosen!r}"
-        raise ValueError(msg)
+        raise StudyError(msg)
     return chosen
 
 
@@ -214,7 +215,7 @@ def anova(
     clash = set(names) & set(errors)
     if clash:
         msg = f"{sorted(clash)} named both as factor and as error column"
-        raise ValueError(msg)
+        raise StudyError(msg)
     y_da, finite = _response(ds, response)
     complete = bool(finite.all())
     y = y_da.values.astype(float) if complete else y_da.values.astype(float)[finite]
@@ -227,7 +228,7 @@ def anova(
     unknown = [p for p in pooled if p not in names]
     if unknown:
         msg = f"cannot pool {unknown}: not among the factors {names}"
-        raise ValueError(msg)
+        raise StudyError(msg)
 
     def fit(pooled: list[str]) -> dict[str, tuple[float, int]]:
         order = [f for f in names if f not in pooled] + pooled

@@ -31,6 +31,7 @@ import xarray as xr
 from scipy import stats
 
 from studies.analysis.statistics import anova
+from studies.common.errors import StudyError
 from studies.define.plan import first_runs
 
 SN_KINDS = ("smaller", "larger", "nominal")
@@ -49,7 +50,7 @@ def signal_to_noise(y: xr.DataArray, kind: str) -> xr.DataArray:
     """
     if kind not in SN_KINDS:
         msg = f"S/N kind must be one of {SN_KINDS}, got {kind!r}"
-        raise ValueError(msg)
+        raise StudyError(msg)
     y = y.astype(float)
     if REPLICATE not in y.dims:
         y = y.expand_dims(REPLICATE, axis=-1)
@@ -63,7 +64,7 @@ def signal_to_noise(y: xr.DataArray, kind: str) -> xr.DataArray:
         else:
             if int(n.max()) < 2:
                 msg = "nominal-is-best S/N needs at least 2 observations (replicates) per run"
-                raise ValueError(msg)
+                raise StudyError(msg)
             mean = xr.where(seen, y, 0.0).sum(REPLICATE) / n
             var = xr.where(seen, (y - mean) ** 2, 0.0).sum(REPLICATE) / (n - 1)
             eta = xr.where(n >= 2, 10.0 * np.log10(mean**2 / var), np.nan)
@@ -127,7 +128,7 @@ def with_sn(
         y = ds[r]
         if set(y.dims) not in ({"run"}, {"run", REPLICATE}):
             msg = f"{r!r} has dims {y.dims}: S/N needs ('run',) or ('run', '{REPLICATE}')"
-            raise ValueError(msg)
+            raise StudyError(msg)
         kind = kinds.get(r, y.attrs.get("better", "smaller"))
         eta = signal_to_noise(y, kind).transpose("run")
         eta.attrs = {

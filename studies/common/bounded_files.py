@@ -13,6 +13,8 @@ import os
 import stat
 from pathlib import Path
 
+from studies.common.errors import StudyError
+
 STUDY_FILE_BYTES = 128 * 1024
 """Largest study file [bytes]: tomllib reads 0.4–1 MB/s (2 loaded cores to idle), so any study
 under this cap is checked in under a second whatever its level lists (about 20 000 levels fit);
@@ -22,7 +24,7 @@ TABLE_FILE_BYTES = 16 * 1024 * 1024
 UTF8_BOM = "\ufeff"
 
 
-class InputFileError(ValueError):
+class InputFileError(StudyError):
     """An input file that is not a regular file, is larger than its cap or cannot be read."""
 
 

@@ -18,6 +18,8 @@ from pathlib import Path
 from types import TracebackType
 from typing import Self
 
+from studies.common.errors import StudyError
+
 LABELS = "labels.json"
 TAG = re.compile(r"^[A-Za-z][A-Za-z0-9._+-]{0,63}$")
 
@@ -36,7 +38,7 @@ def check_tag(tag: str) -> None:
             f"tag {tag!r} is not allowed: a tag starts with a letter and holds letters, digits "
             "and . _ + - (at most 64), so that it can never be mistaken for a run id"
         )
-        raise ValueError(msg)
+        raise StudyError(msg)
 
 
 def read_labels(folder: Path) -> Labels:

@@ -10,6 +10,8 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING, NamedTuple, TypeVar
 
+from studies.common.errors import StudyError
+
 if TYPE_CHECKING:
     import numpy as np
 
@@ -119,5 +121,5 @@ def conversion_factor(from_unit: str, to_unit: str) -> float:
     a, b = UNITS[from_unit], UNITS[to_unit]
     if a.dimension != b.dimension:
         msg = f"cannot convert {from_unit!r} ({a.dimension}) to {to_unit!r} ({b.dimension})"
-        raise ValueError(msg)
+        raise StudyError(msg)
     return a.to_si / b.to_si

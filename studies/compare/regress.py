@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
+from studies.common.errors import StudyError
 from studies.compare.runs import matched_points, point_label, point_table
 from studies.compare.tolerances import (
     DEFAULT,
@@ -70,11 +71,11 @@ def check_results(
     unknown = sorted(set(tolerances) - set(responses))
     if unknown:
         msg = f"tolerances name responses the baseline does not have: {', '.join(unknown)}"
-        raise ValueError(msg)
+        raise StudyError(msg)
     shared = [r for r in responses if r in results]
     if not shared:
         msg = f"the run has none of the baseline's responses ({', '.join(responses)})"
-        raise ValueError(msg)
+        raise StudyError(msg)
     factors = json.loads(baseline.attrs.get("factors", "[]"))
     common = matched_points(baseline, results, factors)
     expected_points = len(point_table(baseline, factors, []))

@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from studies.common.errors import RunStateError, StudyError
 from studies.common.units import UNITS, to_si
 from studies.compare.differences import (
     Difference,
@@ -109,7 +110,7 @@ def load_run(outputs: Path, ref: str) -> RecordedRun:
     results = folder / "results.nc"
     if not results.exists():
         msg = f"run {row['run_id']} has no results.nc (status {row['status']}): nothing to compare"
-        raise FileNotFoundError(msg)
+        raise RunStateError(msg)
     record = json.loads((folder / "run.json").read_text(encoding="utf-8"))
     definition = tomllib.loads((folder / "study.toml").read_text(encoding="utf-8"))
     values = registry.run_values(outputs, row["run_id"])
@@ -135,13 +136,13 @@ def compare(
     beyond its tolerance (``tolerances`` per response, else ``default``)."""
     tolerances = tolerances or {}
     if len(runs) < 2:
-        raise ValueError("name at least two runs to compare")
+        raise StudyError("name at least two runs to compare")
     shared = [r for r in runs[0].responses() if all(r in x.responses() for x in runs[1:])]
     if not shared:
         msg = "the runs share no response: " + "; ".join(
             f"{x.run_id}: {', '.join(x.responses()) or 'none'}" for x in runs
         )
-        raise ValueError(msg)
+        raise StudyError(msg)
     factors = shared_factors(runs)
     changes = []
     for other in runs[1:]:
@@ -171,7 +172,7 @@ def shared_factors(runs: list[RecordedRun]) -> list[str]:
     factors = [f for f in runs[0].factors if all(f in x.factors for x in runs[1:])]
     if not factors:
         msg = "the runs share no factor, so no design point of one can be matched to the other"
-        raise ValueError(msg)
+        raise StudyError(msg)
     return factors
 
 
@@ -186,7 +187,7 @@ def point_table(ds: xr.Dataset, factors: list[str], responses: list[str]) -> pd.
             f"run {ds.attrs.get('run_id', '?')} has several design points with the same values "
             f"of {', '.join(factors)}: the points cannot be matched by the shared factors"
         )
-        raise ValueError(msg)
+        raise StudyError(msg)
     return indexed
 
 
@@ -200,7 +201,7 @@ def matched_points(reference: xr.Dataset, other: xr.Dataset, factors: list[str])
     common = a.join(b.add_suffix("_other"), how="inner")
     if common.empty:
         msg = f"the runs have no design point in common over {', '.join(factors)}"
-        raise ValueError(msg)
+        raise StudyError(msg)
     return common
 
 

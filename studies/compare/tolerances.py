@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from studies.common.bounded_files import TABLE_FILE_BYTES, read_bounded_text
+from studies.common.errors import StudyError
 
 DEFAULT_RTOL = 1e-7
 DEFAULT_ATOL = 0.0
@@ -40,13 +41,13 @@ def read_tolerances(path: Path) -> dict[str, Tolerance]:
     try:
         raw = tomllib.loads(read_bounded_text(path, "--tolerances", TABLE_FILE_BYTES))
     except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"{path}: not valid TOML ({exc})") from None
+        raise StudyError(f"{path}: not valid TOML ({exc})") from None
     out = {}
     for name, table in raw.items():
         unknown = set(table) - {"rtol", "atol"} if isinstance(table, dict) else {"(not a table)"}
         if unknown:
             msg = f"{path}: [{name}] may hold rtol and atol only, not {', '.join(sorted(unknown))}"
-            raise ValueError(msg)
+            raise StudyError(msg)
         out[name] = Tolerance(
             float(table.get("rtol", DEFAULT_RTOL)), float(table.get("atol", DEFAULT_ATOL))
         )

@@ -3,7 +3,7 @@
 A study is data first. This module reads the TOML file and checks everything that can be
 checked without the design (names, units, types, ranges, empty or duplicate levels), collecting
 *every* problem; :mod:`studies.define.plan` adds the design-fit and per-point physical checks and raises
-one :class:`StudyError` listing them all before anything runs.
+one :class:`StudyFileError` listing them all before anything runs.
 
 File layout (see ``studies/catalog/*.toml`` and the README)::
 
@@ -58,11 +58,12 @@ from studies.common.bounded_files import (
     InputFileError,
     read_bounded_text,
 )
+from studies.common.errors import StudyError
 from studies.define.values import Factor, ValueParser, suggest
 from studies.scenes import SCENES, Scene, get_scene
 from studies.scenes.base import NONE_MEANINGS, short
 
-CATALOG = Path(__file__).parent / "catalog"
+CATALOG = Path(__file__).resolve().parents[1] / "catalog"
 TOP_LEVEL_KEYS = {
     "name",
     "scene",
@@ -83,7 +84,7 @@ MAX_NESTING = 10  # arrays/tables inside each other; a study needs 4 (factors.x.
 SHORT_KEY = 60  # characters of a key path shown in a message
 
 
-class StudyError(ValueError):
+class StudyFileError(StudyError):
     """A study that cannot run; ``problems`` lists every reason, one sentence each."""
 
     def __init__(self, source: str, problems: list[str]) -> None:
@@ -137,7 +138,7 @@ def find_study(name_or_path: str | Path) -> Path:
     problem = (
         f"no study named {str(name_or_path)!r} in the catalogue (known: {known}) and no such file"
     )
-    raise StudyError(str(name_or_path), [problem])
+    raise StudyFileError(str(name_or_path), [problem])
 
 
 def catalog_names() -> list[str]:
@@ -146,12 +147,12 @@ def catalog_names() -> list[str]:
 
 def read_study(name_or_path: str | Path) -> tuple[StudyDefinition | None, list[str]]:
     """Parse a study file; return the definition (None if unusable) and the problems found.
-    The file must be a regular file of at most ``STUDY_FILE_BYTES`` (StudyError otherwise)."""
+    The file must be a regular file of at most ``STUDY_FILE_BYTES`` (StudyFileError otherwise)."""
     path = find_study(name_or_path)
     try:
         text = read_bounded_text(path, "study file", STUDY_FILE_BYTES)
     except InputFileError as exc:
-        raise StudyError(str(path), [str(exc)]) from None
+        raise StudyFileError(str(path), [str(exc)]) from None
     return parse_study(text, str(path))
 
 

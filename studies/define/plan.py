@@ -2,7 +2,7 @@
 
 :func:`plan_study` is the single gate before any computation: it gathers the definition's own
 problems, the design-fit problems and the scene's per-point physical checks into one
-:class:`~studies.define.definition.StudyError`. Nothing is written and no kernel runs unless the
+:class:`~studies.define.definition.StudyFileError`. Nothing is written and no kernel runs unless the
 plan is clean.
 """
 
@@ -17,10 +17,11 @@ from typing import Any
 
 import numpy as np
 
+from studies.common.errors import StudyError
 from studies.define import designs
 from studies.define.definition import (
     StudyDefinition,
-    StudyError,
+    StudyFileError,
     find_study,
     parse_study,
     read_study,
@@ -70,7 +71,7 @@ def plan_text(text: str, source: str = "<string>") -> Plan:
 
 def _plan(definition: StudyDefinition | None, problems: list[str], source: str) -> Plan:
     if definition is None or (problems and not definition.factors):
-        raise StudyError(source, problems)
+        raise StudyFileError(source, problems)
     scene = get_scene(definition.scene)
     design = None
     try:
@@ -78,7 +79,7 @@ def _plan(definition: StudyDefinition | None, problems: list[str], source: str) 
     except designs.DesignError as exc:
         problems = problems + exc.problems
     if design is None or problems:
-        raise StudyError(source, problems)
+        raise StudyFileError(source, problems)
     points = _points(scene, definition, design, design.runs)
     settings = {
         s.name: s.to_si(definition.settings[s.name])
@@ -89,16 +90,16 @@ def _plan(definition: StudyDefinition | None, problems: list[str], source: str) 
     asked, curves = list(definition.responses), list(definition.curves)
     max_chunk, work_problem = settings_fit(scene, definition, settings, design.runs)
     if work_problem:
-        raise StudyError(source, [work_problem])
+        raise StudyFileError(source, [work_problem])
     point_problems = scene.check_points(points, settings)
     point_problems += scene.request_problems(settings, asked, curves)
     if point_problems:
-        raise StudyError(source, point_problems)
+        raise StudyFileError(source, point_problems)
     stages = scene.stages_for(asked, curves)
     stored = scene.stored_responses(asked, curves)
     clashes = _name_clashes(definition, scene, design, stored)
     if clashes:
-        raise StudyError(source, clashes)
+        raise StudyFileError(source, clashes)
     return Plan(
         definition, scene, design, points, settings, tuple(stages), tuple(stored), max_chunk
     )
@@ -184,7 +185,7 @@ def max_points(text: str) -> int:
         value = math.nan
     if not 1 <= value < math.inf:
         msg = f"{MAX_POINTS_VARIABLE}={text!r} must be a number of design points, e.g. 5e7"
-        raise ValueError(msg)
+        raise StudyError(msg)
     return int(value)
 
 

@@ -19,6 +19,7 @@ import xarray as xr
 
 from studies.analysis import analyze as analysis
 from studies.analysis.missing import nothing_to_analyse
+from studies.common.errors import StudyError
 from studies.common.figure_layout import save_figures
 from studies.report import html as html_report
 from studies.report import markdown_report, plots
@@ -42,7 +43,7 @@ def write_analysis(
     scalar = [r for r in names if r in ds and ds[r].dims == ("run",)]
     missing = [r for r in names if r not in ds]
     if missing:
-        raise KeyError(
+        raise StudyError(
             f"responses not in the results: {', '.join(missing)} "
             f"(available: {', '.join(map(str, ds.data_vars))})"
         )

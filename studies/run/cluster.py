@@ -18,6 +18,7 @@ from concurrent.futures import Executor
 from contextlib import contextmanager
 from typing import Any
 
+from studies.common.errors import ClusterError
 from studies.run import provenance
 from studies.run.runner import dask_client
 
@@ -102,7 +103,7 @@ def check_workers(client: Any, scheduler: str, scenes: list[str]) -> None:
             f"task) within {CHECK_TIMEOUT_S:g} s: a worker is hung or overloaded; restart the "
             "workers; nothing was run"
         )
-        raise ValueError(msg)
+        raise ClusterError(msg)
     wrong = {w: d for w, r in sorted(reports.items()) if (d := differences(here, r))}
     if not wrong:
         return
@@ -113,7 +114,7 @@ def check_workers(client: Any, scheduler: str, scenes: list[str]) -> None:
         f"{'; '.join(found)}. Install the same engine-studies, scenes and libraries on every "
         "worker and restart it; nothing was run"
     )
-    raise ValueError(msg)
+    raise ClusterError(msg)
 
 
 @contextmanager

@@ -36,7 +36,7 @@ PACKAGES = (
     "matplotlib",
 )
 LIBRARIES = ("numba", "llvmlite", "numpy", "scipy")  # what computes a result: in the cache key
-SOURCE_ROOT = Path(__file__).resolve().parent.parent
+SOURCE_ROOT = Path(__file__).resolve().parents[2]
 SKIPPED_SUFFIXES = {".pyc", ".pyo", ".so", ".nbi", ".nbc"}  # compiled or cached, not source
 NO_COMMIT = ""
 

@@ -23,6 +23,7 @@ import netCDF4
 import numpy as np
 import xarray as xr
 
+from studies.common.errors import StudyError
 from studies.define.plan import Plan, first_runs
 from studies.run.runner import Evaluation
 
@@ -220,7 +221,7 @@ def grid_order(ds: xr.Dataset) -> tuple[list[str], tuple[int, ...], np.ndarray]:
     factorial; ValueError for any other design or an incomplete one."""
     if ds.attrs.get("design") != "full_factorial":
         msg = f"a grid view needs a full_factorial result, this one is {ds.attrs.get('design')!r}"
-        raise ValueError(msg)
+        raise StudyError(msg)
     factors = json.loads(ds.attrs["factors"])
     codes = [ds[f"{f}_level"].values.astype(np.int64) for f in factors]
     counts = tuple(int(c.max()) + 1 for c in codes)
@@ -229,7 +230,7 @@ def grid_order(ds: xr.Dataset) -> tuple[list[str], tuple[int, ...], np.ndarray]:
     order[flat] = np.arange(flat.size)
     if flat.size != order.size or (order < 0).any():
         msg = f"the full factorial is incomplete: {flat.size} runs for {order.size} grid cells"
-        raise ValueError(msg)
+        raise StudyError(msg)
     return factors, counts, order
 
 

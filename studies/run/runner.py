@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 from tqdm.auto import tqdm
 
+from studies.common.errors import ClusterError
 from studies.define.plan import Plan
 from studies.scenes import Scene, SceneOutput, get_scene
 
@@ -178,7 +179,7 @@ def dask_client(scheduler: str) -> Any:
         from dask.distributed import Client  # noqa: PLC0415  (optional dependency)
     except ImportError:
         msg = "--scheduler needs dask.distributed: pip install -e '.[cluster]'"
-        raise ValueError(msg) from None
+        raise ClusterError(msg) from None
     if scheduler == "local":
         return Client(dashboard_address=None)
     client = _connect(Client, scheduler)
@@ -190,7 +191,7 @@ def dask_client(scheduler: str) -> Any:
             f"--scheduler {scheduler}: the scheduler has no workers (none joined within "
             f"{WORKERS_TIMEOUT_S:g} s): start one with `dask worker {scheduler}`"
         )
-        raise ValueError(msg) from None
+        raise ClusterError(msg) from None
     return client
 
 
@@ -219,4 +220,4 @@ def _connect(client: Callable[..., Any], scheduler: str) -> Any:
         f"{SCHEDULER_TIMEOUT_S:g} s ({kind}: {detail[:200]}); "
         "check the address (e.g. tcp://host:8786) or use --scheduler local"
     )
-    raise ValueError(msg)
+    raise ClusterError(msg)

@@ -18,7 +18,9 @@ from functools import cache
 from importlib.metadata import EntryPoint, entry_points
 from typing import ClassVar
 
+from studies.common.errors import StudyError
 from studies.scenes.base import (
+    BenchKit,
     Curve,
     CurveAxis,
     Parameter,
@@ -158,7 +160,7 @@ def get_scene(name: str) -> Scene:
         return SCENES[name]()
     except KeyError:
         msg = f"unknown scene {name!r}; known scenes: {', '.join(sorted(SCENES))}"
-        raise KeyError(msg) from None
+        raise StudyError(msg) from None
 
 
 def describe_scene(scene: Scene) -> str:
@@ -199,6 +201,7 @@ def describe_scene(scene: Scene) -> str:
 __all__ = [
     "BUILT_IN",
     "SCENES",
+    "BenchKit",
     "Curve",
     "CurveAxis",
     "Parameter",

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from studies.common.errors import StudyError
 from studies.common.units import UNITS, to_si
 
 if TYPE_CHECKING:
@@ -188,6 +189,18 @@ class WorkEstimate:
 
 
 @dataclass(frozen=True)
+class BenchKit:
+    """What the bench command lends a scene's benchmarks: the engine's planner (study text →
+    plan) and chunk evaluator ((plan, runs) → evaluation), which the scene layer cannot import."""
+
+    plan: Callable[[str], Any]
+    evaluate: Callable[[Any, slice], Any]
+
+
+SceneBenchmark = Callable[[BenchKit, int, float, int], dict[str, Any]]
+
+
+@dataclass(frozen=True)
 class CurveAxis:
     """The shared angle axis of a scene's curves (name, units, values)."""
 
@@ -295,9 +308,15 @@ class Scene(ABC):
         of this scene reads). None by default; :mod:`studies.common.summary_tables` has helpers."""
         return []
 
+    def benchmarks(self) -> dict[str, SceneBenchmark]:
+        """The scene's own benchmarks for ``studies bench NAME``, by name: each takes the
+        engine's :class:`BenchKit`, the number of cases, the angle step [deg] and the repeats,
+        and returns its figures. None by default."""
+        return {}
+
     def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray:
         """Values of the curve axis (in ``curve_axis.units``) for these settings."""
-        raise ValueError(f"scene {self.name!r} stores no curves")
+        raise StudyError(f"scene {self.name!r} stores no curves")
 
     @abstractmethod
     def evaluate(

@@ -17,7 +17,7 @@ import numpy as np
 
 from engine_kernels.cam import kinematics as cb
 from engine_kernels.cam import lift_laws, multi_segment
-from engine_kernels.valvetrain import rocker
+from engine_kernels.valvetrain import rocker, rocker_batches
 from studies.scenes.cam_laws import LAW_CODES, SHAPE_CODES
 from studies.scenes.checks import PointProblems, more_concave_line
 
@@ -74,7 +74,7 @@ def nose_tappet_lifts(points: dict[str, np.ndarray], idx: np.ndarray) -> np.ndar
     """:func:`nose_tappet_lift` of design points ``idx`` in one kernel call [m]."""
     out = np.empty(len(idx))
     lift = np.ascontiguousarray(np.asarray(points["valve_lift"], dtype=float)[idx])
-    rocker.tappet_lift_for_valve_lift_batch(lift, geometry_rows(points, idx), out)
+    rocker_batches.tappet_lift_for_valve_lift_batch(lift, geometry_rows(points, idx), out)
     return out
 
 

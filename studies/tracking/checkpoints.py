@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from studies.common.errors import OutputsError, RunStateError
 from studies.scenes import SceneOutput
 from studies.tracking.store import RunRecord
 
@@ -29,7 +30,7 @@ REDO = "delete it and resume: its design points are computed again"
 FIELD_TYPES = {"str": str, "int": int, "bool": bool, "float": float}
 
 
-class DamagedCheckpoint(OSError):
+class DamagedCheckpoint(OutputsError):
     """A checkpoint chunk file that cannot be decoded or does not belong to the run."""
 
 
@@ -105,10 +106,10 @@ def read_run_record(path: Path) -> RunRecord:
     try:
         raw = json.loads(path.read_text(encoding="utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{path} is not a run record: {exc}") from None
+        raise RunStateError(f"{path} is not a run record: {exc}") from None
     problem = _record_problem(raw)
     if problem:
-        raise ValueError(f"{path} is not a run record ({problem}): it was not resumed")
+        raise RunStateError(f"{path} is not a run record ({problem}): it was not resumed")
     return RunRecord(**raw)
 
 

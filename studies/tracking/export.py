@@ -18,6 +18,8 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from studies.common.errors import StudyError
+
 FORMATS = ("csv", "parquet")
 CURVE_CHUNK = 1024  # design points per written block of the curve table
 
@@ -66,7 +68,7 @@ def export_results(results: Path, to: Path, file_format: str) -> list[Path]:
     """Write the table of ``results`` to ``to`` as CSV or Parquet, and its curves (if any) to
     ``<to stem>_curves<suffix>``; return the files written."""
     if file_format not in FORMATS:
-        raise ValueError(f"unknown format {file_format!r}: use one of {', '.join(FORMATS)}")
+        raise StudyError(f"unknown format {file_format!r}: use one of {', '.join(FORMATS)}")
     to.parent.mkdir(parents=True, exist_ok=True)
     with xr.open_dataset(results) as ds:
         frame = results_table(ds.load())
@@ -88,7 +90,7 @@ def _write(blocks: Any, to: Path, file_format: str, index: bool) -> Path:
         import pyarrow.parquet as pq  # noqa: PLC0415
     except ImportError as exc:
         msg = f"Parquet needs pyarrow: pip install -e '.[parquet]' ({exc})"
-        raise ValueError(msg) from None
+        raise StudyError(msg) from None
     writer = None
     try:
         for block in blocks:

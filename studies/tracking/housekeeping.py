@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from studies.common import labels
+from studies.common.errors import RunStateError, StudyError
 from studies.tracking import registry, store, trash
 from studies.tracking.liveness import is_locked, lock_folder
 from studies.tracking.registry_file import writing
@@ -36,11 +37,11 @@ def parse_age(text: str) -> dt.timedelta:
     beyond a century are a century."""
     match = AGE.match(text)
     if not match:
-        raise ValueError(f"--older-than {text!r}: write a number and s, m, h, d or w, e.g. 30d")
+        raise StudyError(f"--older-than {text!r}: write a number and s, m, h, d or w, e.g. 30d")
     seconds = float(match[1]) * UNIT_S[match[2]]
     if seconds > MAX_AGE.total_seconds():
         msg = f"--older-than {text.strip()} is more than {MAX_AGE.days // 365} years: give a shorter age"
-        raise ValueError(msg)
+        raise StudyError(msg)
     return dt.timedelta(seconds=seconds)
 
 
@@ -55,7 +56,7 @@ def remove_run(outputs: Path, row: dict[str, Any], force: bool = False) -> Path 
             f"run {run_id} is tagged ({', '.join(tags)}): not removed; `rm --force` moves it "
             "to the trash all the same (`restore` brings it back)"
         )
-        raise ValueError(msg)
+        raise RunStateError(msg)
     folder = Path(row["folder"])
     try:
         lock = lock_folder(folder, LOCK_WAIT_S)
@@ -64,13 +65,13 @@ def remove_run(outputs: Path, row: dict[str, Any], force: bool = False) -> Path 
             registry.delete_run(con, run_id)
         return None
     if lock is None:
-        raise ValueError(f"run {run_id} is still running (its folder is locked): not removed")
+        raise RunStateError(f"run {run_id} is still running (its folder is locked): not removed")
     with lock:
         if not lock.holds(folder):
-            raise KeyError(f"run {run_id} was moved by another process meanwhile: not removed")
+            raise RunStateError(f"run {run_id} was moved by another process meanwhile: not removed")
         record = read_record(folder)
         if record is not None and store.liveness(record) == "running":
-            raise ValueError(f"run {run_id} is still running: not removed")
+            raise RunStateError(f"run {run_id} is still running: not removed")
         target = trash.move_in(outputs, folder, str(row["study"]))
         try:
             with registry.connection(outputs) as con, writing(con):
@@ -87,22 +88,24 @@ def restore_run(outputs: Path, ref: str) -> tuple[trash.Trashed, Path, list[str]
     entry = trash.find(outputs, ref)
     folder = outputs / entry.study / entry.run_id
     if folder.exists():
-        raise ValueError(f"{folder} exists: run {entry.run_id} is not restored over it")
+        raise RunStateError(f"{folder} exists: run {entry.run_id} is not restored over it")
     try:
         lock = lock_folder(entry.folder, LOCK_WAIT_S)  # held across the rename: same inode
     except FileNotFoundError:
         lock = None
     if lock is None or not lock.holds(entry.folder):
-        raise KeyError(f"run {entry.run_id} left the trash meanwhile: not restored")
+        raise RunStateError(f"run {entry.run_id} left the trash meanwhile: not restored")
     with lock:
         record = read_record(entry.folder)
         if record is None:
-            raise ValueError(f"{entry.folder} holds no readable run.json: not restored")
+            raise RunStateError(f"{entry.folder} holds no readable run.json: not restored")
         folder.parent.mkdir(parents=True, exist_ok=True)
         try:
             entry.folder.rename(folder)
         except FileNotFoundError:
-            raise KeyError(f"run {entry.run_id} left the trash meanwhile: not restored") from None
+            raise RunStateError(
+                f"run {entry.run_id} left the trash meanwhile: not restored"
+            ) from None
         try:
             with registry.connection(outputs) as con:
                 lost = registry.index_folder(con, outputs, record, folder)

@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import urlparse
 
+from studies.common.errors import StudyError
 from studies.tracking.run_values import values_of
 
 EXTRA = "pip install -e '.[mlflow]' (from a checkout of engine-studies)"
@@ -68,7 +69,7 @@ def _mlflow() -> Any:
     try:
         import mlflow  # noqa: PLC0415 (an optional extra: imported only when asked for)
     except ImportError:
-        raise ValueError(f"MLflow export needs the optional mlflow extra: {EXTRA}") from None
+        raise StudyError(f"MLflow export needs the optional mlflow extra: {EXTRA}") from None
     for name in ("mlflow", "alembic"):  # their INFO lines ("Updating database tables")
         logging.getLogger(name).setLevel(logging.WARNING)
     return mlflow
@@ -105,7 +106,7 @@ def check_store(uri: str) -> None:
             f"--mlflow {uri}: MLflow cannot use this store ({detail.splitlines()[0][:160]}); "
             f"for a local store use SQLite, e.g. --mlflow {RECOMMENDED}"
         )
-        raise ValueError(msg) from None
+        raise StudyError(msg) from None
 
 
 def log_run(uri: str, folder: Path, tags: list[str], notes: list[str]) -> tuple[str, bool]:
@@ -120,7 +121,7 @@ def log_run(uri: str, folder: Path, tags: list[str], notes: list[str]) -> tuple[
     except Exception as exc:  # noqa: BLE001  MLflow's, its store's or the network's errors
         detail = getattr(exc, "message", None) or str(exc) or type(exc).__name__
         msg = f"MLflow at {uri} did not log run {record['run_id']}: {detail.splitlines()[0][:200]}"
-        raise ValueError(msg) from None
+        raise StudyError(msg) from None
 
 
 def _log(

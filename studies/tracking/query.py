@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from studies.common.errors import StudyError
 from studies.common.units import UNITS, compatible_units, from_si, to_si
 from studies.tracking import registry, store
 from studies.tracking.housekeeping import parse_age
@@ -68,7 +69,7 @@ class Condition:
                 msg = (
                     f"--where names {self.name!r}, which no run records (known: {', '.join(names)})"
                 )
-            raise ValueError(msg)
+            raise StudyError(msg)
         head = "EXISTS (SELECT 1 FROM run_values v WHERE v.run_id = runs.run_id AND v.name = ? "
         if not isinstance(self.value, float):
             return head + f"AND v.text {op} ?)", [self.name, self.value]
@@ -91,7 +92,7 @@ class Condition:
                 f"{self.name} is in {declared!r} (use one of "
                 f"{', '.join(compatible_units(declared))})"
             )
-            raise ValueError(msg)
+            raise StudyError(msg)
         return to_si(self.value, units)
 
 
@@ -103,7 +104,7 @@ def parse_condition(text: str) -> Condition:
             f"cannot read --where {text!r}: write NAME OP VALUE with OP one of "
             '== != < <= > >=, e.g. "cam_speed>=5000" or "max_jerk.max<900"'
         )
-        raise ValueError(msg)
+        raise StudyError(msg)
     name, op, raw = match.groups()
     raw = raw.strip("'\"")
     number = NUMBER.match(raw)
@@ -115,7 +116,7 @@ def parse_condition(text: str) -> Condition:
             f'--where {text!r}: unknown units {units!r} (write e.g. "bore>=80 mm"; '
             "`python -m studies scenes` lists each name's units)"
         )
-        raise ValueError(msg)
+        raise StudyError(msg)
     return Condition(name, op, float(value), units)
 
 
@@ -129,7 +130,7 @@ def since_date(text: str) -> str:
             when = dt.datetime.now(dt.UTC) - parse_age(text)
         except (ValueError, OverflowError):
             msg = f"--since {text!r} is not a date or an age: write e.g. 2026-11-01 or 30d"
-            raise ValueError(msg) from None
+            raise StudyError(msg) from None
     if when.tzinfo is None:
         when = when.replace(tzinfo=dt.UTC)
     return when.isoformat(timespec="seconds")
@@ -154,7 +155,7 @@ def find_runs(
     conditions = [c for c in conditions if c.name != STATUS]
     for c in current:
         if c.op not in ("==", "=", "!="):
-            raise ValueError(f"--where status: use == or != (e.g. status==finished), not {c.op}")
+            raise StudyError(f"--where status: use == or != (e.g. status==finished), not {c.op}")
     clauses: list[str] = []
     args: list[Any] = []
     for column, value in (("study", study), ("scene", scene)):
@@ -296,7 +297,7 @@ def check_columns(rows: list[dict[str, Any]], columns: list[str]) -> None:
             f"--columns names {', '.join(map(repr, unknown))}, which no listed run records "
             f"(known: {', '.join(sorted(known))})"
         )
-        raise ValueError(msg)
+        raise StudyError(msg)
 
 
 def _declared(rows: list[dict[str, Any]], column: str) -> str:

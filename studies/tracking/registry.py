@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from studies.common import labels
+from studies.common.errors import EngineError, RunStateError
 from studies.tracking.registry_file import (
     BUSY_TIMEOUT_S,
     REGISTRY,
@@ -83,7 +84,7 @@ _TABLES = (
 TABLES = ("runs", "run_values", "tags", "notes")
 
 
-class RegistryError(ValueError):
+class RegistryError(EngineError, ValueError):
     """A registry this version cannot use: written by a newer version of the package."""
 
 
@@ -257,7 +258,7 @@ def _folder(con: sqlite3.Connection, outputs: Path, run_id: str) -> Path:
     row = con.execute("SELECT * FROM runs WHERE run_id = ?", (run_id,)).fetchone()
     folder = folder_of(outputs, dict(row)) if row else None
     if folder is None or not folder.is_dir():
-        raise FileNotFoundError(f"run {run_id} has no folder under {outputs}: nothing to label")
+        raise RunStateError(f"run {run_id} has no folder under {outputs}: nothing to label")
     return folder
 
 

@@ -21,6 +21,8 @@ from collections.abc import Callable, Iterator
 from contextlib import closing, contextmanager
 from pathlib import Path
 
+from studies.common.errors import OutputsError
+
 REGISTRY = "registry.sqlite"
 BUSY_TIMEOUT_S = 10.0  # how long a command waits for another process's write lock
 _BUSY = (sqlite3.SQLITE_BUSY, sqlite3.SQLITE_LOCKED)
@@ -34,7 +36,7 @@ _DAMAGED = (
 )
 
 
-class RegistryUnusable(OSError):
+class RegistryUnusable(OutputsError):
     """The registry cannot be read or written now: damaged, locked, read-only or full."""
 
 

@@ -32,6 +32,7 @@ from pathlib import Path
 from typing import Any
 
 from studies.common.bounded_files import TABLE_FILE_BYTES, InputFileError, read_bounded_bytes
+from studies.common.errors import RunNotFound
 from studies.run.runner import DEFAULT_CHUNK_SIZE
 from studies.tracking import registry, trash
 from studies.tracking.liveness import is_locked
@@ -144,7 +145,7 @@ def default_outputs() -> Path:
     chosen = os.environ.get(OUTPUTS_VARIABLE)
     if chosen:
         return Path(chosen).expanduser().resolve()
-    checkout = Path(__file__).resolve().parents[1] / "outputs"
+    checkout = Path(__file__).resolve().parents[2] / "outputs"
     if (checkout / "README.md").exists():
         return checkout
     return Path("outputs").resolve()
@@ -260,4 +261,4 @@ def resolve_run(outputs: Path, ref: str) -> dict[str, Any]:
             f"no run or tag {ref!r} under {outputs} "
             "(`python -m studies runs` lists the runs and their tags)"
         )
-    raise KeyError(msg)
+    raise RunNotFound(msg)

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from studies.common import labels
+from studies.common.errors import RunNotFound
 from studies.tracking.liveness import lock_folder
 
 TRASH = ".trash"
@@ -93,9 +94,9 @@ def find(outputs: Path, ref: str) -> Trashed:
         return chosen[0]
     if chosen:
         names = ", ".join(e.run_id for e in chosen[:4])
-        raise KeyError(f"{ref!r} matches {len(chosen)} runs in the trash ({names}…): say which")
+        raise RunNotFound(f"{ref!r} matches {len(chosen)} runs in the trash ({names}…): say which")
     msg = f"no run {ref!r} in the trash under {outputs} (`python -m studies trash` lists it)"
-    raise KeyError(msg)
+    raise RunNotFound(msg)
 
 
 def purge(entry: Trashed) -> bool:

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.polynomial import polynomial as poly
 
-from engine_kernels.valvetrain import rocker
+from engine_kernels.valvetrain import rocker, rocker_batches
 
 MM = 1e-3
 # physics §3 reference geometry (125 cc motorcycle): r0, rs, la, lc, lb, rho_b, z, lash [mm].
@@ -200,7 +200,9 @@ def test_batch_and_interpreted_agree_with_single():
     geometry = np.stack([GEOMETRY, GEOMETRY * np.array([1, 1, 1.02, 1, 0.98, 1, 1, 1.5])])
     out = np.empty((2, 6, theta.size))
     status = np.empty(2, dtype=np.int64)
-    rocker.rocker_valve_lift_batch(phi, h, dh, ddh, geometry, rocker.PAD_BEHIND, theta, out, status)
+    rocker_batches.rocker_valve_lift_batch(
+        phi, h, dh, ddh, geometry, rocker.PAD_BEHIND, theta, out, status
+    )
     for i in range(2):
         single = np.empty((6, theta.size))
         plain = np.empty((6, theta.size))

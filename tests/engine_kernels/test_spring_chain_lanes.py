@@ -30,7 +30,7 @@ from engine_kernels.valvetrain.spring_chain.one_case import (
     spring_chain_response_batch,
 )
 from engine_kernels.valvetrain.valve.lane_batch import block_starts
-from studies.run.simd import host_lanes, target_features, widest_vector
+from studies.common.simd import host_lanes, target_features, widest_vector
 
 RPM = 2 * math.pi / 60
 VALVE_MASS = 0.033 + 5e-6 / 33.28e-3**2

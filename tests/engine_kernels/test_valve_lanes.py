@@ -29,7 +29,7 @@ from engine_kernels import valvetrain as valve
 from engine_kernels._jit import FASTMATH
 from engine_kernels.valvetrain.valve import lane_batch as valve_lanes
 from engine_kernels.valvetrain.valve import lanes as lane_loops
-from studies.run.simd import host_lanes, target_features, widest_vector
+from studies.common.simd import host_lanes, target_features, widest_vector
 
 RPM = 2 * math.pi / 60
 MASS = 0.033 + 0.015 / 3 + 5e-6 / 33.28e-3**2
@@ -163,7 +163,7 @@ def test_spread_order_balances_contiguous_shares():
 
 
 def expected_lanes(dtype: type) -> int:
-    """Lanes the lane loops must reach: the host's vector width (studies.run.simd.host_lanes) on
+    """Lanes the lane loops must reach: the host's vector width (studies.common.simd.host_lanes) on
     targets with AVX; a target without it (SSE-only, e.g. NUMBA_CPU_NAME=generic) has no
     blends, and LLVM keeps these select-heavy loops scalar there (precision still checked)."""
     return host_lanes(dtype) if "+avx" in target_features() else 1
@@ -289,7 +289,7 @@ def test_single_precision_status_at_the_extremes(changes, guard):
 
 def test_host_lanes_match_the_cpu_features():
     # Every x86-64 CPU has SSE2 (4 float lanes, 2 double); with AVX2 and no forced target,
-    # LLVM must use at least 8 and 4. Guards the reference loop (studies.run.simd) against
+    # LLVM must use at least 8 and 4. Guards the reference loop (studies.common.simd) against
     # vectorising nothing, which would make the width tests below pass vacuously.
     lanes = host_lanes(np.float32)
     assert lanes >= 4

@@ -1,4 +1,4 @@
-"""Benchmark figures of the multi-mass spring kernel [V4] (studies/bench/chain.py).
+"""Benchmark figures of the multi-mass spring kernel [V4] (studies/scenes/valve/bench/multi_mass.py).
 
 Timings are never asserted (shared machines); what is checked is that the chain rows are the
 lumped valve train with the spring modelled as N masses (the [V1] equivalent mass
@@ -16,7 +16,12 @@ import pytest
 from engine_kernels import valvetrain as valve
 from engine_kernels.valvetrain.spring_chain import layout
 from engine_kernels.valvetrain.spring_chain.one_case import spring_chain_response_batch
-from studies.bench.chain import CHAIN_MASSES, SPRING_MASS, chain_figures, chain_rows
+from studies.scenes.valve.bench.multi_mass import (
+    CHAIN_MASSES,
+    SPRING_MASS,
+    chain_figures,
+    chain_rows,
+)
 
 RPM = 2 * math.pi / 60
 LUMPED = np.array([3500 * RPM, 0.04252, 1.17e7, 150.0, 3.0e4, 205.8, 5e7, 900.0, 0.0, 0.0, 0.0])

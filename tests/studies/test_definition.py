@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from studies.define.definition import StudyError
+from studies.define.definition import StudyFileError
 from studies.define.plan import plan_text
 
 GOOD = """
@@ -140,7 +140,7 @@ def test_good_study_plans() -> None:
 
 @pytest.mark.parametrize(("what", "edit", "words"), MISTAKES, ids=[m[0] for m in MISTAKES])
 def test_mistake_is_reported(what: str, edit, words: list[str]) -> None:
-    with pytest.raises(StudyError) as info:
+    with pytest.raises(StudyFileError) as info:
         plan_text(edit(GOOD))
     message = str(info.value)
     for w in words:
@@ -154,14 +154,14 @@ def test_every_problem_listed_at_once() -> None:
         .replace("[12.0, 14.0, 16.0]", "[12.0, 12.0, 16.0]")
         .replace('units = "deg"', 'units = "N"')
     )
-    with pytest.raises(StudyError) as info:
+    with pytest.raises(StudyFileError) as info:
         plan_text(text)
     assert len(info.value.problems) == 4, info.value.problems
 
 
 def test_point_check_names_the_design_point() -> None:
     text = GOOD.replace("[parameters]", "[parameters]\nramp_velocity = 0.001")
-    with pytest.raises(StudyError) as info:
+    with pytest.raises(StudyFileError) as info:
         plan_text(text)
     assert "ramp" in str(info.value)
 
@@ -189,5 +189,5 @@ def test_cli_prints_message_without_traceback_and_writes_nothing(
 def test_missing_file_is_a_clear_error(tmp_path: Path) -> None:
     from studies.define.plan import plan_study
 
-    with pytest.raises(StudyError, match="no such file"):
+    with pytest.raises(StudyFileError, match="no such file"):
         plan_study(tmp_path / "nope.toml")

@@ -254,8 +254,8 @@ def test_study_interactions_reach_the_design_and_the_dataset() -> None:
     ],
 )
 def test_study_interaction_mistakes_are_reported(design, interactions, words) -> None:
-    from studies.define.definition import StudyError
+    from studies.define.definition import StudyFileError
     from studies.define.plan import plan_text
 
-    with pytest.raises(StudyError, match=re.escape(words)):
+    with pytest.raises(StudyFileError, match=re.escape(words)):
         plan_text(INTERACTION_STUDY.format(design=design, interactions=interactions))

@@ -95,7 +95,7 @@ levels = [15.0, 20.0]
 
 
 def test_missing_table_is_a_study_problem(tmp_path: Path) -> None:
-    from studies.define.definition import StudyError
+    from studies.define.definition import StudyFileError
 
     text = f"""
 name = "table"
@@ -107,5 +107,5 @@ lift_table = "{tmp_path / "missing.csv"}"
 [factors.base_radius]
 levels = [15.0, 20.0]
 """
-    with pytest.raises(StudyError, match="no such file"):
+    with pytest.raises(StudyFileError, match="no such file"):
         plan_text(text)

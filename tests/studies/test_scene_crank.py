@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from studies.define.definition import StudyError
+from studies.define.definition import StudyFileError
 from studies.define.plan import plan_study, plan_text
 from studies.pipeline import run_plan
 from studies.run.runner import evaluate
@@ -165,13 +165,13 @@ def test_v12_torque_runs_with_curves_figures_and_energy_balance(tmp_path: Path) 
     ],
 )
 def test_bad_parameters_give_clear_messages(parameters: str, factors: str, expected: str) -> None:
-    with pytest.raises(StudyError) as info:
+    with pytest.raises(StudyFileError) as info:
         plan_text(study(parameters=parameters, factors=factors))
     assert expected in str(info.value)
 
 
 def test_angle_step_must_divide_the_cycle() -> None:
-    with pytest.raises(StudyError, match=r"angle_step = 0\.7 deg must divide 720 deg"):
+    with pytest.raises(StudyFileError, match=r"angle_step = 0\.7 deg must divide 720 deg"):
         plan_text(study(settings="angle_step = 0.7"))
 
 
@@ -280,7 +280,7 @@ def test_v_twin_moment_from_given_cylinder_positions() -> None:
     expected = np.hypot(mx, my).max() * 3.5 * 0.090 * omega**2
     np.testing.assert_allclose(ev.scalars["free_first_order_moment"], expected, rtol=1e-6)
     np.testing.assert_allclose(ev.scalars["free_first_order_force"], 3.5 * 0.090 * omega**2 / 1e3)
-    with pytest.raises(StudyError, match="cylinder_positions has 1 values for cylinders = 2"):
+    with pytest.raises(StudyFileError, match="cylinder_positions has 1 values for cylinders = 2"):
         plan_text(
             study(parameters="cylinders = 2\nfiring_order = [1, 2]\ncylinder_positions = [0.0]")
         )
@@ -339,5 +339,5 @@ def test_pressure_table_firing_tdc_is_shifted_onto_the_grid(tmp_path: Path) -> N
 
 def test_missing_pressure_table_is_reported_before_running(tmp_path: Path) -> None:
     missing = tmp_path / "nope.csv"
-    with pytest.raises(StudyError, match="no such file"):
+    with pytest.raises(StudyFileError, match="no such file"):
         plan_text(study(parameters=f'pressure_model = "table"\npressure_table = "{missing}"'))

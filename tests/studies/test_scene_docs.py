@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from studies import scenes
-from studies.define.definition import StudyError
+from studies.define.definition import StudyFileError
 from studies.define.plan import plan_text
 from studies.run.results import build_dataset
 from studies.run.runner import evaluate
@@ -70,6 +70,6 @@ def test_the_documented_scene_runs_and_its_curve_is_the_closed_form(scene_class)
 
 def test_request_problems_refuse_a_curve_too_long(scene_class) -> None:
     text = STUDY.replace("time_step = 0.5", "time_step = 1e-4")  # 200 001 values per point
-    with pytest.raises(StudyError, match=r"curve displacement would hold 2e\+05 values"):
+    with pytest.raises(StudyFileError, match=r"curve displacement would hold 2e\+05 values"):
         plan_text(text)
     plan_text(text.replace('curves = ["displacement"]', "curves = []"))  # no curve: no problem

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from studies.define.definition import StudyError
+from studies.define.definition import StudyFileError
 from studies.define.plan import plan_study, plan_text
 from studies.pipeline import run_plan
 from studies.run.runner import evaluate
@@ -145,6 +145,6 @@ def test_no_listed_motor_fails_the_motor_check() -> None:
     ],
 )
 def test_bad_parameters_give_clear_messages(parameters: str, factors: str, expected: str) -> None:
-    with pytest.raises(StudyError) as info:
+    with pytest.raises(StudyFileError) as info:
         plan_text(study(parameters=parameters, factors=factors))
     assert expected in str(info.value)

@@ -10,7 +10,7 @@ import pytest
 from scipy.optimize import brentq
 
 from studies.common.figure_layout import save_figures
-from studies.define.definition import StudyError
+from studies.define.definition import StudyFileError
 from studies.define.plan import plan_study, plan_text
 from studies.pipeline import run_plan
 from studies.run.results import build_dataset
@@ -105,7 +105,7 @@ def test_reed_resonance_runs_and_reports_the_reference_reed(tmp_path: Path) -> N
     ],
 )
 def test_bad_parameters_give_clear_messages(parameters: str, factors: str, expected: str) -> None:
-    with pytest.raises(StudyError) as info:
+    with pytest.raises(StudyFileError) as info:
         plan_text(study(parameters=parameters, factors=factors))
     assert expected in str(info.value)
 

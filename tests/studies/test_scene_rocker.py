@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from numpy.polynomial import polynomial as poly
 
-from studies.define.definition import StudyError
+from studies.define.definition import StudyFileError
 from studies.define.plan import plan_text
 from studies.run.runner import evaluate
 from studies.scenes import chain as rocker_scene
@@ -179,7 +179,7 @@ LIFTS = "[factors.valve_lift]\nlevels = [6.0, 7.815]"
 def test_bad_inputs_name_parameter_value_and_allowed(
     parameters: str, settings: str, factors: str, expected: str
 ) -> None:
-    with pytest.raises(StudyError) as info:
+    with pytest.raises(StudyFileError) as info:
         plan_text(study(parameters=parameters, settings=settings, factors=factors))
     assert expected in str(info.value)
 

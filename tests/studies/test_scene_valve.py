@@ -17,7 +17,7 @@ from engine_kernels import valvetrain as valve
 from engine_kernels.valvetrain import rocker
 from engine_kernels.valvetrain.valve import layout
 from studies.bench.benchmarks import run_benchmark
-from studies.define.definition import StudyError
+from studies.define.definition import StudyFileError
 from studies.define.plan import plan_study, plan_text
 from studies.pipeline import run_plan
 from studies.run.runner import evaluate
@@ -349,7 +349,7 @@ def test_status_codes_are_integers_with_cf_flags_and_are_counted_not_averaged(
 def test_bad_settings_are_refused_before_running(
     parameters: str, settings: str, expected: str
 ) -> None:
-    with pytest.raises(StudyError) as info:
+    with pytest.raises(StudyFileError) as info:
         plan_text(
             study(
                 parameters=parameters,

@@ -14,7 +14,7 @@ import pytest
 from engine_kernels import valvetrain as valve
 from engine_kernels.valvetrain.spring_chain import layout as sc
 from engine_kernels.valvetrain.spring_chain.one_case import spring_chain_response
-from studies.define.definition import StudyError
+from studies.define.definition import StudyFileError
 from studies.define.plan import plan_study, plan_text
 from studies.pipeline import run_plan
 from studies.run.runner import evaluate
@@ -124,14 +124,14 @@ def test_multi_mass_answers_are_the_chain_kernels(chain_calls: list[str]) -> Non
 
 def test_requests_the_multi_mass_model_cannot_answer_are_refused() -> None:
     text = study('["max_acceleration"]', 'spring_model = "multi_mass"')
-    with pytest.raises(StudyError, match=r"max_acceleration.*spring_model = 'lumped'"):
+    with pytest.raises(StudyFileError, match=r"max_acceleration.*spring_model = 'lumped'"):
         plan_text(text)
     text = study(settings='spring_model = "multi_mass"\ntolerance = 0.001')
-    with pytest.raises(StudyError, match="tolerance"):
+    with pytest.raises(StudyFileError, match="tolerance"):
         plan_text(text)
-    with pytest.raises(StudyError, match=r"spring_mass = 0\.2 kg"):
+    with pytest.raises(StudyFileError, match=r"spring_mass = 0\.2 kg"):
         plan_text(study(parameters="spring_mass = 0.2"))
-    with pytest.raises(StudyError, match="spring_masses"):
+    with pytest.raises(StudyFileError, match="spring_masses"):
         plan_text(study(settings='spring_model = "multi_mass"\nspring_masses = 25'))
 
 
@@ -222,5 +222,5 @@ def test_every_dynamic_response_is_answered_or_refused_under_multi_mass() -> Non
     for name in answered:
         assert np.isfinite(out.scalars[name]).all() or name in absent_when_following, name
     for name in set(dynamic) - set(answered):
-        with pytest.raises(StudyError, match=name):
+        with pytest.raises(StudyFileError, match=name):
             plan_text(study(json.dumps([name]), settings))

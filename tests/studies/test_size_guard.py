@@ -9,7 +9,7 @@ import tracemalloc
 import pytest
 
 from studies.define import plan as planning
-from studies.define.definition import StudyError
+from studies.define.definition import StudyFileError
 from studies.define.plan import full_factorial_size_problem, plan_text
 
 FACTORS = ("cam_speed", "spring_preload", "spring_rate", "drive_stiffness")
@@ -29,7 +29,7 @@ def test_a_trillion_point_design_is_refused_before_anything_is_allocated(
     text = huge_study(1000)  # four factors of 1000 levels: 10¹² points
     tracemalloc.start()
     start = time.perf_counter()
-    with pytest.raises(StudyError) as refused:
+    with pytest.raises(StudyFileError) as refused:
         plan_text(text)
     seconds = time.perf_counter() - start
     _, peak = tracemalloc.get_traced_memory()

@@ -247,7 +247,7 @@ def test_the_outputs_root_is_the_same_from_any_folder(
     assert not (tmp_path / "here" / "outputs").exists()
     # without the variable: this checkout's outputs/ folder, wherever the command runs
     monkeypatch.delenv("ENGINE_STUDIES_OUTPUTS")
-    checkout = Path(store.__file__).resolve().parents[1] / "outputs"
+    checkout = Path(__file__).resolve().parents[2] / "outputs"  # tests/studies/ -> the checkout
     assert store.default_outputs() == checkout
 
 

@@ -12,7 +12,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from studies.define.definition import StudyError
+from studies.define.definition import StudyFileError
 from studies.define.plan import plan_study, plan_text
 from studies.pipeline import run_plan
 from studies.scenes.valve import accuracy_reference as acc
@@ -129,7 +129,7 @@ levels = [0.5, 0.3]
 [factors.integrator]
 levels = ["rk4", "lanes"]
 """
-    with pytest.raises(StudyError) as info:
+    with pytest.raises(StudyFileError) as info:
         plan_text(text)
     assert "design points 2–3: angle_step = 0.3 deg is not allowed" in str(info.value)
 

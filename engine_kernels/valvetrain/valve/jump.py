@@ -1,16 +1,14 @@
-"""Valve jump: the lowest camshaft speed at which the valve leaves its drive (physics §4).
-
-A scan over speeds followed by bisection, each speed one run of
-:func:`engine_kernels.valvetrain.valve.one_case.valve_response`.
+"""Valve jump, single-mass model [V2]: the lowest camshaft speed at which the valve leaves its
+drive (physics §4), the shared search of :mod:`engine_kernels.valvetrain.jump_search` driven
+by :func:`engine_kernels.valvetrain.valve.one_case.valve_response`.
 """
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from engine_kernels._jit import jit
+from engine_kernels.valvetrain.jump_search import S_SPEED, search_next, search_start
 from engine_kernels.valvetrain.valve.layout import (
     O_JUMP_DURATION,
     O_STATUS,
@@ -20,12 +18,6 @@ from engine_kernels.valvetrain.valve.layout import (
     VALVE_OUTPUT_NAMES,
 )
 from engine_kernels.valvetrain.valve.one_case import valve_response
-
-JUMP_FOUND = 0
-JUMP_NONE_IN_RANGE = 1
-JUMP_AT_LOWER_BOUND = 2
-JUMP_RUN_FAILED = 3
-JUMP_STATUS_NAMES = ("found", "none_in_range", "at_lower_bound", "run_failed")
 
 
 @jit
@@ -40,14 +32,10 @@ def jump_speed(
     scan_points,
     tolerance,
 ):
-    """Lowest camshaft speed at which the valve separates from the drive (physics §4).
-
-    Scans ``scan_points`` geometrically spaced speeds from ``speed_low`` to ``speed_high``
-    for the first one with a jump (``O_JUMP_DURATION > 0``), then bisects between it and
-    the previous scan point until the bracket is narrower than ``tolerance`` times its
-    upper end. Returns ``(speed [rad/s], code)`` with code ``JUMP_FOUND``,
-    ``JUMP_NONE_IN_RANGE`` (speed NaN), ``JUMP_AT_LOWER_BOUND`` (separates already at
-    ``speed_low``) or ``JUMP_RUN_FAILED`` (a run did not finish with ``STATUS_OK``).
+    """Lowest camshaft speed at which the valve separates from the drive (physics §4): the
+    search of :mod:`engine_kernels.valvetrain.jump_search`, each speed one run of
+    :func:`valve_response`, a jump being ``O_JUMP_DURATION > 0``. Returns ``(speed [rad/s],
+    code)`` with the codes ``JUMP_*`` of that module.
 
     params      : 1-D array  Parameter row (``P_*``); its speed entry is ignored.
     speed_low   : float      Lower end of the search [rad/s].
@@ -59,29 +47,11 @@ def jump_speed(
     work = params.copy()
     out = np.empty(len(VALVE_OUTPUT_NAMES))
     no_curves = np.empty((len(VALVE_CURVE_NAMES), 0))
-    below = speed_low
-    above = math.nan
-    for i in range(scan_points):
-        speed = speed_low * (speed_high / speed_low) ** (i / (scan_points - 1))
-        work[P_SPEED] = speed
+    state = search_start(speed_low, speed_high, scan_points, tolerance)
+    while True:
+        work[P_SPEED] = state[S_SPEED]
         valve_response(excitation, table_step, table_start, work, settings, out, no_curves)
-        if out[O_STATUS] != STATUS_OK:
-            return math.nan, JUMP_RUN_FAILED
-        if out[O_JUMP_DURATION] > 0.0:
-            if i == 0:
-                return speed, JUMP_AT_LOWER_BOUND
-            above = speed
-            break
-        below = speed
-    if math.isnan(above):
-        return math.nan, JUMP_NONE_IN_RANGE
-    while above - below > tolerance * above:
-        work[P_SPEED] = 0.5 * (below + above)
-        valve_response(excitation, table_step, table_start, work, settings, out, no_curves)
-        if out[O_STATUS] != STATUS_OK:
-            return math.nan, JUMP_RUN_FAILED
-        if out[O_JUMP_DURATION] > 0.0:
-            above = work[P_SPEED]
-        else:
-            below = work[P_SPEED]
-    return above, JUMP_FOUND
+        separated = out[O_JUMP_DURATION] > 0.0
+        done, speed, code = search_next(state, separated, out[O_STATUS] == STATUS_OK)
+        if done:
+            return speed, code

@@ -7,6 +7,7 @@ from __future__ import annotations
 import functools
 from collections.abc import Iterator
 
+from studies.common.errors import StudyError
 from studies.define.designs.orthogonal_arrays import (
     OAInfo,
     interaction_columns,
@@ -16,7 +17,7 @@ from studies.define.designs.orthogonal_arrays import (
 )
 
 
-class DesignError(ValueError):
+class DesignError(StudyError):
     """Factors that do not fit the requested design; ``problems`` lists every reason."""
 
     def __init__(self, problems: list[str]) -> None:
@@ -85,7 +86,7 @@ def smallest_fitting(
             f"interacting factors {', '.join(involved)} must have one level count for an "
             f"interaction table, got {counts}"
         )
-        raise ValueError(msg)
+        raise StudyError(msg)
     q = counts[0]
     needed = len(level_counts) + len(pairs) * (q - 1)
     candidates = [
@@ -102,7 +103,7 @@ def smallest_fitting(
         f"and {len(pairs)} interaction(s) of {q}-level factors ({needed} columns; tried: "
         f"{tried}); use fewer interactions or factors"
     )
-    raise ValueError(msg)
+    raise StudyError(msg)
 
 
 def assign_columns(
@@ -295,5 +296,5 @@ def array_info(name: str) -> OAInfo:
     )
     if canonical is None:
         msg = f"orthogonal array {name!r} ({runs} runs, {cols} columns) is not in the catalogue"
-        raise ValueError(msg)
+        raise StudyError(msg)
     return canonical

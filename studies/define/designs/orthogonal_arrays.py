@@ -28,6 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from studies.common.errors import StudyError
+
 
 @dataclass(frozen=True)
 class OAInfo:
@@ -181,7 +183,7 @@ def _canonical(name: str) -> str:
             f"unknown orthogonal array {name!r}; known arrays: {known} "
             "(bare L16, L32 and L36 mean L16(2^15), L32(2^31) and L36(2^11 3^12))"
         )
-        raise ValueError(msg)
+        raise StudyError(msg)
     return key
 
 
@@ -239,10 +241,10 @@ def smallest_array_for(level_counts: Sequence[int], interactions: int = 0) -> OA
     counts = [int(c) for c in level_counts]
     if not counts or min(counts) < 2:
         msg = f"every factor needs at least 2 levels, got {counts}"
-        raise ValueError(msg)
+        raise StudyError(msg)
     if interactions < 0:
         msg = f"interactions must be >= 0, got {interactions}"
-        raise ValueError(msg)
+        raise StudyError(msg)
     catalogue = list_orthogonal_arrays()
     needed = Counter(counts)
     if interactions:
@@ -251,7 +253,7 @@ def smallest_array_for(level_counts: Sequence[int], interactions: int = 0) -> OA
                 "interaction columns are defined only for factors with one level count, "
                 f"got {_describe(counts)}"
             )
-            raise ValueError(msg)
+            raise StudyError(msg)
         (s,) = needed
         needed = Counter({s: len(counts) + interactions * (s - 1)})
         catalogue = [i for i in catalogue if i.name in _LINEAR]
@@ -267,7 +269,7 @@ def smallest_array_for(level_counts: Sequence[int], interactions: int = 0) -> OA
         f"the catalogue holds {', '.join(_CATALOGUE_ORDER)}; use a full factorial or fewer "
         "factors/levels"
     )
-    raise ValueError(msg)
+    raise StudyError(msg)
 
 
 def interaction_columns(name: str, col_a: int, col_b: int) -> tuple[int, ...]:
@@ -284,17 +286,17 @@ def interaction_columns(name: str, col_a: int, col_b: int) -> tuple[int, ...]:
             f"{canonical} has no interaction table (its interactions are spread over "
             f"several columns); arrays with one: {', '.join(_LINEAR)}"
         )
-        raise ValueError(msg)
+        raise StudyError(msg)
     q, k = _LINEAR[canonical]
     vectors = _column_vectors(q, k)
     ncols = len(vectors)
     for col in (col_a, col_b):
         if not 0 <= col < ncols:
             msg = f"column {col} is not in {canonical} (0-based columns 0..{ncols - 1})"
-            raise ValueError(msg)
+            raise StudyError(msg)
     if col_a == col_b:
         msg = f"an interaction needs two different columns, got {col_a} twice"
-        raise ValueError(msg)
+        raise StudyError(msg)
     add, mul = _gf_tables(q)
     by_multiple = {tuple(mul[scale, v]): j for j, v in enumerate(vectors) for scale in range(1, q)}
     u, v = vectors[col_a], vectors[col_b]

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from studies.common.bounded_files import TABLE_FILE_BYTES, read_bounded_text
+from studies.common.errors import StudyError
 
 SPLINE_DEGREE = 5  # quintic: lift, velocity, acceleration and jerk all come from the spline
 MIN_POINTS = SPLINE_DEGREE + 2
@@ -25,25 +26,25 @@ def read_lift_table(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     """
     path = Path(path)
     if not path.is_file():
-        raise ValueError(f"lift_table = {str(path)!r}: no such file")
+        raise StudyError(f"lift_table = {str(path)!r}: no such file")
     rows = read_bounded_text(path, "lift_table", TABLE_FILE_BYTES).splitlines()
     try:
         data = np.genfromtxt(rows, delimiter=",", comments="#", dtype=float)
     except ValueError as exc:
-        raise ValueError(f"lift_table {path}: not a two-column numeric CSV ({exc})") from None
+        raise StudyError(f"lift_table {path}: not a two-column numeric CSV ({exc})") from None
     data = np.atleast_2d(data)
     if data.shape[0] > 0 and np.isnan(data[0]).all():
         data = data[1:]  # a header line
     if data.ndim != 2 or data.shape[1] != 2 or not np.isfinite(data).all():
-        raise ValueError(
+        raise StudyError(
             f"lift_table {path}: expected two numeric columns "
             "'cam angle [deg], lift [mm]' on every row"
         )
     angle, lift = data[:, 0], data[:, 1]
     if len(angle) < MIN_POINTS:
-        raise ValueError(f"lift_table {path}: {len(angle)} rows, need at least {MIN_POINTS}")
+        raise StudyError(f"lift_table {path}: {len(angle)} rows, need at least {MIN_POINTS}")
     if np.any(np.diff(angle) <= 0):
-        raise ValueError(f"lift_table {path}: cam angles must increase strictly")
+        raise StudyError(f"lift_table {path}: cam angles must increase strictly")
     return angle, lift
 
 

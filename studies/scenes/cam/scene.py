@@ -34,7 +34,7 @@ from studies.scenes.cam_laws import LAW_CODES, SHAPE_CODES, polydyne_problems
 from studies.scenes.checks import checked_groups
 
 if TYPE_CHECKING:
-    from studies.scenes.base import FigureBuilder
+    from studies.scenes.base import FigureBuilder, SceneBenchmark
 
 HALF_TURN_DEG = 180.0
 
@@ -143,6 +143,11 @@ class CamScene(Scene):
         from studies.scenes.cam.figures import cam_curves_figure  # noqa: PLC0415  (matplotlib on use)
 
         return {"cam_curves": cam_curves_figure}
+
+    def benchmarks(self) -> dict[str, SceneBenchmark]:
+        from studies.scenes.cam.bench import bench_cam  # noqa: PLC0415
+
+        return {"cam": bench_cam}
 
     def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray:
         step = np.rad2deg(settings["angle_step"])

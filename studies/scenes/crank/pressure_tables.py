@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from studies.common.bounded_files import TABLE_FILE_BYTES, read_bounded_text
+from studies.common.errors import StudyError
 
 CYCLE_DEG = 720.0
 FIRING_TDC_DEG = 360.0  # firing TDC on the scene's cycle grid
@@ -29,36 +30,36 @@ def read_pressure_table(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     path = Path(path)
     name = f"pressure_table = {str(path)!r}"
     if not str(path) or not path.is_file():
-        raise ValueError(f"{name}: no such file (a CSV of crank angle [deg], pressure [MPa])")
+        raise StudyError(f"{name}: no such file (a CSV of crank angle [deg], pressure [MPa])")
     rows = read_bounded_text(path, "pressure_table", TABLE_FILE_BYTES).splitlines()
     try:
         data = np.genfromtxt(rows, delimiter=",", comments="#", dtype=float)
     except ValueError as exc:
-        raise ValueError(f"{name}: not a two-column numeric CSV ({exc})") from None
+        raise StudyError(f"{name}: not a two-column numeric CSV ({exc})") from None
     data = np.atleast_2d(data)
     if data.size:
         data = data[~np.isnan(data).all(axis=1)]
     if data.ndim != 2 or data.shape[1] != 2 or not np.isfinite(data).all():
-        raise ValueError(
+        raise StudyError(
             f"{name}: expected two numeric columns 'crank angle [deg], pressure [MPa]' on every row"
         )
     angle, pressure = data[:, 0], data[:, 1]
     if len(angle) < MIN_ROWS:
-        raise ValueError(f"{name}: {len(angle)} rows, need at least {MIN_ROWS}")
+        raise StudyError(f"{name}: {len(angle)} rows, need at least {MIN_ROWS}")
     if np.any(np.diff(angle) <= 0):
-        raise ValueError(f"{name}: crank angles must increase strictly")
+        raise StudyError(f"{name}: crank angles must increase strictly")
     span = angle[-1] - angle[0]
     if span > CYCLE_DEG:
-        raise ValueError(f"{name}: covers {span:g}° of crank angle, more than one cycle (720°)")
+        raise StudyError(f"{name}: covers {span:g}° of crank angle, more than one cycle (720°)")
     gap = CYCLE_DEG - span
     if gap > np.diff(angle).max() * (1.0 + 1e-9):
-        raise ValueError(
+        raise StudyError(
             f"{name}: covers only {span:g}° of crank angle; give the whole "
             "720° cycle (the gap between the last and first row is wider than "
             "the table's own spacing)"
         )
     if np.any(pressure < 0):
-        raise ValueError(f"{name}: pressures must be ≥ 0 MPa (absolute pressure)")
+        raise StudyError(f"{name}: pressures must be ≥ 0 MPa (absolute pressure)")
     return angle, pressure
 
 

@@ -33,16 +33,9 @@ from studies.scenes.base import Scene, SceneOutput
 from studies.scenes.checks import PointProblems
 from studies.scenes.crank import work
 from studies.scenes.crank.checks import CYCLE_NAMES, LAYOUT_NAMES, cycle_problems, layout_problems
-from studies.scenes.crank.parameters import (
-    CRANK_ANGLE,
-    CURVES,
-    MAX_ORDER_HALVES,
-    PARAMETERS,
-    RESPONSES,
-    SETTINGS,
-    order_name,
-)
+from studies.scenes.crank.parameters import MAX_ORDER_HALVES, PARAMETERS, SETTINGS
 from studies.scenes.crank.pressure_tables import read_pressure_table, resample_pressure
+from studies.scenes.crank.responses import CRANK_ANGLE, CURVES, RESPONSES, order_name
 
 if TYPE_CHECKING:
     from studies.scenes.base import FigureBuilder

@@ -52,6 +52,7 @@ from studies.scenes.valve.batches import (
 )
 from studies.scenes.valve.error_bar import BAR_FACTOR, DERIVED_BARS, Ladder, tolerance_rungs
 from studies.scenes.valve.excitation import unclipped_valve_lift
+from studies.scenes.valve.output_columns import BAR_SCALE, CURVE_ROWS, MM, OUTPUT_COLUMNS
 from studies.scenes.valve.parameters import (
     CURVES,
     DOPRI,
@@ -68,9 +69,9 @@ from studies.scenes.valve.parameters import (
 if TYPE_CHECKING:
     import xarray as xr
 
-    from studies.scenes.base import FigureBuilder
+    from studies.scenes.base import FigureBuilder, SceneBenchmark
 
-MM, DEG, RPM = 1e3, math.degrees(1.0), 30.0 / math.pi
+RPM = 30.0 / math.pi
 WINDOW_PROBE_DEG = 0.25
 """Grid on which the valve opening and closing angles that set the window are found."""
 PRE_OPEN_DEG = 2.0
@@ -79,43 +80,7 @@ BUDGET_RESPONSES = frozenset(("integration_error", "excitation_error"))
 BAR_RESPONSES = (
     frozenset(("error_estimate", "step_halving_difference", *DERIVED_BARS)) | BUDGET_RESPONSES
 )
-# error bar response -> factor from SI to the response's units
-_BAR_SCALE = {
-    "jump_start_error": DEG,
-    "seating_velocity_error": 1.0,
-    "bounce_height_error": MM,
-    "max_lift_error": MM,
-    "integration_error": MM,
-    "excitation_error": MM,
-}
 KINEMATIC_RESPONSES = frozenset(r.name for r in ROCKER_RESPONSES)
-
-# response -> (output column, factor from SI to the response's units)
-_OUTPUT: dict[str, tuple[int, float]] = {
-    "max_lift": (valve.O_MAX_LIFT, MM),
-    "max_opening_velocity": (valve.O_MAX_VELOCITY, 1.0),
-    "max_closing_velocity": (valve.O_MIN_VELOCITY, 1.0),
-    "max_acceleration": (valve.O_MAX_ACCELERATION, 1.0),
-    "min_acceleration": (valve.O_MIN_ACCELERATION, 1.0),
-    "jump_start": (valve.O_JUMP_START, DEG),
-    "jump_duration": (valve.O_JUMP_DURATION, DEG),
-    "jump_max_gap": (valve.O_JUMP_GAP, MM),
-    "bounce_count": (valve.O_BOUNCE_COUNT, 1.0),
-    "bounce_height": (valve.O_BOUNCE_HEIGHT, MM),
-    "seating_velocity": (valve.O_SEATING_VELOCITY, 1.0),
-    "max_contact_force": (valve.O_MAX_CONTACT_FORCE, 1.0),
-    "substeps": (valve.O_SUBSTEPS, 1.0),
-    "step_ratio": (valve.O_STEP_RATIO, 1.0),
-    "mode_transitions": (valve.O_TRANSITIONS, 1.0),
-    "status": (valve.O_STATUS, 1.0),
-}
-_CURVE_ROW = {
-    "actual_lift": (valve.C_LIFT, MM),
-    "actual_velocity": (valve.C_VELOCITY, 1.0),
-    "actual_acceleration": (valve.C_ACCELERATION, 1.0),
-    "drive_force": (valve.C_DRIVE_FORCE, 1.0),
-    "seat_force": (valve.C_SEAT_FORCE, 1.0),
-}
 
 
 class ValveScene(ChainScene):
@@ -141,6 +106,11 @@ class ValveScene(ChainScene):
             "jump_speed_map": jump_speed_map_figure,
             "surge_sweep": surge_sweep_figure,
         }
+
+    def benchmarks(self) -> dict[str, SceneBenchmark]:
+        from studies.scenes.valve.bench.kernels import bench_valve  # noqa: PLC0415
+
+        return {"valve": bench_valve}
 
     def summaries(self, ds: xr.Dataset) -> list[str]:
         from studies.scenes.chain_summaries import chain_status_summary  # noqa: PLC0415
@@ -224,7 +194,7 @@ class ValveScene(ChainScene):
         n = ctx["n"]
         ctx["out"] = np.full((n, N_OUT), np.nan)
         ctx["step_used"] = np.full(n, np.nan)
-        want = any(c in _CURVE_ROW for c in ctx["curves"])
+        want = any(c in CURVE_ROWS for c in ctx["curves"])
         axis = self.curve_coordinate(ctx["settings"])
         ctx["traces"] = np.full((n, N_CURVES, axis.size if want else 0), np.nan)
         names = ("error_estimate", "tolerance_met", *DERIVED_BARS, *BUDGET_RESPONSES)
@@ -378,8 +348,8 @@ class ValveScene(ChainScene):
             column, scale = spring.SURGE_OUTPUT[response]
             return ctx["chain_out"][:, column] * scale
         out = ctx["out"]
-        if response in _OUTPUT:
-            column, scale = _OUTPUT[response]
+        if response in OUTPUT_COLUMNS:
+            column, scale = OUTPUT_COLUMNS[response]
             return out[:, column] * scale
         status = out[:, valve.O_STATUS]
         if response == "run_ok":
@@ -396,8 +366,8 @@ class ValveScene(ChainScene):
             return bars["error_estimate"] / BAR_FACTOR * MM
         if response == "error_estimate":
             return bars["error_estimate"] * MM
-        if response in _BAR_SCALE:
-            return bars[response] * _BAR_SCALE[response]
+        if response in BAR_SCALE:
+            return bars[response] * BAR_SCALE[response]
         if ctx["settings"]["tolerance"] > 0.0:
             return bars["tolerance_met"].copy()
         return np.ones(ctx["n"])
@@ -408,7 +378,7 @@ class ValveScene(ChainScene):
         ):
             row, scale = spring.CHAIN_CURVE_ROW[name]
             return ctx["chain_traces"][:, row, :] * scale
-        if name not in _CURVE_ROW:
+        if name not in CURVE_ROWS:
             return super().curve_values(ctx, name)
-        row, scale = _CURVE_ROW[name]
+        row, scale = CURVE_ROWS[name]
         return ctx["traces"][:, row, :] * scale

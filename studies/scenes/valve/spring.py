@@ -9,7 +9,7 @@ lumped rung's under ``spring_model = "multi_mass"``, and the checks of a request
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -26,8 +26,27 @@ from studies.scenes.valve.batches import N_OUT, kernel_settings
 from studies.scenes.valve.parameters import STATUS_NOT_RUN
 from studies.scenes.valve.spring_parameters import CHAIN_UNOBSERVED, SURGE_CURVES
 
-if TYPE_CHECKING:
-    from studies.scenes.valve.scene import ValveScene
+
+class SurgeHost(Protocol):
+    """What the ``surge`` stage asks of the scene that runs it (the valve scene): the curve
+    axis, which cam–rocker chains are valid, the chain kernel's rows and the excitation."""
+
+    def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray: ...
+
+    def chain_valid(self, ctx: dict[str, Any], key: tuple) -> bool: ...
+
+    def spring_rows(self, ctx: dict[str, Any], idx: np.ndarray) -> np.ndarray: ...
+
+    def window(self, ctx: dict[str, Any], key: tuple) -> tuple[float, float]: ...
+
+    def excitation(
+        self,
+        ctx: dict[str, Any],
+        key: tuple,
+        step: float,
+        span: tuple[float, float] | None = None,
+    ) -> tuple[np.ndarray, float, float]: ...
+
 
 MM = 1e3
 TWO_PI = 2.0 * np.pi
@@ -194,7 +213,7 @@ def spring_point_problems(points: dict[str, np.ndarray]) -> list[str]:
     return found.messages()
 
 
-def surge_stage(scene: ValveScene, ctx: dict[str, Any]) -> None:
+def surge_stage(scene: SurgeHost, ctx: dict[str, Any]) -> None:
     """The ``surge`` stage: the multi-mass spring (once per study chunk) at ``angle_step``, and
     over ``revolutions`` turns when asked; under ``spring_model = "multi_mass"`` its outputs
     also answer the dynamic responses."""

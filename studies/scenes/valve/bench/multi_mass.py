@@ -32,7 +32,7 @@ from engine_kernels.valvetrain.spring_chain.one_case import (
     spring_chain_response_batch,
 )
 from engine_kernels.valvetrain.valve import lane_batch as valve_lanes
-from studies.bench.timing import best_times
+from studies.common.timing import best_times
 
 CHAIN_MASSES = (1, 2, 4, 8, 16, 24)
 SPRING_MASS = 0.015  # kg: the spring behind the valve scene's default equivalent mass [V1]

@@ -1,0 +1,1 @@
+"""The valve scene's benchmarks (``studies bench valve``): kernels, multi-mass spring, integrators."""
