@@ -15,7 +15,7 @@ from studies.run import provenance
 
 ROOT = Path(__file__).resolve().parents[2]
 PRINT_STATE = (
-    "import json; from studies import provenance as p; "
+    "import json; from studies.run import provenance as p; "
     "print(json.dumps([p.git_state(), p.engine_code()['source_sha256']]))"
 )
 
