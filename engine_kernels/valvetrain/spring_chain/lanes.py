@@ -119,7 +119,13 @@ def _valve(nodes, l, n, x, v, drive_lift, drive_velocity, c):
         drive_velocity,
         nodes[node_at(n, NODE_F, l)],
         c[LK_VALVE_MASS],
-        (c[LK_K], c[LK_B], c[LK_KZ], c[LK_BZ], c[LK_GAMMA], c[LK_PRELOAD], c[LK_DEPTH]),
+        c[LK_K],
+        c[LK_B],
+        c[LK_KZ],
+        c[LK_BZ],
+        c[LK_GAMMA],
+        c[LK_PRELOAD],
+        c[LK_DEPTH],
     )
     return lift, velocity, drive, seat, acc
 

@@ -160,7 +160,29 @@ def segment_force(compression, rate, damper, preload, gap, kc, cc, compression_r
 
 
 @jit
-def chain_accelerations(pos, vel, acc, forces, drive_lift, drive_velocity, c):
+def chain_accelerations(
+    pos,
+    vel,
+    acc,
+    forces,
+    drive_lift,
+    drive_velocity,
+    masses,
+    valve_mass,
+    coil_mass,
+    rate,
+    damper,
+    gap,
+    kc,
+    cc,
+    k,
+    b,
+    kz,
+    bz,
+    gamma,
+    preload,
+    depth,
+):
     """Accelerations of the coils and the valve [V4]; fills ``acc`` and the segment ``forces``.
 
     pos, vel : 1-D arrays (N+1,)  Coil displacements u_1 … u_N then the valve lift y [m], and
@@ -168,12 +190,10 @@ def chain_accelerations(pos, vel, acc, forces, drive_lift, drive_velocity, c):
     acc      : 1-D array (N+1,)   Out: accelerations [m/s²].
     forces   : 1-D array (N+1,)   Out: segment forces F_0 … F_N [N] (F_N at the retainer).
     drive_lift, drive_velocity : float  Y [m] and Ẏ [m/s] of the excitation.
-    c        : tuple              The coefficients of :func:`chain_coefficients`.
+    Other arguments as returned by :func:`chain_coefficients`.
     Returns the drive force before clipping ``k (Y − y) + b (Ẏ − ẏ)`` [N] and the seat force
     (0 when off the seat) [N].
     """
-    masses, valve_mass, coil_mass, rate, damper, gap, kc, cc = c[:8]
-    preload = c[13]
     lower, lower_v = 0.0, 0.0
     for j in range(masses + 1):
         forces[j] = segment_force(
@@ -184,21 +204,46 @@ def chain_accelerations(pos, vel, acc, forces, drive_lift, drive_velocity, c):
     for i in range(masses):
         acc[i] = (forces[i + 1] - forces[i]) * inv_coil
     drive, seat, acc[masses] = valve_balance(
-        pos[masses], vel[masses], drive_lift, drive_velocity, forces[masses], valve_mass, c[8:15]
+        pos[masses],
+        vel[masses],
+        drive_lift,
+        drive_velocity,
+        forces[masses],
+        valve_mass,
+        k,
+        b,
+        kz,
+        bz,
+        gamma,
+        preload,
+        depth,
     )
     return drive, seat
 
 
 @jit_inline
-def valve_balance(lift, velocity, drive_lift, drive_velocity, retainer, valve_mass, contact):
+def valve_balance(
+    lift,
+    velocity,
+    drive_lift,
+    drive_velocity,
+    retainer,
+    valve_mass,
+    k,
+    b,
+    kz,
+    bz,
+    gamma,
+    preload,
+    depth,
+):
     """Drive and seat forces on the valve and its acceleration [V4] (selects, no calls).
 
     lift, velocity : float  y [m], ẏ [m/s];  drive_lift, drive_velocity : float  Y [m], Ẏ [m/s].
-    retainer       : float  Force of the retainer-end segment F_N [N];  valve_mass M_v [kg].
-    contact        : tuple  k, b, kz, bz, γ, Ps0, δ0 as in :func:`chain_coefficients`.
+    retainer       : float  Force of the retainer-end segment F_N [N].
+    Other arguments as returned by :func:`chain_coefficients`.
     Returns the drive force before clipping [N], the seat force [N] and ÿ [m/s²].
     """
-    k, b, kz, bz, gamma, preload, depth = contact
     drive = k * (drive_lift - lift) + b * (drive_velocity - velocity)
     seat = preload - kz * lift - bz * velocity  # kz (δ0 − y) − bz ẏ with kz δ0 = Ps0
     seat = seat if (lift < depth) & (seat > 0.0) else 0.0
@@ -206,7 +251,9 @@ def valve_balance(lift, velocity, drive_lift, drive_velocity, retainer, valve_ma
 
 
 @jit
-def chain_energy(pos, vel, drive_lift, c):
+def chain_energy(
+    pos, vel, drive_lift, masses, valve_mass, coil_mass, rate, preload, gap, kc, k, kz, depth
+):
     """Mechanical energy of the chain model above the rest state [J].
 
     ``E = ½M_v ẏ² + Σ ½m_c u̇_i² + Σ_j (½k_seg d_j² + ½kc (d_j − g)²·[d_j > g]) + Ps0 y
@@ -214,7 +261,6 @@ def chain_energy(pos, vel, drive_lift, c):
     [V2], ``dE/dt ≤ F_drive·Ẏ``: every damper and one-sided contact only removes energy.
     Arguments as in :func:`chain_accelerations` (no damping needed).
     """
-    masses, valve_mass, coil_mass, rate, _, gap, kc, _, k, _, kz, _, _, preload, depth, _ = c
     lift = pos[masses]
     energy = kinetic_energy(0.0, valve_mass, vel[masses]) + preload * lift
     lower = 0.0

@@ -79,7 +79,7 @@ def _rk4_substep(s, tau, ym, vm, y1, v1, c):
     """One classic RK4 step of the chain from the state and first stage in ``s`` (in place).
 
     s : 2-D scratch (rows ``_POS`` …); tau : float  h [s]; ym, vm / y1, v1 : float  Y [m],
-    Ẏ [m/s] at the half step / step end; c : the tuple of :func:`chain_coefficients`.
+    Ẏ [m/s] at the half step / step end; c : tuple of :func:`chain_coefficients`.
     """
     n = c[0]
     half = 0.5 * tau
@@ -87,15 +87,15 @@ def _rk4_substep(s, tau, ym, vm, y1, v1, c):
     for i in range(n + 1):
         s[_P2, i] = pos[i] + half * vel[i]
         s[_V2, i] = vel[i] + half * s[_ACC1, i]
-    chain_accelerations(s[_P2], s[_V2], s[_ACC2], s[_FORCES], ym, vm, c)
+    chain_accelerations(s[_P2], s[_V2], s[_ACC2], s[_FORCES], ym, vm, *c[:15])
     for i in range(n + 1):
         s[_P3, i] = pos[i] + half * s[_V2, i]
         s[_V3, i] = vel[i] + half * s[_ACC2, i]
-    chain_accelerations(s[_P3], s[_V3], s[_ACC3], s[_FORCES], ym, vm, c)
+    chain_accelerations(s[_P3], s[_V3], s[_ACC3], s[_FORCES], ym, vm, *c[:15])
     for i in range(n + 1):
         s[_P4, i] = pos[i] + tau * s[_V3, i]
         s[_V4, i] = vel[i] + tau * s[_ACC3, i]
-    chain_accelerations(s[_P4], s[_V4], s[_ACC4], s[_FORCES], y1, v1, c)
+    chain_accelerations(s[_P4], s[_V4], s[_ACC4], s[_FORCES], y1, v1, *c[:15])
     sixth = tau / 6.0
     for i in range(n + 1):
         pos[i] += sixth * (vel[i] + 2.0 * (s[_V2, i] + s[_V3, i]) + s[_V4, i])
@@ -122,7 +122,7 @@ def spring_chain_response(excitation, table_step, table_start, params, settings,
     if substeps == 0:
         return
     c = chain_coefficients(params)
-    n, gap, preload, depth, speed = c[0], c[5], c[13], c[14], c[15]
+    n, valve_mass, coil_mass, rate, _, gap, kc, _, k, _, kz, _, _, preload, depth, speed = c
     spring_rate = params[SC_SPRING_RATE]
     s = np.zeros((_SCRATCH_ROWS, n + 1))
     clashing = np.zeros(n + 1, dtype=np.bool_)
@@ -148,9 +148,11 @@ def spring_chain_response(excitation, table_step, table_start, params, settings,
         position = 2.0 * m / substeps
         lift, velocity = pos[n], vel[n]
         v0 = speed * slope0
-        drive, _ = chain_accelerations(pos, vel, s[_ACC1], forces, y0, v0, c)
+        drive, _ = chain_accelerations(pos, vel, s[_ACC1], forces, y0, v0, *c[:15])
         retainer = forces[n]
-        energy = chain_energy(pos, vel, y0, c)
+        energy = chain_energy(
+            pos, vel, y0, n, valve_mass, coil_mass, rate, preload, gap, kc, k, kz, depth
+        )
         power = positive_part(drive) * v0
         if m == 0:
             energy0 = energy
