@@ -128,7 +128,7 @@ def resume_run(run_id: str, outputs: Path | None = None, progress: bool = True) 
         raise RunStateError(msg)
     try:
         if not lock.holds(folder):
-            raise RunStateError(f"run {row['run_id']} was moved by another process: not resumed")
+            raise RunNotFound(f"run {row['run_id']} was moved by another process: not resumed")
         record = read_run_record(folder / "run.json")
         record.folder = str(folder)  # where it was found (a copied tree records another)
         if record.status == "finished":

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from studies.common import labels
-from studies.common.errors import RunStateError, StudyError
+from studies.common.errors import RunNotFound, RunStateError, StudyError
 from studies.tracking import registry, store, trash
 from studies.tracking.liveness import is_locked, lock_folder
 from studies.tracking.registry_file import writing
@@ -68,7 +68,7 @@ def remove_run(outputs: Path, row: dict[str, Any], force: bool = False) -> Path 
         raise RunStateError(f"run {run_id} is still running (its folder is locked): not removed")
     with lock:
         if not lock.holds(folder):
-            raise RunStateError(f"run {run_id} was moved by another process meanwhile: not removed")
+            raise RunNotFound(f"run {run_id} was moved by another process meanwhile: not removed")
         record = read_record(folder)
         if record is not None and store.liveness(record) == "running":
             raise RunStateError(f"run {run_id} is still running: not removed")
@@ -94,7 +94,7 @@ def restore_run(outputs: Path, ref: str) -> tuple[trash.Trashed, Path, list[str]
     except FileNotFoundError:
         lock = None
     if lock is None or not lock.holds(entry.folder):
-        raise RunStateError(f"run {entry.run_id} left the trash meanwhile: not restored")
+        raise RunNotFound(f"run {entry.run_id} left the trash meanwhile: not restored")
     with lock:
         record = read_record(entry.folder)
         if record is None:
@@ -103,7 +103,7 @@ def restore_run(outputs: Path, ref: str) -> tuple[trash.Trashed, Path, list[str]
         try:
             entry.folder.rename(folder)
         except FileNotFoundError:
-            raise RunStateError(
+            raise RunNotFound(
                 f"run {entry.run_id} left the trash meanwhile: not restored"
             ) from None
         try:
