@@ -135,6 +135,16 @@ SHAPE_CODES = {name: code for code, name in enumerate(SHAPES)}
 POLYDYNE_TOLERANCE = 1e-9
 
 
+def codes(values: np.ndarray, table: dict[str, int]) -> np.ndarray:
+    """The kernel codes of the names ``values`` (each distinct name looked up once; a column
+    of one name costs one comparison per value)."""
+    values = np.asarray(values)
+    if values.size and (values.strides[0] == 0 or (values == values.flat[0]).all()):
+        return np.full(values.size, table[str(values.flat[0])], dtype=np.int64)
+    distinct, inverse = np.unique(values.astype(str), return_inverse=True)
+    return np.array([table[name] for name in distinct.tolist()], dtype=np.int64)[inverse.ravel()]
+
+
 def polydyne_problems(c: np.ndarray) -> list[str]:
     """Why polydyne coefficients c_k of f(x) = Σ c_k x^k are not a rise law (empty if they are)."""
     if c.size > lift_laws.NCOEF:

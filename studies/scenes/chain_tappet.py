@@ -18,8 +18,9 @@ import numpy as np
 from engine_kernels.cam import kinematics as cb
 from engine_kernels.cam import lift_laws, multi_segment
 from engine_kernels.valvetrain import rocker, rocker_batches
-from studies.scenes.cam_laws import LAW_CODES, SHAPE_CODES
-from studies.scenes.checks import PointProblems, more_concave_line
+from studies.scenes import cam_radius
+from studies.scenes.cam_laws import LAW_CODES, SHAPE_CODES, codes
+from studies.scenes.checks import PointProblems, more_concave_line, take
 
 HALF_TURN_DEG = 180.0
 ADVICE_STEP_DEG = 0.5
@@ -62,7 +63,10 @@ def geometry_row(points: dict[str, np.ndarray], i: int) -> np.ndarray:
 def geometry_rows(points: dict[str, np.ndarray], idx: np.ndarray) -> np.ndarray:
     """Rocker geometries of design points ``idx``, one row each (``rocker.G_*`` columns) [m]."""
     names = rocker.ROCKER_GEOMETRY_NAMES
-    return np.stack([np.asarray(points[name], dtype=float)[idx] for name in names], axis=1)
+    rows = np.empty((len(idx), len(names)))
+    for column, name in enumerate(names):
+        rows[:, column] = take(points[name], idx)
+    return rows
 
 
 def nose_tappet_lift(points: dict[str, np.ndarray], i: int) -> float:
@@ -73,20 +77,14 @@ def nose_tappet_lift(points: dict[str, np.ndarray], i: int) -> float:
 def nose_tappet_lifts(points: dict[str, np.ndarray], idx: np.ndarray) -> np.ndarray:
     """:func:`nose_tappet_lift` of design points ``idx`` in one kernel call [m]."""
     out = np.empty(len(idx))
-    lift = np.ascontiguousarray(np.asarray(points["valve_lift"], dtype=float)[idx])
+    lift = np.ascontiguousarray(take(points["valve_lift"], idx), dtype=float)
     rocker_batches.tappet_lift_for_valve_lift_batch(lift, geometry_rows(points, idx), out)
     return out
 
 
-def codes(values: np.ndarray, table: dict[str, int]) -> np.ndarray:
-    """The kernel codes of the names ``values`` (each distinct name looked up once)."""
-    names, inverse = np.unique(np.asarray(values).astype(str), return_inverse=True)
-    return np.array([table[name] for name in names.tolist()], dtype=np.int64)[inverse.ravel()]
-
-
 def shape_codes(points: dict[str, np.ndarray], idx: np.ndarray) -> np.ndarray:
     """Six-segment shape codes of design points ``idx``, shape (len(idx), 6)."""
-    columns = [codes(points[f"seg{k}_shape"][idx], SHAPE_CODES) for k in range(1, 7)]
+    columns = [codes(take(points[f"seg{k}_shape"], idx), SHAPE_CODES) for k in range(1, 7)]
     return np.stack(columns, axis=1).reshape(len(idx), multi_segment.N_SEGMENTS)
 
 
@@ -98,11 +96,12 @@ def tappet_parameters(
     n = len(idx)
 
     def column(name: str) -> np.ndarray:
-        return np.asarray(points[name], dtype=float)[idx]
+        return take(points[name], idx).astype(float, copy=False)
 
     params = np.zeros((n, cb.N_PARAMS))
-    six = np.asarray(points["law"])[idx] == "six_segment"
-    params[:, cb.P_LAW] = codes(points["law"][idx], LAW_CODES)
+    law = codes(take(points["law"], idx), LAW_CODES)
+    six = law == LAW_CODES["six_segment"]
+    params[:, cb.P_LAW] = law
     params[:, cb.P_CAM_SPEED] = 1.0
     params[:, cb.P_BASE_RADIUS] = column("base_radius")
     params[:, cb.P_LIFT] = nose - np.where(six, column("ramp_height"), 0.0)
@@ -118,7 +117,7 @@ def tappet_parameters(
         params[:, cb.P_SEG_ACCEL0 + k] = column(f"seg{k + 1}_accel")
         params[:, cb.P_SEG_AMP0 + k] = column(f"seg{k + 1}_amplitude")
     coeffs = np.zeros((n, lift_laws.NCOEF))
-    given = np.asarray(points["polydyne_coefficients"], dtype=float)[idx]
+    given = take(points["polydyne_coefficients"], idx).astype(float, copy=False)
     given = given.reshape(n, -1)[:, : lift_laws.NCOEF]
     coeffs[:, : given.shape[1]] = given
     return params, shape_codes(points, idx), coeffs
@@ -149,7 +148,7 @@ def concave_chains(
     A standard rise law scales as h'' ∝ lift/β², so its smallest radius of curvature rises
     with the rise angle β: bisections side by side find the rise angle from which each listed
     law is convex."""
-    radius = min_radii(points, first, ADVICE_STEP_DEG)
+    radius, scanned = min_radii(points, first, ADVICE_STEP_DEG)
     concave = np.flatnonzero(radius <= 0.0)
     listed = concave[:LISTED_CHAINS]
     members = {int(g): np.flatnonzero(chain == g) for g in listed}
@@ -172,35 +171,27 @@ def concave_chains(
         return found.messages()
     sizes = np.bincount(chain, minlength=first.size)
     more = more_concave_line(rest, sizes, radius * 1e3, "these points will not run either")
-    return [*found.messages(), more]
+    return [*found.messages(), more + scanned]
 
 
 def min_radii(
     points: dict[str, np.ndarray], idx: np.ndarray, spacing: float, nose: np.ndarray | None = None
-) -> np.ndarray:
+) -> tuple[np.ndarray, str]:
     """Smallest radius of curvature r0 + h + h'' [m] of the tappet laws of design points
     ``idx`` on a tappet-angle grid of ``spacing`` [deg] (``nose`` [m], their tappet nose
-    lifts, if known: they do not depend on the rise angle), in one kernel call per kind of law
-    that keeps no curves (O(len(idx)) memory).
-
-    A rise-return law is the base circle (h = h'' = 0, so ρ = r0 exactly) beyond its rise
-    angle: those laws are evaluated only on the grid nodes within their largest rise angle, and
-    r0 joins the minimum when nodes were left out (the value the whole grid gives)."""
-    phi = np.radians(grid_deg(-HALF_TURN_DEG, spacing, HALF_TURN_DEG))
+    lifts, if known: they do not depend on the rise angle), and what to say if some were
+    scanned coarser (:func:`studies.scenes.cam_radius.min_radii`: O(len(idx)) memory)."""
     nose = nose_tappet_lifts(points, idx) if nose is None else nose
-    params, shapes, coeffs = tappet_parameters(points, idx, nose)
-    out = np.empty(len(idx))
-    six = params[:, cb.P_LAW] == LAW_CODES["six_segment"]
-    beta = params[:, cb.P_RISE_ANGLE]
-    for rows in (np.flatnonzero(six), np.flatnonzero(~six)):
-        window = phi
-        if rows.size and not six[rows[0]] and (beta[rows] > 0.0).all():
-            window = phi[np.abs(phi) <= beta[rows].max()]
-        radius = np.empty(rows.size)
-        cb.min_radius_of_curvature_batch(params[rows], shapes[rows], coeffs[rows], window, radius)
-        base = params[rows, cb.P_BASE_RADIUS]
-        out[rows] = np.minimum(radius, base) if window.size < phi.size else radius
-    return out
+    law = codes(take(points["law"], idx), LAW_CODES)
+    return cam_radius.min_radii(
+        law,
+        nose,
+        take(points["rise_angle"], idx).astype(float),
+        take(points["base_radius"], idx).astype(float),
+        take(points["polydyne_coefficients"], idx),
+        lambda some: tappet_parameters(points, idx[some], nose[some]),
+        spacing,
+    )
 
 
 def _convex_from(points: dict[str, np.ndarray], idx: np.ndarray) -> list[str]:
@@ -214,7 +205,7 @@ def _convex_from(points: dict[str, np.ndarray], idx: np.ndarray) -> list[str]:
         some = {name: np.asarray(values)[idx[which]] for name, values in points.items()}
         some["rise_angle"] = np.radians(beta_deg)
         every = np.arange(len(which))
-        return min_radii(some, every, ADVICE_STEP_DEG, nose[which]) > 0.0
+        return min_radii(some, every, ADVICE_STEP_DEG, nose[which])[0] > 0.0
 
     every = np.arange(len(idx))
     high = np.full(len(idx), ADVICE_LIMIT_DEG)

@@ -120,7 +120,8 @@ def groups_of(indices: np.ndarray, columns: Sequence[np.ndarray]) -> list[tuple[
         return []
     if not columns:
         return [(int(indices[0]), indices)]
-    first, inverse = distinct([np.asarray(c)[indices] for c in columns])
+    whole = indices.size == len(columns[0]) and bool((indices == np.arange(indices.size)).all())
+    first, inverse = distinct([np.asarray(c) if whole else take(c, indices) for c in columns])
     order = np.argsort(inverse, kind="stable")
     bounds = np.cumsum(np.bincount(inverse, minlength=first.size))[:-1]
     members = np.split(indices[order], bounds)
@@ -149,6 +150,20 @@ def distinct(columns: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     rank = np.empty_like(order)
     rank[order] = np.arange(order.size)
     return firsts[order], rank[group]
+
+
+def take(values: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """``values[idx]`` along the first axis; a column broadcast from one value (a fixed
+    parameter, :func:`studies.define.plan.plan_study`) stays a broadcast view: O(1)."""
+    values = np.asarray(values)
+    if values.strides and values.strides[0] == 0:
+        return np.broadcast_to(values[:1], (len(idx), *values.shape[1:]))
+    return values[idx]
+
+
+def take_points(points: dict[str, np.ndarray], idx: np.ndarray) -> dict[str, np.ndarray]:
+    """Every column of ``points`` at the design points ``idx`` (:func:`take`)."""
+    return {name: take(values, idx) for name, values in points.items()}
 
 
 def _constant(values: np.ndarray) -> bool:

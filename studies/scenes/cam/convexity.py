@@ -15,7 +15,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from studies.scenes.checks import PointProblems, distinct, more_concave_line
+from studies.scenes import cam_radius
+from studies.scenes.cam.scene import kernel_inputs
+from studies.scenes.cam_laws import LAW_CODES, codes
+from studies.scenes.checks import PointProblems, distinct, more_concave_line, take_points
 
 if TYPE_CHECKING:
     from studies.scenes.base import Scene
@@ -36,11 +39,6 @@ LISTED_CAMS = 10
 """At most this many concave cams are warned one by one, each with a rise-angle search; the
 others are counted in one line (a check of 10⁴ points stays short and fast)."""
 ADVICE_RESOLUTION_DEG = 0.01  # the advice is rounded up to 0.1°
-SCAN_BUDGET = 4_000_000
-"""Cam angles × distinct shapes the check evaluates at most: beyond it the shapes are scanned
-on a coarser grid (at most :data:`COARSEST_SCAN_DEG`), so ``check`` stays fast at 10⁴ points;
-``run`` computes every point on the study's own grid whatever the check saw."""
-COARSEST_SCAN_DEG = 2.0
 NO_ADVICE = ("six_segment", "table")  # their shape does not scale with the rise angle alone
 MM = 1e3
 
@@ -52,9 +50,8 @@ def concave_cams(
     one line counting the rest; O(N) grouping, then one kernel call over the distinct cam
     shapes and one per bisection step of the advice."""
     first, shape = _distinct(points)
-    shapes = {name: values[first] for name, values in points.items()}
-    settings, scanned = _scan_settings(settings, len(first))
-    radius = _min_radius(scene, shapes, settings)
+    shapes = take_points(points, first)
+    radius, scanned = _min_radii(scene, shapes, settings)
     concave = np.flatnonzero(radius <= 0.0)
     listed = concave[:LISTED_CAMS]
     advised = [int(g) for g in listed if str(shapes["law"][g]) not in NO_ADVICE]
@@ -80,14 +77,31 @@ def concave_cams(
     return [*found.messages(), more_concave_line(rest, sizes, radius, consequence) + scanned]
 
 
-def _scan_settings(settings: dict[str, Any], shapes: int) -> tuple[dict[str, Any], str]:
-    """The settings of the convexity scan, on a grid coarse enough for :data:`SCAN_BUDGET`,
-    and what to say when it is coarser than the study's own."""
-    step = math.radians(min(360.0 * shapes / SCAN_BUDGET, COARSEST_SCAN_DEG))
-    if step <= settings["angle_step"]:
-        return settings, ""
-    said = f" (scanned every {math.degrees(step):.2g} degree for {shapes} cam shapes)"
-    return settings | {"angle_step": step}, said
+def _min_radii(
+    scene: Scene, shapes: dict[str, np.ndarray], settings: dict[str, Any]
+) -> tuple[np.ndarray, str]:
+    """min ρ [mm] of every cam shape on the study's angle grid: the kernel laws through
+    :func:`studies.scenes.cam_radius.min_radii` (rise laws by their shape groups), lift
+    tables through the scene, both coarser beyond the scan budget (and what to say then)."""
+    step = math.degrees(settings["angle_step"])
+    table = shapes["law"] == "table"
+    radius = np.empty(table.size)
+    kernel = take_points(shapes, np.flatnonzero(~table)) if table.any() else shapes
+    radius[~table], scanned = cam_radius.min_radii(
+        codes(kernel["law"], LAW_CODES),
+        np.asarray(kernel["lift"], dtype=float),
+        np.asarray(kernel["rise_angle"], dtype=float),
+        np.asarray(kernel["base_radius"], dtype=float),
+        kernel["polydyne_coefficients"],
+        lambda some: kernel_inputs(take_points(kernel, some)),
+        step,
+    )
+    radius[~table] *= MM
+    if table.any():
+        coarse = cam_radius.scan_step_deg(int(table.sum()), step)
+        tables = take_points(shapes, np.flatnonzero(table))
+        radius[table] = _min_radius(scene, tables, settings | {"angle_step": math.radians(coarse)})
+    return radius, scanned
 
 
 def _distinct(points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:

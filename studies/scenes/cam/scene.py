@@ -30,7 +30,7 @@ from studies.scenes.cam.parameters import (
     RESPONSES,
     SETTINGS,
 )
-from studies.scenes.cam_laws import LAW_CODES, SHAPE_CODES, polydyne_problems
+from studies.scenes.cam_laws import LAW_CODES, SHAPE_CODES, codes, polydyne_problems
 from studies.scenes.checks import checked_groups
 
 if TYPE_CHECKING:
@@ -221,13 +221,11 @@ class CamScene(Scene):
         responses: list[str],
         curves: list[str],
     ) -> SceneOutput:
+        params, shapes, coeffs = kernel_inputs(points)
         ctx: dict[str, Any] = {
-            "params": _pack(points),
-            "shapes": np.array(
-                [[SHAPE_CODES[s] for s in points[f"seg{k}_shape"]] for k in range(1, 7)],
-                dtype=np.int64,
-            ).T.copy(),
-            "coeffs": _coefficients(points["polydyne_coefficients"]),
+            "params": params,
+            "shapes": shapes,
+            "coeffs": coeffs,
             "theta": np.deg2rad(self.curve_coordinate(settings)),
             "points": points,
             "settings": settings,
@@ -283,14 +281,18 @@ class CamScene(Scene):
         ctx |= {"load": load, "load_curves": load_curves}
 
 
+def kernel_inputs(points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``cam_kinematics_batch`` inputs of the design points: parameters (SI), six-segment shape
+    codes and polydyne coefficients, one row per point."""
+    shapes = np.stack([codes(points[f"seg{k}_shape"], SHAPE_CODES) for k in range(1, 7)], axis=1)
+    return _pack(points), shapes, _coefficients(points["polydyne_coefficients"])
+
+
 def _pack(points: dict[str, np.ndarray]) -> np.ndarray:
     n = len(points["law"])
     params = np.zeros((n, cb.N_PARAMS))
     for name, col in _COLUMN.items():
-        if name == "law":
-            params[:, col] = [LAW_CODES[v] for v in points["law"]]
-        else:
-            params[:, col] = points[name]
+        params[:, col] = codes(points["law"], LAW_CODES) if name == "law" else points[name]
     table = points["law"] == "table"
     params[table, cb.P_LIFT] = 0.0
     return params
