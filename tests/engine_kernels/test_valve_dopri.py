@@ -16,6 +16,7 @@ import pytest
 
 from engine_kernels import valvetrain as valve
 from engine_kernels.valvetrain.dopri import integrate as dopri
+from engine_kernels.valvetrain.dopri import jump as dopri_jump
 from studies.scenes.valve.reference.valve_ivp import table_excitation, valve_reference
 from studies.scenes.valve.reference.valve_outputs import reference_outputs
 
@@ -193,3 +194,47 @@ def test_bounces_and_jump_start_match_reference():
     assert out[valve.O_JUMP_START] == pytest.approx(separation, abs=1e-4)
     out, _, _ = run(fast, 1e-9)
     assert out[valve.O_JUMP_START] == pytest.approx(separation, abs=1e-6)
+
+
+def test_jump_speed_by_dopri_is_the_rigid_separation_speed():
+    # Stiff (10x reference), well-damped drive (as test_valve.py's RK4 search): separation
+    # starts at the rigid closed form, where the spring force Ps0 + ks Y falls short of
+    # M |Y''| ω² at the nose (Y = 2H, Y'' = −H w²), within 2 %. And the search's answer is
+    # the upper end of its bracket: the valve separates there and not 2 search tolerances below.
+    row = params(drive_stiffness=1e8, drive_damping=math.sqrt(1e8 * MASS))
+    critical = math.sqrt(
+        (row[valve.P_PRELOAD] + 2 * row[valve.P_SPRING_RATE] * HEIGHT)
+        / (row[valve.P_MASS] * HEIGHT * WAVE**2)
+    )
+    table, step, start = excitation()
+    grid = math.radians(GRID_DEG)
+    speed, code = dopri_jump.dopri_jump_speed(
+        table, step, start, grid, row, 1e-7, 0.3 * critical, 3.0 * critical, 12, 1e-3
+    )
+    assert code == valve.JUMP_FOUND
+    assert speed == pytest.approx(critical, rel=0.02)
+    for factor, separates in ((1.0, True), (1.0 - 2e-3, False)):
+        at = row.copy()
+        at[valve.P_SPEED] = factor * speed
+        out, _, _ = run(at, 1e-7)
+        assert (out[valve.O_JUMP_DURATION] > 0.0) == separates
+
+
+def test_jump_speed_by_dopri_reports_a_failed_run():
+    # An invalid row (zero seat stiffness) makes the first run fail: the search says so
+    # (JUMP_RUN_FAILED, NaN speed) instead of scanning on.
+    table, step, start = excitation()
+    speed, code = dopri_jump.dopri_jump_speed(
+        table,
+        step,
+        start,
+        math.radians(GRID_DEG),
+        params(seat_stiffness=0.0),
+        1e-7,
+        100.0,
+        1000.0,
+        4,
+        1e-3,
+    )
+    assert code == valve.JUMP_RUN_FAILED
+    assert math.isnan(speed)

@@ -139,10 +139,12 @@ def test_quasi_static_lift_at_low_speed() -> None:
     assert (ev.scalars["follows_cam"] == 1).all()
 
 
-def test_jump_speed_matches_the_rigid_drive_closed_form() -> None:
+@pytest.mark.parametrize("integrator", ["lanes", "dopri"])
+def test_jump_speed_matches_the_rigid_drive_closed_form(integrator: str) -> None:
     # A stiff, critically damped drive separates where the spring can no longer decelerate
     # the mass: ω_c² = min over Y'' < 0 of (Ps0 + ks Y)/(M |Y''|), evaluated on the chain's Y
     # with numpy second differences (the nose region; the flanks carry no negative Y'').
+    # The search runs the study's integrator (issue #26 item 5), dopri's on its own table.
     theta, lift = theoretical_lift("")
     curvature = np.gradient(np.gradient(lift, theta), theta)
     stiffness = 1e8
@@ -152,6 +154,7 @@ def test_jump_speed_matches_the_rigid_drive_closed_form() -> None:
             '["jump_speed", "jump_speed_status"]',
             parameters=f"drive_stiffness = {stiffness / 1e3}\ndrive_damping = {damping}",
             factors="[factors.spring_preload]\nlevels = [205.8, 300.0]",
+            settings=f'integrator = "{integrator}"',
         )
     )
     decelerating = curvature < 0.0

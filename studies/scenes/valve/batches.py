@@ -10,6 +10,7 @@ import numpy as np
 
 from engine_kernels import valvetrain as valve
 from engine_kernels.valvetrain.dopri import integrate as valve_dopri
+from engine_kernels.valvetrain.dopri.jump import dopri_jump_speed
 from engine_kernels.valvetrain.valve import lane_batch as valve_lanes
 from studies.scenes.chain import step_deg
 from studies.scenes.checks import PointProblems
@@ -143,6 +144,34 @@ def dopri_lifts(
         table, table_step, start, grid, rows, tolerance, longest, DOPRI_MAX_STEPS, out, lifts
     )
     return out, lifts
+
+
+def dopri_jump_speeds(
+    excitation: tuple[np.ndarray, float, float],
+    rows: np.ndarray,
+    grid_deg: float,
+    tolerance: float,
+    settings: dict[str, Any],
+    scan_points: int,
+) -> np.ndarray:
+    """(jump speed [rad/s], ``JUMP_*`` code) of every row, each speed of the search one
+    ``dopri`` run (see :func:`integrate_dopri`; ``tolerance``: lift tolerance per step [m])."""
+    table, table_step, start = excitation
+    found = np.empty((rows.shape[0], 2))
+    for j, row in enumerate(rows):
+        found[j] = dopri_jump_speed(
+            table,
+            table_step,
+            start,
+            math.radians(grid_deg),
+            row,
+            tolerance,
+            settings["jump_speed_low"],
+            settings["jump_speed_high"],
+            scan_points,
+            settings["jump_speed_tolerance"],
+        )
+    return found
 
 
 def jump_setting_problems(settings: dict[str, Any]) -> list[str]:

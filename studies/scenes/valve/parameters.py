@@ -25,8 +25,9 @@ rate 30 N/mm, seat stiffness 5e4 N/mm with 900 N s/m of seat damping, no externa
   down a ladder that halves the step, the table spacing and the sub-step together (at most
   ``MAX_HALVINGS`` times) until the bar is within it. The results of the first level that
   meets it are reported (``angle_step_used``, ``integrator_used``, ``tolerance_met``); see
-  :mod:`studies.scenes.valve.error_bar`. The jump-speed search always uses ``angle_step``
-  (and plain RK4 when the integrator is ``dopri``).
+  :mod:`studies.scenes.valve.error_bar`. The jump-speed search runs the chosen integrator
+  on the ``angle_step`` grid: RK4 at ``angle_step`` (switch-aware when chosen), or ``dopri``
+  on its own table at its per-step tolerance (:mod:`engine_kernels.valvetrain.dopri.jump`).
 
 **Error bars**: asking for ``error_estimate`` runs each point once more with every length
 halved; the bar is three times the largest lift difference over the grid. Asking for a bar of

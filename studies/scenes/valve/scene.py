@@ -43,6 +43,7 @@ from studies.scenes.valve import spring, work
 from studies.scenes.valve.batches import (
     N_CURVES,
     N_OUT,
+    dopri_jump_speeds,
     integrate,
     integrate_dopri,
     jump_setting_problems,
@@ -318,8 +319,20 @@ class ValveScene(ChainScene):
             if not self.chain_valid(ctx, key):
                 ctx["jump"][idx, 1] = JUMP_NOT_RUN
                 continue
-            table, table_step, start = self.excitation(ctx, key, step_deg(settings["angle_step"]))
             chained = spring.uses_chain(settings)
+            if settings["integrator"] == DOPRI and not chained:  # the search honours dopri
+                tolerance = settings["tolerance"]
+                table_deg = 2 * dopri_table_deg(tolerance)
+                ctx["jump"][idx] = dopri_jump_speeds(
+                    self.excitation(ctx, key, table_deg, unclipped=True),
+                    valve_rows(ctx["points"], idx),
+                    step_deg(settings["angle_step"]),
+                    dopri_tolerance(tolerance),
+                    settings,
+                    JUMP_SCAN_POINTS,
+                )
+                continue
+            table, table_step, start = self.excitation(ctx, key, step_deg(settings["angle_step"]))
             rows = self.spring_rows(ctx, idx) if chained else valve_rows(ctx["points"], idx)
             search = chain_jump_speed if chained else valve.jump_speed
             for i, row in zip(idx, rows, strict=True):
