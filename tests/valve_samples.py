@@ -114,7 +114,7 @@ def reference_of(
     lift = np.full((which.size, axis.size), np.nan)
     outputs = np.full((which.size, len(OUTPUTS)), np.nan)
     for key, idx in ctx["groups"].items():
-        if not scene.chain_valid(ctx, key):
+        if not scene.linkage_valid(ctx, key):
             continue
         table, step, start = scene.excitation(
             ctx, key, 2.0 * acc.REFERENCE_TABLE_DEG, unclipped=True

@@ -1,7 +1,7 @@
 """Scene ``rocker``: OHC cam with a variable-ratio rocker, valve kinematics (physics §3).
 
 The chain itself (tappet law, rocker kinematics, caches, checks) is
-:class:`studies.scenes.chain.ChainScene`, which the ``valve`` scene builds on too; this scene
+:class:`studies.scenes.linkage.scene.LinkageScene`, which the ``valve`` scene builds on too; this scene
 adds what a user of the kinematics reads: the valve-lift figure and the invalid-chain table.
 """
 
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from studies.scenes.chain import ChainScene
+from studies.scenes.linkage.scene import LinkageScene
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -17,15 +17,15 @@ if TYPE_CHECKING:
     from studies.scenes.base import FigureBuilder
 
 
-class RockerScene(ChainScene):
-    """The kinematic chain as a scene of its own (declarations in :mod:`~studies.scenes.chain`)."""
+class RockerScene(LinkageScene):
+    """The kinematic chain as a scene of its own (declarations in :mod:`~studies.scenes.linkage.scene`)."""
 
     def figures(self) -> dict[str, FigureBuilder]:
-        from studies.scenes.chain_figures import valve_lift_figure  # noqa: PLC0415
+        from studies.scenes.linkage.figures import valve_lift_figure  # noqa: PLC0415
 
         return {"valve_lift": valve_lift_figure}
 
     def summaries(self, ds: xr.Dataset) -> list[str]:
-        from studies.scenes.chain_summaries import chain_status_summary  # noqa: PLC0415  (xarray on use)
+        from studies.scenes.linkage.summaries import linkage_status_summary  # noqa: PLC0415  (xarray on use)
 
-        return chain_status_summary(ds)
+        return linkage_status_summary(ds)

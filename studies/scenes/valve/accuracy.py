@@ -24,7 +24,7 @@ import numpy as np
 
 from engine_kernels import valvetrain as valve
 from studies.scenes.base import Parameter, Response, SceneOutput
-from studies.scenes.chain import CACHE_SIZE, BoundedCache, angle_step_problem, grid_deg, step_deg
+from studies.scenes.linkage.scene import CACHE_SIZE, BoundedCache, angle_step_problem, grid_deg, step_deg
 from studies.scenes.checks import PointProblems
 from studies.scenes.valve import accuracy_reference as acc
 from studies.scenes.valve.error_bar import tolerance_rungs
@@ -131,7 +131,7 @@ class ValveAccuracyScene(ValveScene):
             problem = angle_step_problem(step, "angle_step")
             if problem:
                 found.add(i, problem)
-        problems = found.messages() + self.chain_point_problems(points)
+        problems = found.messages() + self.linkage_point_problems(points)
         return (
             problems + jump_setting_problems(settings) + stability_problems(points, settings, steps)
         )
@@ -166,7 +166,7 @@ class ValveAccuracyScene(ValveScene):
         spacing = settings["reference_spacing"]
         ctx["reference_error"] = np.full(ctx["n"], np.nan)
         for key, idx in ctx["groups"].items():
-            if not self.chain_valid(ctx, key):
+            if not self.linkage_valid(ctx, key):
                 continue
             fine = self.excitation(ctx, key, 2.0 * acc.REFERENCE_TABLE_DEG, unclipped=True)
             window = self.window(ctx, key)
@@ -207,7 +207,7 @@ class ValveAccuracyScene(ValveScene):
         ctx["cost"] = np.full(ctx["n"], np.nan)
         ctx["cost_iqr"] = np.full(ctx["n"], np.nan)
         for key, idx in ctx["groups"].items():
-            if not self.chain_valid(ctx, key):
+            if not self.linkage_valid(ctx, key):
                 continue
             if settings["tolerance"] > 0.0:
                 run = partial(self.ladder_run, ctx, key)

@@ -20,8 +20,8 @@ from __future__ import annotations
 import numpy as np
 
 from engine_kernels.valvetrain import rocker
-from studies.scenes.chain import SIDES, grid_deg
-from studies.scenes.chain_tappet import TappetTable, geometry_row
+from studies.scenes.linkage.scene import SIDES, grid_deg
+from studies.scenes.linkage.tappet import TappetTable, geometry_row
 
 
 def unclipped_valve_lift(

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from studies.scenes.base import Parameter, Response, SceneOutput
-from studies.scenes.chain import step_deg
+from studies.scenes.linkage.scene import step_deg
 from studies.scenes.valve import accuracy_reference as acc
 from studies.scenes.valve import spring
 from studies.scenes.valve.parameters import PARAMETERS, RESPONSES, SETTINGS
@@ -118,7 +118,7 @@ class ValveSpringLadderScene(ValveScene):
         ctx["cost_iqr"] = np.full(ctx["n"], np.nan)
         step = step_deg(settings["angle_step"])
         for key, idx in ctx["groups"].items():
-            if not self.chain_valid(ctx, key):
+            if not self.linkage_valid(ctx, key):
                 continue
             excitation = self.excitation(ctx, key, step)
             rows = self.spring_rows(ctx, idx) if chained else valve_rows(ctx["points"], idx)

@@ -49,10 +49,10 @@ import numpy as np
 
 from engine_kernels import valvetrain as valve
 from studies.scenes.base import Curve, Parameter, Response
-from studies.scenes.chain_parameters import CURVES as ROCKER_CURVES
-from studies.scenes.chain_parameters import PARAMETERS as ROCKER_PARAMETERS
-from studies.scenes.chain_parameters import RESPONSES as ROCKER_RESPONSES
-from studies.scenes.chain_parameters import TAPPET_STEP
+from studies.scenes.linkage.parameters import CURVES as ROCKER_CURVES
+from studies.scenes.linkage.parameters import PARAMETERS as ROCKER_PARAMETERS
+from studies.scenes.linkage.parameters import RESPONSES as ROCKER_RESPONSES
+from studies.scenes.linkage.parameters import TAPPET_STEP
 from studies.scenes.valve.spring_parameters import (
     SPRING_PARAMETERS,
     SPRING_SETTINGS,

@@ -1,7 +1,7 @@
 """Scene ``valve``: single-DOF valve-train dynamics driven through the rocker (physics §4).
 
 The excitation is the theoretical valve lift Y(θ) of the ``rocker`` scene's chain, so this
-scene extends :class:`~studies.scenes.chain.ChainScene` and adds two stages:
+scene extends :class:`~studies.scenes.linkage.scene.LinkageScene` and adds two stages:
 
 * ``dynamics`` — fixed-step RK4 of [V2] over the integration window (valve opening − 2° …
   closure + ``closing_window``, snapped outward to whole multiples of 2°), with the integrator
@@ -29,16 +29,16 @@ import numpy as np
 from engine_kernels import valvetrain as valve
 from engine_kernels.valvetrain import rocker
 from engine_kernels.valvetrain.spring_chain.jump import chain_jump_speed
-from studies.scenes.chain import (
+from studies.scenes.linkage.scene import (
     CACHE_SIZE,
     GRID_UNIT_DEG,
     HALF_TURN_DEG,
     BoundedCache,
-    ChainScene,
+    LinkageScene,
     open_range,
     step_deg,
 )
-from studies.scenes.chain_parameters import RESPONSES as ROCKER_RESPONSES
+from studies.scenes.linkage.parameters import RESPONSES as ROCKER_RESPONSES
 from studies.scenes.valve import spring, work
 from studies.scenes.valve.batches import (
     N_CURVES,
@@ -83,7 +83,7 @@ BAR_RESPONSES = (
 KINEMATIC_RESPONSES = frozenset(r.name for r in ROCKER_RESPONSES)
 
 
-class ValveScene(ChainScene):
+class ValveScene(LinkageScene):
     name = "valve"
     seconds_per_point = 1e-3
     work_estimate = staticmethod(work.work_estimate)  # type: ignore[assignment]
@@ -97,7 +97,7 @@ class ValveScene(ChainScene):
 
     # --- outputs beside the generic ones -----------------------------------------------------
     def figures(self) -> dict[str, FigureBuilder]:
-        from studies.scenes.chain_figures import valve_lift_figure  # noqa: PLC0415
+        from studies.scenes.linkage.figures import valve_lift_figure  # noqa: PLC0415
         from studies.scenes.valve.figures import jump_speed_map_figure  # noqa: PLC0415
         from studies.scenes.valve.surge_figures import surge_sweep_figure  # noqa: PLC0415
 
@@ -113,10 +113,10 @@ class ValveScene(ChainScene):
         return {"valve": bench_valve}
 
     def summaries(self, ds: xr.Dataset) -> list[str]:
-        from studies.scenes.chain_summaries import chain_status_summary  # noqa: PLC0415
+        from studies.scenes.linkage.summaries import linkage_status_summary  # noqa: PLC0415
         from studies.scenes.valve.summaries import dynamics_status_summary  # noqa: PLC0415
 
-        return chain_status_summary(ds) + dynamics_status_summary(ds)
+        return linkage_status_summary(ds) + dynamics_status_summary(ds)
 
     def __init__(self) -> None:
         super().__init__()
@@ -141,7 +141,7 @@ class ValveScene(ChainScene):
         spacing = step_deg(ctx["settings"]["tappet_step"])
 
         def make() -> tuple[float, float]:
-            probe = self.chain(ctx, key, (-HALF_TURN_DEG, WINDOW_PROBE_DEG, HALF_TURN_DEG))
+            probe = self.linkage(ctx, key, (-HALF_TURN_DEG, WINDOW_PROBE_DEG, HALF_TURN_DEG))
             opening, closing = open_range(probe)
             if math.isnan(opening):
                 return -HALF_TURN_DEG, HALF_TURN_DEG
@@ -173,17 +173,17 @@ class ValveScene(ChainScene):
         grid = (start, step / 2.0, stop)
         if unclipped:
             i = int(ctx["groups"][key][0])
-            table = self.chain_cache.get(
+            table = self.linkage_cache.get(
                 ("unclipped", key, step_deg(ctx["settings"]["tappet_step"]), grid),
                 lambda: unclipped_valve_lift(ctx["points"], i, self.tappet_table(ctx, key), grid),
             )
         else:
-            chain = self.chain(ctx, key, grid)
+            chain = self.linkage(ctx, key, grid)
             table = np.ascontiguousarray(chain.curves[: rocker.ROW_VALVE_ACCELERATION + 1])
         return table, math.radians(step / 2.0), math.radians(start)
 
-    def chain_valid(self, ctx: dict[str, Any], key: tuple) -> bool:
-        probe = self.chain(ctx, key, (-HALF_TURN_DEG, WINDOW_PROBE_DEG, HALF_TURN_DEG))
+    def linkage_valid(self, ctx: dict[str, Any], key: tuple) -> bool:
+        probe = self.linkage(ctx, key, (-HALF_TURN_DEG, WINDOW_PROBE_DEG, HALF_TURN_DEG))
         return probe.status == rocker.ROCKER_OK
 
     # --- stages ---------------------------------------------------------------------------
@@ -201,7 +201,7 @@ class ValveScene(ChainScene):
         ctx["bars"] = {name: np.full(n, np.nan) for name in names}
         ctx["method"] = np.full(n, float(INTEGRATORS.index(ctx["settings"]["integrator"])))
         for key, idx in ctx["groups"].items():
-            if not self.chain_valid(ctx, key):
+            if not self.linkage_valid(ctx, key):
                 ctx["out"][idx, valve.O_STATUS] = STATUS_NOT_RUN
                 continue
             self.run_group(ctx, key, idx, want)
@@ -315,7 +315,7 @@ class ValveScene(ChainScene):
         flags = kernel_settings(settings, settings["integrator"], False)
         ctx["jump"] = np.full((ctx["n"], 2), np.nan)
         for key, idx in ctx["groups"].items():
-            if not self.chain_valid(ctx, key):
+            if not self.linkage_valid(ctx, key):
                 ctx["jump"][idx, 1] = JUMP_NOT_RUN
                 continue
             table, table_step, start = self.excitation(ctx, key, step_deg(settings["angle_step"]))

@@ -20,7 +20,7 @@ from engine_kernels.valvetrain.spring_chain.one_case import (
     spring_chain_response,
     spring_chain_response_batch,
 )
-from studies.scenes.chain import HALF_TURN_DEG, step_deg
+from studies.scenes.linkage.scene import HALF_TURN_DEG, step_deg
 from studies.scenes.checks import PointProblems
 from studies.scenes.valve.batches import N_OUT, kernel_settings
 from studies.scenes.valve.parameters import STATUS_NOT_RUN
@@ -33,7 +33,7 @@ class SurgeHost(Protocol):
 
     def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray: ...
 
-    def chain_valid(self, ctx: dict[str, Any], key: tuple) -> bool: ...
+    def linkage_valid(self, ctx: dict[str, Any], key: tuple) -> bool: ...
 
     def spring_rows(self, ctx: dict[str, Any], idx: np.ndarray) -> np.ndarray: ...
 
@@ -228,7 +228,7 @@ def surge_stage(scene: SurgeHost, ctx: dict[str, Any]) -> None:
     step = step_deg(settings["angle_step"])
     flags = kernel_settings(settings, "rk4", False)
     for key, idx in ctx["groups"].items():
-        if not scene.chain_valid(ctx, key):
+        if not scene.linkage_valid(ctx, key):
             ctx["chain_out"][idx, sc.CO_STATUS] = STATUS_NOT_RUN
             continue
         rows = scene.spring_rows(ctx, idx)

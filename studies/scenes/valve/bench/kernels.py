@@ -20,7 +20,7 @@ from engine_kernels.valvetrain.valve import lane_batch as valve_lanes
 from studies.common.simd import host_lanes
 from studies.common.timing import best_time, best_times
 from studies.scenes.base import BenchKit
-from studies.scenes.chain import HALF_TURN_DEG, grid_deg
+from studies.scenes.linkage.scene import HALF_TURN_DEG, grid_deg
 from studies.scenes.valve.accuracy_reference import reference_lift
 from studies.scenes.valve.batches import kernel_settings, valve_rows
 from studies.scenes.valve.bench.multi_mass import chain_figures

@@ -13,7 +13,7 @@ Design points that share the cam and rocker parameters share one chain: both sta
 distinct parameter set and keep their tables in a bounded cache on the scene, so a study that
 varies only speeds or springs computes the kinematics once. A cam that is not convex, or a
 chain that does not close, is a per-point result (``chain_status``, ``cam_convex``), never an
-exception; impossible geometry is refused by :meth:`ChainScene.check_points` before anything
+exception; impossible geometry is refused by :meth:`LinkageScene.check_points` before anything
 runs.
 """
 
@@ -28,18 +28,18 @@ import numpy as np
 
 from engine_kernels.valvetrain import rocker
 from studies.scenes.base import CurveAxis, Scene, SceneOutput
-from studies.scenes.chain_checks import chain_point_problems
-from studies.scenes.chain_parameters import (
+from studies.scenes.linkage.checks import linkage_point_problems
+from studies.scenes.linkage.parameters import (
     CAM_ANGLE,
     CURVES,
     PARAMETERS,
     RESPONSES,
     SETTINGS,
 )
-from studies.scenes.chain_tappet import (
+from studies.scenes.linkage.tappet import (
     HALF_TURN_DEG,
     TappetTable,
-    concave_chains,
+    concave_linkages,
     geometry_row,
     grid_deg,
     step_deg,
@@ -82,7 +82,7 @@ class BoundedCache:
 
 
 @dataclass(frozen=True)
-class ChainCurves:
+class LinkageCurves:
     """The chain [R1]–[R6] of one parameter set on a cam-angle grid (``ROW_*`` rows, SI)."""
 
     theta_deg: np.ndarray
@@ -90,7 +90,7 @@ class ChainCurves:
     status: int
 
 
-def chain_groups(points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+def linkage_groups(points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     """The first design point of each distinct chain (its cam law and rocker parameters) and
     the chain of each design point, numbered in order of first appearance. Vectorised (O(N log
     N) over the parameters that vary): a 10⁶-point study may have 10⁶ chains."""
@@ -98,10 +98,10 @@ def chain_groups(points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]
     return distinct([coefficients, *(np.asarray(points[name]) for name in KEY_NAMES)])
 
 
-def chain_keys(points: dict[str, np.ndarray]) -> dict[tuple, np.ndarray]:
+def linkage_keys(points: dict[str, np.ndarray]) -> dict[tuple, np.ndarray]:
     """The design points of each distinct chain, keyed by the tuple of its chain parameters
     (the keys of the scene's table caches, shared across chunks)."""
-    first, chain = chain_groups(points)
+    first, chain = linkage_groups(points)
     order = np.argsort(chain, kind="stable")
     members = np.split(order, np.cumsum(np.bincount(chain, minlength=first.size))[:-1])
     coefficients = np.asarray(points["polydyne_coefficients"], dtype=float)
@@ -111,7 +111,7 @@ def chain_keys(points: dict[str, np.ndarray]) -> dict[tuple, np.ndarray]:
     }
 
 
-class ChainScene(Scene):
+class LinkageScene(Scene):
     name = "rocker"
     seconds_per_point = 2e-2
     description = "OHC cam with variable-ratio rocker: valve lift, force ratio (kinematics)"
@@ -126,7 +126,7 @@ class ChainScene(Scene):
     def __init__(self) -> None:
         super().__init__()
         self.tappet_cache = BoundedCache(CACHE_SIZE)
-        self.chain_cache = BoundedCache(CACHE_SIZE)
+        self.linkage_cache = BoundedCache(CACHE_SIZE)
         self.groups_seen: tuple[tuple[np.ndarray, ...], tuple[np.ndarray, np.ndarray]] | None = None
 
     def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray:
@@ -136,21 +136,21 @@ class ChainScene(Scene):
     # --- checks ---------------------------------------------------------------------------
     def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
         problem = angle_step_problem(settings["angle_step"], "setting angle_step")
-        return ([problem] if problem else []) + self.chain_point_problems(points)
+        return ([problem] if problem else []) + self.linkage_point_problems(points)
 
     def point_warnings(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
         """The chains whose cam is concave: their points will not run (a result, not an error).
         The last user of the chains :meth:`check_points` found: they are forgotten here."""
-        groups = self.chain_groups(points)
+        groups = self.linkage_groups(points)
         self.groups_seen = None
-        return concave_chains(points, *groups)
+        return concave_linkages(points, *groups)
 
-    def chain_point_problems(self, points: dict[str, np.ndarray]) -> list[str]:
+    def linkage_point_problems(self, points: dict[str, np.ndarray]) -> list[str]:
         """Input errors of the cam laws and rocker geometries, grouped by design points."""
-        return chain_point_problems(points, *self.chain_groups(points))
+        return linkage_point_problems(points, *self.linkage_groups(points))
 
-    def chain_groups(self, points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-        """:func:`chain_groups`, computed once for the points ``check`` and ``run`` plan with
+    def linkage_groups(self, points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        """:func:`linkage_groups`, computed once for the points ``check`` and ``run`` plan with
         (the same arrays: their checks and warnings share it)."""
         arrays = tuple(points.values())
         seen = self.groups_seen
@@ -159,7 +159,7 @@ class ChainScene(Scene):
             or len(seen[0]) != len(arrays)
             or any(a is not b for a, b in zip(seen[0], arrays, strict=True))
         ):
-            seen = self.groups_seen = (arrays, chain_groups(points))
+            seen = self.groups_seen = (arrays, linkage_groups(points))
         return seen[1]
 
     # --- evaluation -----------------------------------------------------------------------
@@ -171,7 +171,7 @@ class ChainScene(Scene):
         curves: list[str],
     ) -> dict[str, Any]:
         """What the stages share: the points, their chain keys and groups, the requests."""
-        groups = chain_keys(points)
+        groups = linkage_keys(points)
         return {
             "points": points,
             "settings": settings,
@@ -209,13 +209,13 @@ class ChainScene(Scene):
 
     def chain(
         self, ctx: dict[str, Any], key: tuple, grid: tuple[float, float, float]
-    ) -> ChainCurves:
+    ) -> LinkageCurves:
         """The chain [R1]–[R6] of ``key`` on the cam-angle grid (start, spacing, stop) [deg]."""
         table = self.tappet_table(ctx, key)
         i = int(ctx["groups"][key][0])
         spacing = step_deg(ctx["settings"]["tappet_step"])
-        return self.chain_cache.get(
-            (key, spacing, grid), lambda: _chain_curves(ctx["points"], i, table, grid)
+        return self.linkage_cache.get(
+            (key, spacing, grid), lambda: _linkage_curves(ctx["points"], i, table, grid)
         )
 
     def stage_tappet(self, ctx: dict[str, Any]) -> None:
@@ -223,7 +223,7 @@ class ChainScene(Scene):
 
     def stage_rocker(self, ctx: dict[str, Any]) -> None:
         grid = self.kinematic_grid(ctx["settings"])
-        ctx["chain"] = {key: self.chain(ctx, key, grid) for key in ctx["groups"]}
+        ctx["chain"] = {key: self.linkage(ctx, key, grid) for key in ctx["groups"]}
 
     # --- outputs --------------------------------------------------------------------------
     def scalar(self, ctx: dict[str, Any], response: str) -> np.ndarray:
@@ -248,9 +248,9 @@ class ChainScene(Scene):
         return out
 
 
-def _chain_curves(
+def _linkage_curves(
     points: dict[str, np.ndarray], i: int, table: TappetTable, grid: tuple[float, float, float]
-) -> ChainCurves:
+) -> LinkageCurves:
     theta_deg = grid_deg(*grid)
     out = np.empty((len(rocker.ROCKER_CURVE_NAMES), theta_deg.size))
     status = rocker.rocker_valve_lift(
@@ -263,10 +263,10 @@ def _chain_curves(
         np.radians(theta_deg),
         out,
     )
-    return ChainCurves(theta_deg, out, int(status))
+    return LinkageCurves(theta_deg, out, int(status))
 
 
-def open_range(chain: ChainCurves) -> tuple[float, float]:
+def open_range(chain: LinkageCurves) -> tuple[float, float]:
     """Cam angles [deg] of the first and last grid points with the valve open (NaN if none)."""
     open_idx = np.flatnonzero(chain.curves[rocker.ROW_VALVE_LIFT] > 0.0)
     if open_idx.size == 0:

@@ -10,7 +10,7 @@ from engine_kernels.valvetrain import rocker
 from studies.common.summary_tables import runs_line
 
 
-def chain_status_summary(ds: xr.Dataset) -> list[str]:
+def linkage_status_summary(ds: xr.Dataset) -> list[str]:
     """Design points whose kinematic chain is invalid, by reason (they explain NaN responses)."""
     blocks = []
     if "chain_status" in ds:

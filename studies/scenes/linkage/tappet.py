@@ -3,7 +3,7 @@
 Every design point's tappet law comes from :func:`engine_kernels.cam.kinematics.cam_kinematics_batch`
 with the nose lift that gives the target valve lift through the rocker
 (:func:`engine_kernels.valvetrain.rocker.tappet_lift_for_valve_lift`). A concave cam (r0 + h + h'' ≤ 0
-somewhere, physics §3) is a per-point result, not an error; :func:`concave_chains` says before a
+somewhere, physics §3) is a per-point result, not an error; :func:`concave_linkages` says before a
 run which points will have one and from which rise angle their law is convex.
 """
 
@@ -138,14 +138,14 @@ def tappet_table(points: dict[str, np.ndarray], i: int, spacing: float) -> Tappe
     return TappetTable(phi, law, float(nose[0]), radius)
 
 
-def concave_chains(
+def concave_linkages(
     points: dict[str, np.ndarray], first: np.ndarray, chain: np.ndarray
 ) -> list[str]:
     """Warnings for the chains whose tappet cam is concave, grouped by design points: these
     points will not run (``chain_status`` says so per point); the first
     :data:`LISTED_CHAINS` one by one, the others counted in one line. ``first`` is the first
     design point of each chain and ``chain`` the chain of each design point
-    (:func:`studies.scenes.chain.chain_groups`). One kernel call per block scans every chain.
+    (:func:`studies.scenes.linkage.scene.linkage_groups`). One kernel call per block scans every chain.
     A standard rise law scales as h'' ∝ lift/β², so its smallest radius of curvature rises
     with the rise angle β: bisections side by side find the rise angle from which each listed
     law is convex."""

@@ -15,7 +15,7 @@ import numpy as np
 
 from engine_kernels.cam import multi_segment
 from studies.scenes.cam_laws import polydyne_problems
-from studies.scenes.chain_tappet import nose_tappet_lifts, shape_codes
+from studies.scenes.linkage.tappet import nose_tappet_lifts, shape_codes
 from studies.scenes.checks import LoopOrder, fixed, groups_of
 
 MM = 1e3
@@ -23,11 +23,11 @@ MAX_EVENT_HALF_DEG = 150.0
 """Largest event half-width (rise + ramp) that leaves room for the closing window."""
 
 
-def chain_point_problems(
+def linkage_point_problems(
     points: dict[str, np.ndarray], first: np.ndarray, chain: np.ndarray
 ) -> list[str]:
     """Input errors of the chains (``first`` design point of each, ``chain`` of each design
-    point, as :func:`studies.scenes.chain.chain_groups` gives them), grouped by design points
+    point, as :func:`studies.scenes.linkage.scene.linkage_groups` gives them), grouped by design points
     (mm and deg shown)."""
     p = {name: np.asarray(values) for name, values in points.items()}
     found = LoopOrder()
