@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 
 from studies.define.plan import plan_text
+from studies.scenes.checks import point_list
 from studies.scenes.linkage import scene as linkage_scene
 from studies.scenes.linkage import tappet as linkage_tappet
-from studies.scenes.linkage.scene import linkage_groups
 from studies.scenes.linkage.checks import linkage_point_problems
 from studies.scenes.linkage.parameters import CONVEX_POLYDYNE
-from studies.scenes.checks import point_list
+from studies.scenes.linkage.scene import linkage_groups
 from study_text import scene_study
 
 N = 240

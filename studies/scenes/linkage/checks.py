@@ -15,8 +15,8 @@ import numpy as np
 
 from engine_kernels.cam import multi_segment
 from studies.scenes.cam_laws import polydyne_problems
-from studies.scenes.linkage.tappet import nose_tappet_lifts, shape_codes
 from studies.scenes.checks import LoopOrder, fixed, groups_of
+from studies.scenes.linkage.tappet import nose_tappet_lifts, shape_codes
 
 MM = 1e3
 MAX_EVENT_HALF_DEG = 150.0

@@ -28,6 +28,7 @@ import numpy as np
 
 from engine_kernels.valvetrain import rocker
 from studies.scenes.base import CurveAxis, Scene, SceneOutput
+from studies.scenes.checks import distinct
 from studies.scenes.linkage.checks import linkage_point_problems
 from studies.scenes.linkage.parameters import (
     CAM_ANGLE,
@@ -45,7 +46,6 @@ from studies.scenes.linkage.tappet import (
     step_deg,
     tappet_table,
 )
-from studies.scenes.checks import distinct
 
 MM = 1e3
 GRID_UNIT_DEG = 2.0

@@ -24,8 +24,14 @@ import numpy as np
 
 from engine_kernels import valvetrain as valve
 from studies.scenes.base import Parameter, Response, SceneOutput
-from studies.scenes.linkage.scene import CACHE_SIZE, BoundedCache, angle_step_problem, grid_deg, step_deg
 from studies.scenes.checks import PointProblems
+from studies.scenes.linkage.scene import (
+    CACHE_SIZE,
+    BoundedCache,
+    angle_step_problem,
+    grid_deg,
+    step_deg,
+)
 from studies.scenes.valve import accuracy_reference as acc
 from studies.scenes.valve.error_bar import tolerance_rungs
 from studies.scenes.valve.parameters import (

@@ -11,8 +11,8 @@ import numpy as np
 from engine_kernels import valvetrain as valve
 from engine_kernels.valvetrain.dopri import integrate as valve_dopri
 from engine_kernels.valvetrain.valve import lane_batch as valve_lanes
-from studies.scenes.linkage.scene import step_deg
 from studies.scenes.checks import PointProblems
+from studies.scenes.linkage.scene import step_deg
 from studies.scenes.valve.parameters import LANE_PRECISION
 
 RPM = 30.0 / math.pi  # rpm per rad/s

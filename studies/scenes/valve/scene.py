@@ -29,6 +29,7 @@ import numpy as np
 from engine_kernels import valvetrain as valve
 from engine_kernels.valvetrain import rocker
 from engine_kernels.valvetrain.spring_chain.jump import chain_jump_speed
+from studies.scenes.linkage.parameters import RESPONSES as ROCKER_RESPONSES
 from studies.scenes.linkage.scene import (
     CACHE_SIZE,
     GRID_UNIT_DEG,
@@ -38,7 +39,6 @@ from studies.scenes.linkage.scene import (
     open_range,
     step_deg,
 )
-from studies.scenes.linkage.parameters import RESPONSES as ROCKER_RESPONSES
 from studies.scenes.valve import spring, work
 from studies.scenes.valve.batches import (
     N_CURVES,

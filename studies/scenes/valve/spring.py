@@ -20,8 +20,8 @@ from engine_kernels.valvetrain.spring_chain.one_case import (
     spring_chain_response,
     spring_chain_response_batch,
 )
-from studies.scenes.linkage.scene import HALF_TURN_DEG, step_deg
 from studies.scenes.checks import PointProblems
+from studies.scenes.linkage.scene import HALF_TURN_DEG, step_deg
 from studies.scenes.valve.batches import N_OUT, kernel_settings
 from studies.scenes.valve.parameters import STATUS_NOT_RUN
 from studies.scenes.valve.spring_parameters import CHAIN_UNOBSERVED, SURGE_CURVES
