@@ -273,12 +273,6 @@ class Scene(ABC, Generic[State]):
         ]
         return [*responses, *extra]
 
-    def run_stages(self, ctx: dict[str, Any], responses: list[str], curves: list[str]) -> None:
-        """Run the needed stages on a shared dict (the protocol of scenes not yet moved to
-        :meth:`start`/:meth:`finish`)."""
-        for stage in self.stages_for(responses, curves):
-            self.stages[stage](ctx)
-
     def stages_to_run(
         self, settings: dict[str, Any], responses: list[str], curves: list[str]
     ) -> list[str]:

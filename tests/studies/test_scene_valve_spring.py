@@ -88,9 +88,9 @@ def test_multi_mass_answers_are_the_chain_kernels(chain_calls: list[str]) -> Non
     ev = evaluate(plan, progress=False)
     assert set(chain_calls) == {"run_chain"}  # one call per chunk of design points
     scene, key = plan.scene, None
-    ctx = scene.context(plan.points, plan.settings, list(plan.responses), [])
-    key = next(iter(ctx["groups"]))
-    table, table_step, start = scene.excitation(ctx, key, 0.5)
+    state = scene.start(plan.points, plan.settings, list(plan.responses), [])
+    key = next(iter(state.groups))
+    table, table_step, start = scene.excitation(state, key, 0.5)
     flags = valve.valve_settings(max_substeps=int(plan.settings["max_substeps"]))
     for i, rpm in enumerate((3000.0, 6000.0)):
         row = np.zeros(len(sc.CHAIN_PARAM_NAMES))

@@ -1,5 +1,5 @@
 """The table the ``rocker`` and ``valve`` scenes share for ``analysis.txt``: the design points
-whose kinematic chain is invalid, by reason."""
+whose kinematic linkage is invalid, by reason."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from studies.common.summary_tables import runs_line
 
 
 def linkage_status_summary(ds: xr.Dataset) -> list[str]:
-    """Design points whose kinematic chain is invalid, by reason (they explain NaN responses)."""
+    """Design points whose kinematic linkage is invalid, by reason (they explain NaN responses)."""
     blocks = []
     if "chain_status" in ds:
         flags = ds["chain_status"].values.astype(float)

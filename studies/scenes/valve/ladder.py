@@ -27,6 +27,7 @@ from studies.scenes.valve import spring
 from studies.scenes.valve.parameters import PARAMETERS, RESPONSES, SETTINGS
 from studies.scenes.valve.scene import MM, ValveScene, integrate, kernel_settings, valve_rows
 from studies.scenes.valve.spring_parameters import SPRING_MASSES, SPRING_MODEL, SURGE_RESPONSES
+from studies.scenes.valve.state import CostState, ValveState
 
 if TYPE_CHECKING:
     from studies.scenes.base import FigureBuilder
@@ -73,6 +74,7 @@ class ValveSpringLadderScene(ValveScene):
     status_responses = (*ValveScene.status_responses, "cost_per_case_iqr")  # beside every cost
     curves = ()
     curve_axis = None
+    state_type = CostState
     stage_order = ("tappet", "rocker", "dynamics", "surge", "jump_speed", "cost")
 
     def figures(self) -> dict[str, FigureBuilder]:
@@ -110,28 +112,30 @@ class ValveSpringLadderScene(ValveScene):
                 _lumped_spring_answers(scalars, idx, points, out.scalars)
         return SceneOutput(scalars)
 
-    def stage_cost(self, ctx: dict[str, Any]) -> None:
-        settings = ctx["settings"]
+    def stage_cost(self, state: CostState) -> None:
+        settings = state.settings
         chained = spring.uses_chain(settings)
         flags = kernel_settings(settings, "lanes", False)
-        ctx["cost"] = np.full(ctx["n"], np.nan)
-        ctx["cost_iqr"] = np.full(ctx["n"], np.nan)
+        state.cost = np.full(state.n, np.nan)
+        state.cost_iqr = np.full(state.n, np.nan)
         step = step_deg(settings["angle_step"])
-        for key, idx in ctx["groups"].items():
-            if not self.linkage_valid(ctx, key):
+        for key, idx in state.groups.items():
+            if not self.linkage_valid(state, key):
                 continue
-            excitation = self.excitation(ctx, key, step)
-            rows = self.spring_rows(ctx, idx) if chained else valve_rows(ctx["points"], idx)
+            excitation = self.excitation(state, key, step)
+            rows = self.spring_rows(state, idx) if chained else valve_rows(state.points, idx)
             run = partial(_run_rung, excitation, flags, chained)
             for i, row in zip(idx, rows, strict=True):
-                ctx["cost"][i], ctx["cost_iqr"][i] = acc.timing_per_case(run, row)
+                state.cost[i], state.cost_iqr[i] = acc.timing_per_case(run, row)
 
-    def scalar(self, ctx: dict[str, Any], response: str) -> np.ndarray:
+    def scalar(self, state: ValveState, response: str) -> np.ndarray:
+        if not isinstance(state, CostState):
+            return super().scalar(state, response)
         if response == "cost_per_case":
-            return ctx["cost"] * MS
+            return state.cost * MS
         if response == "cost_per_case_iqr":
-            return ctx["cost_iqr"] * MS
-        return super().scalar(ctx, response)
+            return state.cost_iqr * MS
+        return super().scalar(state, response)
 
 
 def _run_rung(

@@ -104,7 +104,7 @@ def dopri_table_deg(tolerance: float) -> float:
 LANE_PRECISION = {"lanes": np.float64, "lanes_f32": np.float32}
 MAX_HALVINGS = 6
 STATUS_NOT_RUN = len(valve.VALVE_STATUS_NAMES)
-"""Scene status code: the kinematic chain is invalid, so the dynamics did not run."""
+"""Scene status code: the kinematic linkage is invalid, so the dynamics did not run."""
 JUMP_NOT_RUN = len(valve.JUMP_STATUS_NAMES)
 
 DYNAMICS_PARAMETERS: tuple[Parameter, ...] = (
