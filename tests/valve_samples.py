@@ -29,7 +29,7 @@ import numpy as np
 
 from engine_kernels.valvetrain.valve.observations import nose_position
 from studies.define.plan import plan_text
-from studies.scenes.valve import accuracy_reference as acc
+from studies.scenes.valve.reference import accuracy as acc
 from studies.scenes.valve.reference.valve_ivp import table_excitation, valve_reference
 from studies.scenes.valve.reference.valve_outputs import reference_outputs
 from studies.scenes.valve.scene import valve_rows

@@ -21,9 +21,9 @@ from studies.define.definition import StudyFileError
 from studies.define.plan import plan_study, plan_text
 from studies.pipeline import run_plan
 from studies.run.runner import evaluate
-from studies.scenes.valve import accuracy_reference as acc
-from studies.scenes.valve.figures import jump_speed_map_figure
+from studies.scenes.valve.figures.maps import jump_speed_map_figure
 from studies.scenes.valve.parameters import INTEGRATORS, STATUS_NOT_RUN
+from studies.scenes.valve.reference import accuracy as acc
 from studies.scenes.valve.scene import valve_rows
 from study_text import recorded_stages, run, scene_study
 

@@ -22,8 +22,8 @@ import xarray as xr
 from valve_samples import OUTPUTS, points_digest, reference_of, sample_plan, sample_points
 
 from engine_kernels import valvetrain as valve
-from studies.scenes.valve import accuracy_reference as acc
 from studies.scenes.valve.parameters import INTEGRATORS
+from studies.scenes.valve.reference import accuracy as acc
 from studies.scenes.valve.scene import valve_rows
 
 REFERENCE = Path(__file__).parent / "data" / "valve_error_bar_reference.nc"

@@ -5,7 +5,7 @@ study. To measure the speed–accuracy trade (physics §4) they must vary betwee
 this scene declares them as parameters (``integrator``, ``angle_step``) and adds two stages:
 
 * ``reference`` — the error of each run against scipy's event-restarted reference
-  (:mod:`studies.scenes.valve.accuracy_reference`), computed once per distinct set of the other parameters
+  (:mod:`studies.scenes.valve.reference.accuracy`), computed once per distinct set of the other parameters
   (e.g. once per camshaft speed × seat stiffness pair) and reused by every integrator and step;
 * ``cost`` — measured seconds per case of the integrator's batch kernel (a timing: the median
   of repeats, with their interquartile range stored beside it whenever it runs).
@@ -32,7 +32,6 @@ from studies.scenes.linkage.scene import (
     grid_deg,
     step_deg,
 )
-from studies.scenes.valve import accuracy_reference as acc
 from studies.scenes.valve.error_bar import tolerance_rungs
 from studies.scenes.valve.parameters import (
     ANGLE_STEP,
@@ -45,6 +44,7 @@ from studies.scenes.valve.parameters import (
     WINDOW_SETTINGS,
 )
 from studies.scenes.valve.parameters import SETTINGS as VALVE_SETTINGS
+from studies.scenes.valve.reference import accuracy as acc
 from studies.scenes.valve.scene import (
     MM,
     WINDOW_PROBE_DEG,
@@ -121,7 +121,7 @@ class ValveAccuracyScene(ValveScene):
 
     # --- outputs beside the generic ones -----------------------------------------------------
     def figures(self) -> dict[str, FigureBuilder]:
-        from studies.scenes.valve.figures import error_vs_cost_figure  # noqa: PLC0415
+        from studies.scenes.valve.figures.maps import error_vs_cost_figure  # noqa: PLC0415
 
         return {"error_vs_cost": error_vs_cost_figure}
 

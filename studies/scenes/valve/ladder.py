@@ -6,7 +6,7 @@ rung of the model ladder changes and costs, this scene declares the rung as a pa
 masses. Design points of one rung are evaluated together by the ``valve`` machinery with that
 rung's settings, and a ``cost`` stage measures the seconds per case of the rung's batch kernel
 (``lanes`` for the lumped rung, the chain batch for N ≥ 1) on enough copies of a point that
-fixed overhead stays small (:func:`studies.scenes.valve.accuracy_reference.seconds_per_case`).
+fixed overhead stays small (:func:`studies.scenes.valve.reference.accuracy.seconds_per_case`).
 
 The lumped rung answers the spring responses from its own assumptions: the spring force at the
 retainer is the static ``Ps0 + ks·y`` (ratio 1, deviation 0, no surge), the run status is the
@@ -22,9 +22,9 @@ import numpy as np
 
 from studies.scenes.base import Parameter, Response, SceneOutput
 from studies.scenes.linkage.scene import step_deg
-from studies.scenes.valve import accuracy_reference as acc
 from studies.scenes.valve import spring
 from studies.scenes.valve.parameters import PARAMETERS, RESPONSES, SETTINGS
+from studies.scenes.valve.reference import accuracy as acc
 from studies.scenes.valve.scene import MM, ValveScene, integrate, kernel_settings, valve_rows
 from studies.scenes.valve.spring_parameters import SPRING_MASSES, SPRING_MODEL, SURGE_RESPONSES
 from studies.scenes.valve.state import CostState, ValveState
@@ -78,8 +78,8 @@ class ValveSpringLadderScene(ValveScene):
     stage_order = ("tappet", "rocker", "dynamics", "surge", "jump_speed", "cost")
 
     def figures(self) -> dict[str, FigureBuilder]:
-        from studies.scenes.valve.ladder_figures import ladder_figure  # noqa: PLC0415
-        from studies.scenes.valve.surge_figures import surge_sweep_figure  # noqa: PLC0415
+        from studies.scenes.valve.figures.ladder import ladder_figure  # noqa: PLC0415
+        from studies.scenes.valve.figures.surge import surge_sweep_figure  # noqa: PLC0415
 
         return {"spring_model_ladder": ladder_figure, "surge_sweep": surge_sweep_figure}
 

@@ -112,8 +112,8 @@ class ValveScene(LinkageScene[ValveState]):
     # --- outputs beside the generic ones -----------------------------------------------------
     def figures(self) -> dict[str, FigureBuilder]:
         from studies.scenes.linkage.figures import valve_lift_figure  # noqa: PLC0415
-        from studies.scenes.valve.figures import jump_speed_map_figure  # noqa: PLC0415
-        from studies.scenes.valve.surge_figures import surge_sweep_figure  # noqa: PLC0415
+        from studies.scenes.valve.figures.maps import jump_speed_map_figure  # noqa: PLC0415
+        from studies.scenes.valve.figures.surge import surge_sweep_figure  # noqa: PLC0415
 
         return {
             "valve_lift": valve_lift_figure,

@@ -21,10 +21,10 @@ from studies.common.simd import host_lanes
 from studies.common.timing import best_time, best_times
 from studies.scenes.base import BenchKit
 from studies.scenes.linkage.scene import HALF_TURN_DEG, grid_deg
-from studies.scenes.valve.accuracy_reference import reference_lift
 from studies.scenes.valve.batches import kernel_settings, valve_rows
 from studies.scenes.valve.bench.multi_mass import chain_figures
 from studies.scenes.valve.reference import c_valve
+from studies.scenes.valve.reference.accuracy import reference_lift
 from studies.scenes.valve.state import ValveState
 
 VALVE_STUDY = """
