@@ -29,7 +29,7 @@ import numpy as np
 
 from engine_kernels.valvetrain.valve.observations import nose_position
 from studies.define.plan import plan_text
-from studies.scenes.valve import accuracy_reference as acc
+from studies.scenes.valve.reference import accuracy as acc
 from studies.scenes.valve.reference.valve_ivp import table_excitation, valve_reference
 from studies.scenes.valve.reference.valve_outputs import reference_outputs
 from studies.scenes.valve.scene import valve_rows
@@ -109,18 +109,18 @@ def reference_of(
     [m/s], bounce height [m]) per point (``OUTPUTS``)."""
     scene = plan.scene
     subset = {k: v[which] for k, v in points.items()}
-    ctx = scene.context(subset, plan.settings, [], [])
+    state = scene.start(subset, plan.settings, [], [])
     axis = scene.curve_coordinate(plan.settings)
     lift = np.full((which.size, axis.size), np.nan)
     outputs = np.full((which.size, len(OUTPUTS)), np.nan)
-    for key, idx in ctx["groups"].items():
-        if not scene.chain_valid(ctx, key):
+    for key, idx in state.groups.items():
+        if not scene.linkage_valid(state, key):
             continue
         table, step, start = scene.excitation(
-            ctx, key, 2.0 * acc.REFERENCE_TABLE_DEG, unclipped=True
+            state, key, 2.0 * acc.REFERENCE_TABLE_DEG, unclipped=True
         )
         nose = start + nose_position(table) * step
-        first, last = scene.window(ctx, key)
+        first, last = scene.window(state, key)
         inside = (axis >= first) & (axis <= last)
         excitation = table_excitation(table, step, start)
         for i, row in zip(idx, valve_rows(subset, idx), strict=True):

@@ -95,7 +95,7 @@ def _plan(definition: StudyDefinition | None, problems: list[str], source: str) 
     point_problems += scene.request_problems(settings, asked, curves)
     if point_problems:
         raise StudyFileError(source, point_problems)
-    stages = scene.stages_for(asked, curves)
+    stages = scene.stages_to_run(settings, asked, curves)
     stored = scene.stored_responses(asked, curves)
     clashes = _name_clashes(definition, scene, design, stored)
     if clashes:

@@ -30,6 +30,7 @@ from studies.scenes.base import (
     WorkEstimate,
     short,
 )
+from studies.scenes.state import RunState
 
 ENTRY_POINTS = "engine_studies.scenes"
 
@@ -206,6 +207,7 @@ __all__ = [
     "CurveAxis",
     "Parameter",
     "Response",
+    "RunState",
     "Scene",
     "SceneOutput",
     "WorkEstimate",

@@ -11,20 +11,27 @@ A scene wraps the compiled kernels of one physical system. It declares
 A stage is one compiled batch driver (kinematics, contact geometry, loads, dynamics, ...).
 :meth:`Scene.stages_for` turns a study's requests into the minimal set of stages, and
 :meth:`Scene.evaluate` runs only those: asking for a kinematic response never runs the dynamics.
+
+One protocol for every built-in scene: :meth:`Scene.start` makes the chunk's run state (a
+:class:`RunState` dataclass of the scene's own, one typed field per result a stage leaves),
+each stage ``stage_<name>(state)`` fills its fields, and :meth:`Scene.finish` turns the state
+into the responses and curves. The state has slots: a mistyped field fails at once
+(``AttributeError``), and a field no stage filled is unset, so reading it fails too.
 """
 
 from __future__ import annotations
 
 import math
-from abc import ABC, abstractmethod
+from abc import ABC
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Generic, cast
 
 import numpy as np
 
 from studies.common.errors import StudyError
 from studies.common.units import UNITS, to_si
+from studies.scenes.state import RunState, State
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -209,8 +216,9 @@ class CurveAxis:
     long_name: str
 
 
-class Scene(ABC):
-    """Base class: subclasses fill the declarations and implement the stages."""
+class Scene(ABC, Generic[State]):
+    """Base class: subclasses fill the declarations, make their run state (:meth:`start`),
+    implement the stages on it and read the outputs from it (:meth:`finish`)."""
 
     name: str = ""
     description: str = ""
@@ -220,6 +228,7 @@ class Scene(ABC):
     curves: tuple[Curve, ...] = ()
     curve_axis: CurveAxis | None = None
     stage_order: tuple[str, ...] = ()
+    state_type: type[RunState] = RunState  # what :meth:`start` makes; the stages fill it
     # Responses stored whenever the stages they need run, asked for or not: they say why
     # another response is NaN at a design point (no jump at all, or the dynamics never ran).
     status_responses: tuple[str, ...] = ()
@@ -264,13 +273,44 @@ class Scene(ABC):
         ]
         return [*responses, *extra]
 
-    def run_stages(self, ctx: dict[str, Any], responses: list[str], curves: list[str]) -> None:
-        """Run only the stages these requests need, in order, on the shared context ``ctx``.
+    def stages_to_run(
+        self, settings: dict[str, Any], responses: list[str], curves: list[str]
+    ) -> list[str]:
+        """The stages :meth:`evaluate` runs for these requests at these settings (SI): those
+        the requests need (:meth:`stages_for`), unless a setting changes which stage answers."""
+        return self.stages_for(responses, curves)
 
-        Always through ``self.stages`` so a test can spy on which stages ran.
+    def evaluate(
+        self,
+        points: dict[str, np.ndarray],
+        settings: dict[str, Any],
+        responses: list[str],
+        curves: list[str],
+    ) -> SceneOutput:
+        """Evaluate a chunk of design points (SI inputs) running only the needed stages, in
+        order, on the run state :meth:`start` makes; :meth:`finish` reads the outputs.
+
+        Stages are called through ``self.stages`` so a test can spy on which ran.
         """
-        for stage in self.stages_for(responses, curves):
-            self.stages[stage](ctx)
+        state = self.start(points, settings, responses, curves)
+        for stage in self.stages_to_run(settings, responses, curves):
+            self.stages[stage](state)
+        return self.finish(state)
+
+    def start(
+        self,
+        points: dict[str, np.ndarray],
+        settings: dict[str, Any],
+        responses: list[str],
+        curves: list[str],
+    ) -> State:
+        """The run state of one chunk before any stage ran: a :attr:`state_type` holding the
+        request (a scene that derives more from it up front extends this)."""
+        return cast(State, self.state_type.of(points, settings, responses, curves))
+
+    def finish(self, state: State) -> SceneOutput:
+        """The responses and curves asked for, in their declared units, from the run state."""
+        raise NotImplementedError(f"scene {self.name!r} defines neither finish nor evaluate")
 
     # --- to be provided by each scene ---------------------------------------------------
     def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
@@ -317,16 +357,6 @@ class Scene(ABC):
     def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray:
         """Values of the curve axis (in ``curve_axis.units``) for these settings."""
         raise StudyError(f"scene {self.name!r} stores no curves")
-
-    @abstractmethod
-    def evaluate(
-        self,
-        points: dict[str, np.ndarray],
-        settings: dict[str, Any],
-        responses: list[str],
-        curves: list[str],
-    ) -> SceneOutput:
-        """Evaluate a chunk of design points (SI inputs) running only the needed stages."""
 
 
 INT64_MAX = 2**63 - 1  # TOML integers are 64-bit; a longer one is a typing slip

@@ -22,7 +22,7 @@ import numpy as np
 import scipy
 import xarray as xr
 
-from studies.scenes.valve import accuracy_reference as acc
+from studies.scenes.valve.reference import accuracy as acc
 from studies.scenes.valve.reference import valve_ivp
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # tests/, pytest's path

@@ -21,20 +21,33 @@ levels = [7.0, 9.0]
 """
 
 
-def test_a_mistyped_key_inside_a_scene_is_a_traceback_not_exit_2(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+def _write_parms(state):  # a scene's bug: "params" spelled "parms" (the state has slots)
+    state.parms = state.params
+
+
+def _read_unfilled(state):  # a scene's bug: reading the loads, which this request never ran
+    return state.load
+
+
+@pytest.mark.parametrize(("bug", "field"), [(_write_parms, "parms"), (_read_unfilled, "load")])
+def test_a_mistyped_field_inside_a_scene_is_a_traceback_not_exit_2(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    bug,
+    field: str,
 ) -> None:
     study = tmp_path / "tiny_cam.toml"
     study.write_text(STUDY, encoding="utf-8")
     scene = type(get_scene("cam"))
-    stages = scene.run_stages
+    finish = scene.finish
 
-    def mistyped(self, ctx, responses, curves):  # a scene's bug: "params" spelled "parms"
-        stages(self, ctx, responses, curves)
-        return ctx["parms"]
+    def buggy(self, state):
+        bug(state)
+        return finish(self, state)
 
-    monkeypatch.setattr(scene, "run_stages", mistyped)
-    with pytest.raises(KeyError, match="parms"):
+    monkeypatch.setattr(scene, "finish", buggy)
+    with pytest.raises(AttributeError, match=field):
         main(["run", str(study), "--outputs", str(tmp_path / "out"), "--no-progress"])
     assert BUG in capsys.readouterr().err
 

@@ -16,7 +16,7 @@ from studies.cli import main
 from studies.common.units import UNITS, conversion_factor
 from studies.define.plan import plan_study
 from studies.scenes import SCENES, get_scene
-from studies.scenes.chain_tappet import nose_tappet_lift
+from studies.scenes.linkage.tappet import nose_tappet_lift
 from study_text import readme_study
 
 

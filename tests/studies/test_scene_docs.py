@@ -1,4 +1,4 @@
-"""The complete example of docs/scenes.md (a stage on a shared context, a curve on its own
+"""The complete example of docs/scenes.md (a stage on a typed run state, a curve on its own
 axis, ``curve_coordinate`` and ``request_problems``) runs as written: the code block is taken
 from the page, registered as a scene, and a study runs through the engine. The curve is checked
 against the closed form x(t) = x0 cos(√(k/m) t)."""

@@ -12,9 +12,9 @@ from numpy.polynomial import polynomial as poly
 from studies.define.definition import StudyFileError
 from studies.define.plan import plan_text
 from studies.run.runner import evaluate
-from studies.scenes import chain as rocker_scene
-from studies.scenes import chain_tappet as rocker_tappet
-from studies.scenes.chain_parameters import CONVEX_POLYDYNE
+from studies.scenes.linkage import scene as rocker_scene
+from studies.scenes.linkage import tappet as rocker_tappet
+from studies.scenes.linkage.parameters import CONVEX_POLYDYNE
 from studies.scenes.rocker import RockerScene
 from study_text import recorded_stages, scene_study
 
@@ -202,7 +202,7 @@ def test_chain_keys_match_a_loop_over_the_points() -> None:
             tuple(coefficients[i].tolist()),
         )
         expected.setdefault(key, []).append(i)
-    got = rocker_scene.chain_keys(points)
+    got = rocker_scene.linkage_keys(points)
     assert {k: v.tolist() for k, v in got.items()} == expected
     assert len(got) == 3 * 3 * 3 * 2
 

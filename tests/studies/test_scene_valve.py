@@ -21,9 +21,9 @@ from studies.define.definition import StudyFileError
 from studies.define.plan import plan_study, plan_text
 from studies.pipeline import run_plan
 from studies.run.runner import evaluate
-from studies.scenes.valve import accuracy_reference as acc
-from studies.scenes.valve.figures import jump_speed_map_figure
+from studies.scenes.valve.figures.maps import jump_speed_map_figure
 from studies.scenes.valve.parameters import INTEGRATORS, STATUS_NOT_RUN
+from studies.scenes.valve.reference import accuracy as acc
 from studies.scenes.valve.scene import valve_rows
 from study_text import recorded_stages, run, scene_study
 
@@ -186,10 +186,10 @@ def test_tolerance_picks_a_step_whose_error_is_within_it() -> None:
     lanes = ev.scalars["integrator_used"] == INTEGRATORS.index("lanes")
     assert ((used < 1.0) | ~lanes).any()
     scene = plan.scene
-    ctx = scene.context(plan.points, plan.settings, [], [])
-    ((key, idx),) = ctx["groups"].items()
-    fine = scene.excitation(ctx, key, 2.0 * acc.REFERENCE_TABLE_DEG, unclipped=True)
-    start, stop = scene.window(ctx, key)
+    state = scene.start(plan.points, plan.settings, [], [])
+    ((key, idx),) = state.groups.items()
+    fine = scene.excitation(state, key, 2.0 * acc.REFERENCE_TABLE_DEG, unclipped=True)
+    start, stop = scene.window(state, key)
     axis = scene.curve_coordinate(plan.settings)
     inside = (axis >= start) & (axis <= stop)
     assert np.isnan(ev.curves["actual_lift"][:, ~inside]).all()

@@ -19,7 +19,7 @@ from studies.define.plan import plan_study, plan_text
 from studies.pipeline import run_plan
 from studies.run.runner import evaluate
 from studies.scenes.valve import spring
-from study_text import run, scene_study
+from study_text import recorded_stages, run, scene_study
 
 SPRING_MASS = 0.015  # kg, scene default
 EQUIVALENT_MASS = 0.04252  # kg, scene default [V1] (includes SPRING_MASS/3)
@@ -80,6 +80,26 @@ def test_surge_responses_run_the_chain_and_leave_the_lumped_answers_alone(
     assert (both.scalars["surge_amplitude"] > 0.0).all()
 
 
+@pytest.mark.parametrize(
+    ("model", "stages"),
+    [
+        # the lumped rung answers the dynamics, the chain (surge stage) the spring responses
+        ("lumped", ["tappet", "rocker", "dynamics", "surge"]),
+        # under multi_mass the chain answers both: the surge stage runs once, dynamics never
+        ("multi_mass", ["tappet", "rocker", "surge"]),
+    ],
+)
+def test_the_spring_model_decides_which_stage_answers_the_dynamics(
+    model: str, stages: list[str], chain_calls: list[str]
+) -> None:
+    plan = plan_text(study(DYNAMIC[:-1] + ", " + SURGE[1:], settings=f'spring_model = "{model}"'))
+    with recorded_stages(plan.scene) as calls:
+        evaluate(plan, progress=False)
+    assert calls == stages + stages  # the runner's one-point warm-up, then the one chunk
+    assert list(plan.stages) == stages  # what `check` and `run` print is what runs
+    assert chain_calls == ["run_chain", "run_chain"]  # one chain run per evaluation
+
+
 def test_multi_mass_answers_are_the_chain_kernels(chain_calls: list[str]) -> None:
     """The scene's multi-mass answers against a direct kernel call on rows written here from
     the scene's defaults: valve-side mass = equivalent mass − m_s/3 [V1], 8 coil masses."""
@@ -88,9 +108,9 @@ def test_multi_mass_answers_are_the_chain_kernels(chain_calls: list[str]) -> Non
     ev = evaluate(plan, progress=False)
     assert set(chain_calls) == {"run_chain"}  # one call per chunk of design points
     scene, key = plan.scene, None
-    ctx = scene.context(plan.points, plan.settings, list(plan.responses), [])
-    key = next(iter(ctx["groups"]))
-    table, table_step, start = scene.excitation(ctx, key, 0.5)
+    state = scene.start(plan.points, plan.settings, list(plan.responses), [])
+    key = next(iter(state.groups))
+    table, table_step, start = scene.excitation(state, key, 0.5)
     flags = valve.valve_settings(max_substeps=int(plan.settings["max_substeps"]))
     for i, rpm in enumerate((3000.0, 6000.0)):
         row = np.zeros(len(sc.CHAIN_PARAM_NAMES))

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from studies.define.definition import StudyFileError
 from studies.define.plan import plan_study, plan_text
 from studies.pipeline import run_plan
-from studies.scenes.valve import accuracy_reference as acc
+from studies.scenes.valve.reference import accuracy as acc
 from study_text import run
 
 # Issue #26's reproduction: a separating cycloidal cam on a very stiff seat, at three tolerances.

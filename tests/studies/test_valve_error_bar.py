@@ -22,8 +22,8 @@ import xarray as xr
 from valve_samples import OUTPUTS, points_digest, reference_of, sample_plan, sample_points
 
 from engine_kernels import valvetrain as valve
-from studies.scenes.valve import accuracy_reference as acc
 from studies.scenes.valve.parameters import INTEGRATORS
+from studies.scenes.valve.reference import accuracy as acc
 from studies.scenes.valve.scene import valve_rows
 
 REFERENCE = Path(__file__).parent / "data" / "valve_error_bar_reference.nc"
@@ -187,12 +187,12 @@ def factorial_errors(
 def reference_lifts(plan: Any, points: dict[str, np.ndarray], table_deg: float) -> np.ndarray:
     """Reference lift [m] on the curve axis (NaN outside the window) on a ``table_deg`` table."""
     scene = plan.scene
-    ctx = scene.context(points, plan.settings, [], [])
+    state = scene.start(points, plan.settings, [], [])
     axis = scene.curve_coordinate(plan.settings)
     lift = np.full((len(points["cam_speed"]), axis.size), np.nan)
-    for key, idx in ctx["groups"].items():
-        fine = scene.excitation(ctx, key, 2.0 * table_deg, unclipped=True)
-        start, stop = scene.window(ctx, key)
+    for key, idx in state.groups.items():
+        fine = scene.excitation(state, key, 2.0 * table_deg, unclipped=True)
+        start, stop = scene.window(state, key)
         inside = (axis >= start) & (axis <= stop)
         theta = np.radians(axis[inside])
         for i, row in zip(idx, valve_rows(points, idx), strict=True):

@@ -13,6 +13,7 @@ A response runs only the stages it needs (``Response.needs``).
 from __future__ import annotations
 
 from collections import defaultdict
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -32,6 +33,7 @@ from studies.scenes.cam.parameters import (
 )
 from studies.scenes.cam_laws import LAW_CODES, SHAPE_CODES, codes, polydyne_problems
 from studies.scenes.checks import checked_groups
+from studies.scenes.state import RunState
 
 if TYPE_CHECKING:
     from studies.scenes.base import FigureBuilder, SceneBenchmark
@@ -68,7 +70,7 @@ _COLUMN = {
 }
 
 MM, UM, MPA = 1e3, 1e6, 1e-6
-# response -> (stage output, column, factor from SI to the response's units)
+# response -> (CamState field, column, factor from SI to the response's units)
 _SCALAR_SOURCE: dict[str, tuple[str, int, float]] = {
     "max_lift": ("kin", cb.K_MAX_LIFT, MM),
     "face_half_width": ("kin", cb.K_MAX_VELOCITY, MM),
@@ -126,7 +128,24 @@ CHECKED = (
 """The parameters the per-point input checks read (each distinct set is checked once)."""
 
 
-class CamScene(Scene):
+@dataclass(slots=True)
+class CamState(RunState):
+    """Run state of a ``cam`` chunk: the kernels' inputs and outputs (SI, kernel columns)."""
+
+    params: np.ndarray = field(init=False)  # kernel parameters (n, cb.N_PARAMS)
+    shapes: np.ndarray = field(init=False)  # segment shape codes (n, 6)
+    coeffs: np.ndarray = field(init=False)  # polydyne coefficients (n, lift_laws.NCOEF)
+    theta: np.ndarray = field(init=False)  # cam angles of the grid [rad]
+    kin_curves: np.ndarray = field(init=False)  # lift [m] and 3 derivatives [m/rad^k] (n, 4, grid)
+    diag: np.ndarray = field(init=False)  # six-segment diagnostics (n, multi_segment.N_DIAG)
+    kin: np.ndarray = field(init=False)  # kinematic responses (n, cb.N_KIN)
+    geo: np.ndarray = field(init=False)  # geometry responses (n, cam_loads.N_GEO)
+    geo_curves: np.ndarray = field(init=False)  # (n, cam_loads.N_GEO_CURVES, grid or 0)
+    load: np.ndarray = field(init=False)  # load responses (n, cam_loads.N_LOAD)
+    load_curves: np.ndarray = field(init=False)  # (n, cam_loads.N_LOAD_CURVES, grid or 0)
+
+
+class CamScene(Scene[CamState]):
     name = "cam"
     seconds_per_point = 1e-3
     work_estimate = staticmethod(work.work_estimate)  # type: ignore[assignment]
@@ -137,6 +156,7 @@ class CamScene(Scene):
     curves = CURVES
     curve_axis = CAM_ANGLE
     stage_order = ("kinematics", "geometry", "loads")
+    state_type = CamState
 
     # --- outputs beside the generic ones -----------------------------------------------------
     def figures(self) -> dict[str, FigureBuilder]:
@@ -214,71 +234,66 @@ class CamScene(Scene):
         return out
 
     # --- evaluation -----------------------------------------------------------------------
-    def evaluate(
+    def start(
         self,
         points: dict[str, np.ndarray],
         settings: dict[str, Any],
         responses: list[str],
         curves: list[str],
-    ) -> SceneOutput:
-        params, shapes, coeffs = kernel_inputs(points)
-        ctx: dict[str, Any] = {
-            "params": params,
-            "shapes": shapes,
-            "coeffs": coeffs,
-            "theta": np.deg2rad(self.curve_coordinate(settings)),
-            "points": points,
-            "settings": settings,
-            "curves": set(curves),
-        }
-        self.run_stages(ctx, responses, curves)
+    ) -> CamState:
+        state = CamState.of(points, settings, responses, curves)
+        state.params, state.shapes, state.coeffs = kernel_inputs(points)
+        state.theta = np.deg2rad(self.curve_coordinate(settings))
+        return state
+
+    def finish(self, state: CamState) -> SceneOutput:
         scalars = {}
-        for r in responses:
+        for r in state.responses:
             if r in ("jerk_margin", "jerk_ok", "fullness_ok"):
-                scalars[r] = _criterion(r, ctx, points)
+                scalars[r] = _criterion(r, state)
                 continue
-            key, col, scale = _SCALAR_SOURCE[r]
-            scalars[r] = ctx[key][:, col] * scale
+            source, col, scale = _SCALAR_SOURCE[r]
+            scalars[r] = getattr(state, source)[:, col] * scale
         out_curves = {}
-        for c in curves:
-            key, idx, scale = _CURVE_SOURCE[c]
-            out_curves[c] = ctx[key][:, idx, :] * scale
+        for c in state.curves:
+            source, idx, scale = _CURVE_SOURCE[c]
+            out_curves[c] = getattr(state, source)[:, idx, :] * scale
         return SceneOutput(scalars, out_curves)
 
-    def stage_kinematics(self, ctx: dict[str, Any]) -> None:
-        params, theta = ctx["params"], ctx["theta"]
+    def stage_kinematics(self, state: CamState) -> None:
+        params, theta, points = state.params, state.theta, state.points
         n, m = params.shape[0], theta.size
         curves = np.empty((n, 4, m))
         diag = np.empty((n, multi_segment.N_DIAG))
-        cb.cam_kinematics_batch(params, ctx["shapes"], ctx["coeffs"], theta, curves, diag)
-        table_rows = np.flatnonzero(ctx["points"]["law"] == "table")
+        cb.cam_kinematics_batch(params, state.shapes, state.coeffs, theta, curves, diag)
+        table_rows = np.flatnonzero(points["law"] == "table")
         for i in table_rows:
-            angle, lift = read_lift_table(ctx["points"]["lift_table"][i])
-            smoothing = ctx["settings"]["table_smoothing"]
+            angle, lift = read_lift_table(points["lift_table"][i])
+            smoothing = state.settings["table_smoothing"]
             curves[i] = table_kinematics(np.deg2rad(angle), lift * 1e-3, smoothing, theta)
             diag[i] = 1.0
             diag[i, multi_segment.D_UNSCALED_WORKING_LIFT] = lift.max() * 1e-3
         kin = np.empty((n, cb.N_KIN))
         cb.cam_kinematic_responses_batch(params, theta, curves, kin)
-        ctx |= {"kin_curves": curves, "diag": diag, "kin": kin}
+        state.kin_curves, state.diag, state.kin = curves, diag, kin
 
-    def stage_geometry(self, ctx: dict[str, Any]) -> None:
-        params, theta, curves = ctx["params"], ctx["theta"], ctx["kin_curves"]
-        want = any(_CURVE_SOURCE[c][0] == "geo_curves" for c in ctx["curves"])
-        geo = np.empty((params.shape[0], cam_loads.N_GEO))
-        geo_curves = np.empty((params.shape[0], cam_loads.N_GEO_CURVES, theta.size if want else 0))
-        cam_loads.cam_geometry_batch(params, theta, curves, geo, geo_curves)
-        ctx |= {"geo": geo, "geo_curves": geo_curves}
+    def stage_geometry(self, state: CamState) -> None:
+        params, theta = state.params, state.theta
+        want = any(_CURVE_SOURCE[c][0] == "geo_curves" for c in state.curves)
+        state.geo = np.empty((params.shape[0], cam_loads.N_GEO))
+        state.geo_curves = np.empty(
+            (params.shape[0], cam_loads.N_GEO_CURVES, theta.size if want else 0)
+        )
+        cam_loads.cam_geometry_batch(params, theta, state.kin_curves, state.geo, state.geo_curves)
 
-    def stage_loads(self, ctx: dict[str, Any]) -> None:
-        params, theta, curves = ctx["params"], ctx["theta"], ctx["kin_curves"]
-        want = any(_CURVE_SOURCE[c][0] == "load_curves" for c in ctx["curves"])
-        load = np.empty((params.shape[0], cam_loads.N_LOAD))
-        load_curves = np.empty(
+    def stage_loads(self, state: CamState) -> None:
+        params, theta = state.params, state.theta
+        want = any(_CURVE_SOURCE[c][0] == "load_curves" for c in state.curves)
+        state.load = np.empty((params.shape[0], cam_loads.N_LOAD))
+        state.load_curves = np.empty(
             (params.shape[0], cam_loads.N_LOAD_CURVES, theta.size if want else 0)
         )
-        cam_loads.cam_loads_batch(params, theta, curves, load, load_curves)
-        ctx |= {"load": load, "load_curves": load_curves}
+        cam_loads.cam_loads_batch(params, theta, state.kin_curves, state.load, state.load_curves)
 
 
 def kernel_inputs(points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -305,8 +320,8 @@ def _coefficients(vectors: np.ndarray) -> np.ndarray:
     return coeffs
 
 
-def _criterion(name: str, ctx: dict[str, Any], points: dict[str, np.ndarray]) -> np.ndarray:
-    kin = ctx["kin"]
+def _criterion(name: str, state: CamState) -> np.ndarray:
+    kin, points = state.kin, state.points
     if name == "fullness_ok":
         return (kin[:, cb.K_WORKING_FULLNESS] >= points["fullness_limit"]).astype(float)
     margin = (points["jerk_limit"] - kin[:, cb.K_MAX_JERK]) * MM

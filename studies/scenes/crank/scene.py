@@ -20,6 +20,7 @@ piston motion used for the inertia forces, the torque and the kinematic curves.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -36,6 +37,7 @@ from studies.scenes.crank.checks import CYCLE_NAMES, LAYOUT_NAMES, cycle_problem
 from studies.scenes.crank.parameters import MAX_ORDER_HALVES, PARAMETERS, SETTINGS
 from studies.scenes.crank.pressure_tables import read_pressure_table, resample_pressure
 from studies.scenes.crank.responses import CRANK_ANGLE, CURVES, RESPONSES, order_name
+from studies.scenes.state import RunState
 
 if TYPE_CHECKING:
     from studies.scenes.base import FigureBuilder
@@ -129,7 +131,19 @@ def _empty_curves(n: int, count: int, store: bool, m: int) -> np.ndarray:
     return np.empty((n, count, m if store else 0))
 
 
-class CrankScene(Scene):
+@dataclass(slots=True)
+class CrankState(RunState):
+    """Run state of a ``crank`` chunk; each stage adds its named responses and curves (SI)."""
+
+    params: np.ndarray = field(init=False)  # kernel parameters (n, ck.N_PARAMS), SI
+    n_angles: int = field(init=False)  # grid points over the 720° cycle
+    stored: frozenset[str] = field(init=False)  # stages that produce a requested curve
+    pressure: np.ndarray = field(init=False)  # cylinder pressure (n, n_angles) [Pa]
+    scalars: dict[str, np.ndarray] = field(init=False, default_factory=dict)  # per point, SI
+    curves_si: dict[str, np.ndarray] = field(init=False, default_factory=dict)  # (n, n_angles)
+
+
+class CrankScene(Scene[CrankState]):
     """Slider-crank and multi-cylinder engine (physics §5)."""
 
     name = "crank"
@@ -145,6 +159,7 @@ class CrankScene(Scene):
     curves = CURVES
     curve_axis = CRANK_ANGLE
     stage_order = ("kinematics", "pressure", "forces", "multicylinder")
+    state_type = CrankState
 
     # --- outputs beside the generic ones -----------------------------------------------------
     def figures(self) -> dict[str, FigureBuilder]:
@@ -200,12 +215,26 @@ class CrankScene(Scene):
         found.add_checked(cycle, columns, lambda i: cycle_problems(points, i))
 
     # --- stages --------------------------------------------------------------------------
-    def stage_kinematics(
-        self, params: np.ndarray, n_angles: int, store: bool
-    ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
-        n = params.shape[0]
-        out = np.empty((n, ck.N_KINEMATICS_OUT))
-        curves = _empty_curves(n, ck.N_KINEMATICS_CURVES, store, n_angles)
+    def start(
+        self,
+        points: dict[str, np.ndarray],
+        settings: dict[str, Any],
+        responses: list[str],
+        curves: list[str],
+    ) -> CrankState:
+        state = CrankState.of(points, settings, responses, curves)
+        state.n_angles = angle_count(settings["angle_step"])
+        state.params = crank_params(points, settings["model"])
+        # a curve's last stage is the one that produces it
+        state.stored = frozenset(self.curve(c).needs[-1] for c in curves)  # type: ignore[union-attr]
+        return state
+
+    def stage_kinematics(self, state: CrankState) -> None:
+        params, n_angles = state.params, state.n_angles
+        out = np.empty((state.n, ck.N_KINEMATICS_OUT))
+        curves = _empty_curves(
+            state.n, ck.N_KINEMATICS_CURVES, "kinematics" in state.stored, n_angles
+        )
         ck.crank_kinematics_batch(params, n_angles, out, curves)
         scalars = dict(zip(ck.KINEMATICS_OUTPUTS, out.T, strict=True))
         r = params[:, ck.CRANK_RADIUS]
@@ -215,12 +244,11 @@ class CrankScene(Scene):
         scalars["approx_error_acceleration_relative"] = scalars["approx_error_acceleration"] / (
             r * omega**2
         )
-        return scalars, dict(zip(ck.KINEMATICS_CURVES, curves.transpose(1, 0, 2), strict=True))
+        state.scalars |= scalars
+        state.curves_si |= dict(zip(ck.KINEMATICS_CURVES, curves.transpose(1, 0, 2), strict=True))
 
-    def stage_pressure(
-        self, points: dict[str, np.ndarray], n_angles: int
-    ) -> tuple[dict[str, np.ndarray], np.ndarray]:
-        n = len(points["stroke"])
+    def stage_pressure(self, state: CrankState) -> None:
+        points, n, n_angles = state.points, state.n, state.n_angles
         pressure = np.empty((n, n_angles))
         values = np.full((n, cb.N_OUT), np.nan)
         cycle = points["pressure_model"] == "cycle"
@@ -241,85 +269,44 @@ class CrankScene(Scene):
         scalars = dict(zip(cb.OUTPUTS, values.T, strict=True))
         for name in CYCLE_ONLY:
             scalars[name] = np.where(cycle, scalars[name], np.nan)
-        return scalars, pressure
+        state.scalars |= scalars
+        state.pressure = state.curves_si["cylinder_pressure"] = pressure
 
-    def stage_forces(
-        self, params: np.ndarray, pressure: np.ndarray, store: bool
-    ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
-        n, m = pressure.shape
+    def stage_forces(self, state: CrankState) -> None:
+        n, m = state.pressure.shape
         out = np.empty((n, cf.N_FORCE_OUT))
-        curves = _empty_curves(n, cf.N_FORCE_CURVES, store, m)
-        cf.crank_forces_batch(params, pressure, out, curves)
-        scalars = {FORCE_NAMES.get(k, k): v for k, v in zip(cf.FORCE_OUTPUTS, out.T, strict=True)}
-        named = {
+        curves = _empty_curves(n, cf.N_FORCE_CURVES, "forces" in state.stored, m)
+        cf.crank_forces_batch(state.params, state.pressure, out, curves)
+        state.scalars |= {
+            FORCE_NAMES.get(k, k): v for k, v in zip(cf.FORCE_OUTPUTS, out.T, strict=True)
+        }
+        state.curves_si |= {
             FORCE_NAMES.get(k, k): v
             for k, v in zip(cf.FORCE_CURVES, curves.transpose(1, 0, 2), strict=True)
         }
-        return scalars, named
 
-    def stage_multicylinder(
-        self,
-        params: np.ndarray,
-        pressure: np.ndarray,
-        firing: np.ndarray,
-        axis: np.ndarray,
-        positions: np.ndarray,
-        store: bool,
-    ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
-        n, m = pressure.shape
+    def stage_multicylinder(self, state: CrankState) -> None:
+        n, m = state.pressure.shape
+        firing, axis, positions = layout_geometry(state.points)
         out = np.empty((n, cl.N_MULTI_OUT))
         harmonics = np.empty((n, MAX_ORDER_HALVES))
-        curves = _empty_curves(n, 1, store, m)
+        curves = _empty_curves(n, 1, "multicylinder" in state.stored, m)
         cl.crank_multicylinder_batch(
-            params, pressure, firing, axis, positions, out, harmonics, curves
+            state.params, state.pressure, firing, axis, positions, out, harmonics, curves
         )
         scalars = dict(zip(cl.MULTI_OUTPUTS, out.T, strict=True))
         for q in range(MAX_ORDER_HALVES):
             scalars[order_name(q + 1)] = harmonics[:, q]
         scalars["dominant_torque_order"] = (np.argmax(harmonics, axis=1) + 1) / 2.0
         scalars["dominant_torque_amplitude"] = harmonics.max(axis=1)
-        return scalars, {"engine_torque": curves[:, 0]}
+        state.scalars |= scalars
+        state.curves_si["engine_torque"] = curves[:, 0]
 
-    # --- evaluation ----------------------------------------------------------------------
-    def evaluate(
-        self,
-        points: dict[str, np.ndarray],
-        settings: dict[str, Any],
-        responses: list[str],
-        curves: list[str],
-    ) -> SceneOutput:
-        stages = self.stages_for(responses, curves)
-        m = angle_count(settings["angle_step"])
-        params = crank_params(points, settings["model"])
-        producers = {self.curve(c).needs[-1] for c in curves}  # type: ignore[union-attr]
-        scalars: dict[str, np.ndarray] = {}
-        curves_si: dict[str, np.ndarray] = {}
-
-        def store(stage: str) -> bool:  # a curve's last stage is the one that produces it
-            return stage in producers
-
-        if "kinematics" in stages:
-            s, c = self.stages["kinematics"](params, m, store("kinematics"))
-            scalars |= s
-            curves_si |= c
-        if "pressure" in stages:
-            s, pressure = self.stages["pressure"](points, m)
-            scalars |= s
-            curves_si["cylinder_pressure"] = pressure
-        if "forces" in stages:
-            s, c = self.stages["forces"](params, pressure, store("forces"))
-            scalars |= s
-            curves_si |= c
-        if "multicylinder" in stages:
-            firing, axis, positions = layout_geometry(points)
-            s, c = self.stages["multicylinder"](
-                params, pressure, firing, axis, positions, store("multicylinder")
-            )
-            scalars |= s
-            curves_si |= c
+    # --- outputs -------------------------------------------------------------------------
+    def finish(self, state: CrankState) -> SceneOutput:
         return SceneOutput(
-            scalars={r: scalars[r] / self._scale(r) for r in responses},
-            curves={c: curves_si[c] / self._scale(c) for c in curves},
+            scalars={r: state.scalars[r] / self._scale(r) for r in state.responses},
+            curves={c: state.curves_si[c] / self._scale(c) for c in state.curves},
         )
 
     def _scale(self, name: str) -> float:

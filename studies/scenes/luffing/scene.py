@@ -8,6 +8,7 @@ and pass flag; ``all_checks_ok`` and ``checks_passed`` sum them up.
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -18,6 +19,7 @@ from studies.common.units import UNITS
 from studies.scenes.base import Scene, SceneOutput
 from studies.scenes.checks import LoopOrder, groups_of
 from studies.scenes.luffing.parameters import CHECKS, KERNEL_NAMES, NEEDS, PARAMETERS, RESPONSES
+from studies.scenes.state import RunState
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -41,7 +43,14 @@ def luffing_params(points: dict[str, np.ndarray]) -> np.ndarray:
     return params
 
 
-class LuffingScene(Scene):
+@dataclass(slots=True)
+class LuffingState(RunState):
+    """Run state of a ``luffing`` chunk."""
+
+    out: np.ndarray = field(init=False)  # luffing_batch outputs (n, lf.N_OUT), SI, lf.OUTPUTS
+
+
+class LuffingScene(Scene[LuffingState]):
     """Tower-crane test-rig trolley drive (physics §7)."""
 
     name = "luffing"
@@ -53,6 +62,7 @@ class LuffingScene(Scene):
     parameters = PARAMETERS
     responses = RESPONSES
     stage_order = NEEDS
+    state_type = LuffingState
 
     # --- outputs beside the generic ones -----------------------------------------------------
     def figures(self) -> dict[str, FigureBuilder]:
@@ -95,22 +105,16 @@ class LuffingScene(Scene):
         )
         return found.messages()
 
-    def stage_sizing(self, params: np.ndarray, ratings: np.ndarray) -> np.ndarray:
-        out = np.empty((params.shape[0], lf.N_OUT))
-        lf.luffing_batch(params, ratings, out)
-        return out
+    def stage_sizing(self, state: LuffingState) -> None:
+        """Every check of every design point (:func:`engine_kernels.luffing.sizing.luffing_batch`)."""
+        ratings = np.ascontiguousarray(
+            state.points["motor_ratings"][0]
+        )  # a vector: same in every run
+        state.out = np.empty((state.n, lf.N_OUT))
+        lf.luffing_batch(luffing_params(state.points), ratings, state.out)
 
-    def evaluate(
-        self,
-        points: dict[str, np.ndarray],
-        settings: dict[str, Any],
-        responses: list[str],
-        curves: list[str],
-    ) -> SceneOutput:
-        ratings = np.ascontiguousarray(points["motor_ratings"][0])  # a vector: same in every run
-        # One stage: every response needs it, so it always runs.
-        out = self.stages["sizing"](luffing_params(points), ratings)
-        si = dict(zip(KERNEL_NAMES, out.T, strict=True))
+    def finish(self, state: LuffingState) -> SceneOutput:
+        si = dict(zip(KERNEL_NAMES, state.out.T, strict=True))
         si["selected_motor"] = si["selected_motor"] + 1.0
         flags = np.stack([si[f"{c}_ok"] for c in CHECKS])
         si["checks_passed"] = flags.sum(axis=0)
@@ -118,6 +122,6 @@ class LuffingScene(Scene):
         return SceneOutput(
             scalars={
                 r: si[r] / UNITS[self.response(r).units].to_si  # type: ignore[union-attr]
-                for r in responses
+                for r in state.responses
             },
         )

@@ -33,6 +33,7 @@ custom        youngs_modulus, density parameters
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -41,6 +42,7 @@ from engine_kernels import reed as rd
 from studies.common.units import UNITS
 from studies.scenes.base import Curve, CurveAxis, Parameter, Response, Scene, SceneOutput
 from studies.scenes.checks import LoopOrder
+from studies.scenes.state import RunState
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -275,7 +277,18 @@ def material_properties(points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.n
     return modulus, density
 
 
-class ReedScene(Scene):
+@dataclass(slots=True)
+class ReedState(RunState):
+    """Run state of a ``reed`` chunk: the kernels' arrays (SI, columns of :mod:`engine_kernels.reed`)."""
+
+    params: np.ndarray = field(init=False)  # reed parameters (n, rd.N_PARAMS)
+    out: np.ndarray = field(init=False)  # per reed (n, rd.N_OUT), rd.OUTPUTS
+    modes: np.ndarray = field(init=False)  # per mode (n, rd.N_MODE_OUT, N_MODES): f [Hz], margin
+    shapes: np.ndarray = field(init=False)  # mode shapes (n, N_MODES, shape points) [1]
+    orders: np.ndarray = field(init=False)  # engine-order crossings (n, N_MODES, rd.N_ORDER_OUT)
+
+
+class ReedScene(Scene[ReedState]):
     """Clamped–free reed valve excited by the engine (physics §6)."""
 
     name = "reed"
@@ -290,6 +303,7 @@ class ReedScene(Scene):
     curves = CURVES
     curve_axis = POSITION
     stage_order = NEEDS
+    state_type = ReedState
 
     # --- outputs beside the generic ones -----------------------------------------------------
     def figures(self) -> dict[str, FigureBuilder]:
@@ -339,25 +353,10 @@ class ReedScene(Scene):
         )
         return found.messages()
 
-    def stage_frequencies(
-        self, params: np.ndarray, n_points: int
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        n = params.shape[0]
-        out = np.empty((n, rd.N_OUT))
-        modes = np.empty((n, rd.N_MODE_OUT, N_MODES))
-        shapes = np.empty((n, N_MODES, n_points))
-        rd.reed_batch(params, out, modes, shapes)
-        return out, modes, shapes
-
-    def evaluate(
-        self,
-        points: dict[str, np.ndarray],
-        settings: dict[str, Any],
-        responses: list[str],
-        curves: list[str],
-    ) -> SceneOutput:
-        n = len(points["length"])
-        params = np.empty((n, rd.N_PARAMS))
+    def stage_frequencies(self, state: ReedState) -> None:
+        """Modes [B1]/[B2], margins to the excitation band, shapes if asked, order crossings."""
+        points, n = state.points, state.n
+        state.params = params = np.empty((n, rd.N_PARAMS))
         params[:, rd.LENGTH] = points["length"]
         params[:, rd.WIDTH] = points["width"]
         params[:, rd.THICKNESS] = points["thickness"]
@@ -365,29 +364,35 @@ class ReedScene(Scene):
         params[:, rd.SPEED_MIN] = points["speed_min"]
         params[:, rd.SPEED_MAX] = points["speed_max"]
         params[:, rd.OPENINGS_PER_REVOLUTION] = [OPENINGS[c] for c in points["cycle"]]
-        n_points = int(settings["shape_points"]) if curves else 0
-        # One stage: every response and curve needs it, so it always runs.
-        out, modes, shapes = self.stages["frequencies"](params, n_points)
-        si = dict(zip(rd.OUTPUTS, out.T, strict=True))
+        n_points = int(state.settings["shape_points"]) if state.curves else 0
+        state.out = np.empty((n, rd.N_OUT))
+        state.modes = np.empty((n, rd.N_MODE_OUT, N_MODES))
+        state.shapes = np.empty((n, N_MODES, n_points))
+        rd.reed_batch(params, state.out, state.modes, state.shapes)
+        state.orders = np.empty((n, N_MODES, rd.N_ORDER_OUT))
+        frequencies = np.ascontiguousarray(state.modes[:, rd.MODE_FREQUENCY, :])
+        max_order = float(state.settings["max_order"])
+        margin = float(state.settings["resonance_margin"])
+        rd.order_batch(frequencies, params, max_order, margin, state.orders)
+
+    def finish(self, state: ReedState) -> SceneOutput:
+        modes, orders = state.modes, state.orders
+        si = dict(zip(rd.OUTPUTS, state.out.T, strict=True))
         for k, word in enumerate(MODE_WORDS):
             si[f"{word}_frequency"] = modes[:, rd.MODE_FREQUENCY, k]
             si[f"{word}_margin"] = modes[:, rd.MODE_MARGIN, k]
         si["first_mode_clear"] = (modes[:, rd.MODE_MARGIN, 0] > 0).astype(float)
         si["all_modes_clear"] = (modes[:, rd.MODE_MARGIN, :] > 0).all(axis=1).astype(float)
-        orders = np.empty((n, N_MODES, rd.N_ORDER_OUT))
-        frequencies = np.ascontiguousarray(modes[:, rd.MODE_FREQUENCY, :])
-        max_order, margin = float(settings["max_order"]), float(settings["resonance_margin"])
-        rd.order_batch(frequencies, params, max_order, margin, orders)
         for k, word in enumerate(MODE_WORDS):
             si[f"{word}_crossing_order"] = orders[:, k, rd.CROSSING_ORDER]
             si[f"{word}_crossing_speed"] = orders[:, k, rd.CROSSING_SPEED]
             si[f"{word}_order_margin"] = orders[:, k, rd.ORDER_MARGIN]
         si["resonance_free"] = orders[:, :, rd.ORDER_CLEAR].min(axis=1)
-        si["events_per_revolution"] = params[:, rd.OPENINGS_PER_REVOLUTION]
+        si["events_per_revolution"] = state.params[:, rd.OPENINGS_PER_REVOLUTION]
         return SceneOutput(
             scalars={
                 r: si[r] / UNITS[self.response(r).units].to_si  # type: ignore[union-attr]
-                for r in responses
+                for r in state.responses
             },
-            curves={c: shapes[:, int(c.rsplit("_", 1)[1]) - 1] for c in curves},
+            curves={c: state.shapes[:, int(c.rsplit("_", 1)[1]) - 1] for c in state.curves},
         )

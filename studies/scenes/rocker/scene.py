@@ -1,15 +1,16 @@
 """Scene ``rocker``: OHC cam with a variable-ratio rocker, valve kinematics (physics §3).
 
-The chain itself (tappet law, rocker kinematics, caches, checks) is
-:class:`studies.scenes.chain.ChainScene`, which the ``valve`` scene builds on too; this scene
-adds what a user of the kinematics reads: the valve-lift figure and the invalid-chain table.
+The linkage itself (tappet law, rocker kinematics [R1]–[R6], caches, checks, kinematic
+responses) is :class:`studies.scenes.linkage.scene.LinkageScene`, which the ``valve`` scenes
+build on too; the rocker scene is that linkage on its own: its two stages ``tappet`` and
+``rocker``, the valve-lift figure and the linkage status table.
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from studies.scenes.chain import ChainScene
+from studies.scenes.linkage.scene import LinkageScene, LinkageState
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -17,15 +18,20 @@ if TYPE_CHECKING:
     from studies.scenes.base import FigureBuilder
 
 
-class RockerScene(ChainScene):
-    """The kinematic chain as a scene of its own (declarations in :mod:`~studies.scenes.chain`)."""
+class RockerScene(LinkageScene[LinkageState]):
+    """The cam–rocker–valve linkage as a scene of its own (kinematics only)."""
+
+    name = "rocker"
+    seconds_per_point = 2e-2
+    description = "OHC cam with variable-ratio rocker: valve lift, force ratio (kinematics)"
+    state_type = LinkageState
 
     def figures(self) -> dict[str, FigureBuilder]:
-        from studies.scenes.chain_figures import valve_lift_figure  # noqa: PLC0415
+        from studies.scenes.linkage.figures import valve_lift_figure  # noqa: PLC0415
 
         return {"valve_lift": valve_lift_figure}
 
     def summaries(self, ds: xr.Dataset) -> list[str]:
-        from studies.scenes.chain_summaries import chain_status_summary  # noqa: PLC0415  (xarray on use)
+        from studies.scenes.linkage.summaries import linkage_status_summary  # noqa: PLC0415  (xarray on use)
 
-        return chain_status_summary(ds)
+        return linkage_status_summary(ds)

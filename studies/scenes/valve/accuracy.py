@@ -5,7 +5,7 @@ study. To measure the speed–accuracy trade (physics §4) they must vary betwee
 this scene declares them as parameters (``integrator``, ``angle_step``) and adds two stages:
 
 * ``reference`` — the error of each run against scipy's event-restarted reference
-  (:mod:`studies.scenes.valve.accuracy_reference`), computed once per distinct set of the other parameters
+  (:mod:`studies.scenes.valve.reference.accuracy`), computed once per distinct set of the other parameters
   (e.g. once per camshaft speed × seat stiffness pair) and reused by every integrator and step;
 * ``cost`` — measured seconds per case of the integrator's batch kernel (a timing: the median
   of repeats, with their interquartile range stored beside it whenever it runs).
@@ -24,9 +24,14 @@ import numpy as np
 
 from engine_kernels import valvetrain as valve
 from studies.scenes.base import Parameter, Response, SceneOutput
-from studies.scenes.chain import CACHE_SIZE, BoundedCache, angle_step_problem, grid_deg, step_deg
 from studies.scenes.checks import PointProblems
-from studies.scenes.valve import accuracy_reference as acc
+from studies.scenes.linkage.scene import (
+    CACHE_SIZE,
+    BoundedCache,
+    angle_step_problem,
+    grid_deg,
+    step_deg,
+)
 from studies.scenes.valve.error_bar import tolerance_rungs
 from studies.scenes.valve.parameters import (
     ANGLE_STEP,
@@ -39,6 +44,7 @@ from studies.scenes.valve.parameters import (
     WINDOW_SETTINGS,
 )
 from studies.scenes.valve.parameters import SETTINGS as VALVE_SETTINGS
+from studies.scenes.valve.reference import accuracy as acc
 from studies.scenes.valve.scene import (
     MM,
     WINDOW_PROBE_DEG,
@@ -49,6 +55,7 @@ from studies.scenes.valve.scene import (
     stability_problems,
     valve_rows,
 )
+from studies.scenes.valve.state import CostState, ValveState
 
 if TYPE_CHECKING:
     from studies.scenes.base import FigureBuilder
@@ -108,12 +115,13 @@ class ValveAccuracyScene(ValveScene):
     responses = RESPONSES
     curves = ()
     curve_axis = None
+    state_type = CostState
     stage_order = ("tappet", "rocker", "dynamics", "jump_speed", "reference", "cost")
     status_responses = (*ValveScene.status_responses, "cost_per_case_iqr")  # beside every cost
 
     # --- outputs beside the generic ones -----------------------------------------------------
     def figures(self) -> dict[str, FigureBuilder]:
-        from studies.scenes.valve.figures import error_vs_cost_figure  # noqa: PLC0415
+        from studies.scenes.valve.figures.maps import error_vs_cost_figure  # noqa: PLC0415
 
         return {"error_vs_cost": error_vs_cost_figure}
 
@@ -131,7 +139,7 @@ class ValveAccuracyScene(ValveScene):
             problem = angle_step_problem(step, "angle_step")
             if problem:
                 found.add(i, problem)
-        problems = found.messages() + self.chain_point_problems(points)
+        problems = found.messages() + self.linkage_point_problems(points)
         return (
             problems + jump_setting_problems(settings) + stability_problems(points, settings, steps)
         )
@@ -160,76 +168,76 @@ class ValveAccuracyScene(ValveScene):
                 scalars[r][idx] = out.scalars[r]
         return SceneOutput(scalars)
 
-    def stage_reference(self, ctx: dict[str, Any]) -> None:
-        settings = ctx["settings"]
+    def stage_reference(self, state: CostState) -> None:
+        settings = state.settings
         step = step_deg(settings["angle_step"])
         spacing = settings["reference_spacing"]
-        ctx["reference_error"] = np.full(ctx["n"], np.nan)
-        for key, idx in ctx["groups"].items():
-            if not self.chain_valid(ctx, key):
+        state.reference_error = np.full(state.n, np.nan)
+        for key, idx in state.groups.items():
+            if not self.linkage_valid(state, key):
                 continue
-            fine = self.excitation(ctx, key, 2.0 * acc.REFERENCE_TABLE_DEG, unclipped=True)
-            window = self.window(ctx, key)
+            fine = self.excitation(state, key, 2.0 * acc.REFERENCE_TABLE_DEG, unclipped=True)
+            window = self.window(state, key)
             theta = np.radians(grid_deg(window[0], spacing, window[1]))
             solver = (settings["reference_method"], settings["reference_rtol"])
-            for i, row in zip(idx, valve_rows(ctx["points"], idx), strict=True):
+            for i, row in zip(idx, valve_rows(state.points, idx), strict=True):
                 reference = self.reference_cache.get(
                     (key, window, spacing, tuple(row), solver),
                     partial(acc.reference_lift, fine, row, theta, *solver),
                 )
-                lift = self.reported_lift(ctx, key, i, row)
-                ctx["reference_error"][i] = acc.max_error(lift, reference, round(step / spacing))
+                lift = self.reported_lift(state, key, i, row)
+                state.reference_error[i] = acc.max_error(lift, reference, round(step / spacing))
 
-    def reported_lift(self, ctx: dict[str, Any], key: tuple, i: int, row: np.ndarray) -> np.ndarray:
+    def reported_lift(self, state: ValveState, key: tuple, i: int, row: np.ndarray) -> np.ndarray:
         """Lift [m] of point i on the study's grid, integrated as it was reported: at its
         step, method and sub-step count (they differ from the settings under a tolerance)."""
-        settings = ctx["settings"]
-        used = float(ctx["step_used"][i])
-        method = INTEGRATORS[int(ctx["method"][i])]
+        settings = state.settings
+        used = float(state.step_used[i])
+        method = INTEGRATORS[int(state.method[i])]
         if method == DOPRI:
-            trace = self.dopri_run(ctx, key, row[None, :], step_deg(settings["angle_step"]), True)[
-                1
-            ]
+            trace = self.dopri_run(
+                state, key, row[None, :], step_deg(settings["angle_step"]), True
+            )[1]
             assert trace is not None
             return trace[0, valve.C_LIFT]
-        substeps = ctx["out"][i, valve.O_SUBSTEPS]
+        substeps = state.out[i, valve.O_SUBSTEPS]
         forced = int(substeps) if np.isfinite(substeps) else 0
         flags = kernel_settings(settings, method, False, forced)
-        lift = acc.trajectory_lift(self.excitation(ctx, key, used), row, flags, method)
+        lift = acc.trajectory_lift(self.excitation(state, key, used), row, flags, method)
         return lift[:: round(step_deg(settings["angle_step"]) / used)]
 
-    def stage_cost(self, ctx: dict[str, Any]) -> None:
+    def stage_cost(self, state: CostState) -> None:
         """Seconds per case of what produced the results: the integrator's batch kernel at
         the study's step, or under a tolerance the whole ladder (runs, companions, rungs)."""
-        settings = ctx["settings"]
+        settings = state.settings
         integrator = settings["integrator"]
         step = step_deg(settings["angle_step"])
-        ctx["cost"] = np.full(ctx["n"], np.nan)
-        ctx["cost_iqr"] = np.full(ctx["n"], np.nan)
-        for key, idx in ctx["groups"].items():
-            if not self.chain_valid(ctx, key):
+        state.cost = np.full(state.n, np.nan)
+        state.cost_iqr = np.full(state.n, np.nan)
+        for key, idx in state.groups.items():
+            if not self.linkage_valid(state, key):
                 continue
             if settings["tolerance"] > 0.0:
-                run = partial(self.ladder_run, ctx, key)
+                run = partial(self.ladder_run, state, key)
             elif integrator == DOPRI:
-                run = partial(self.dopri_cost_run, ctx, key, step)
+                run = partial(self.dopri_cost_run, state, key, step)
             else:
                 flags = kernel_settings(settings, integrator, False)
-                run = partial(_run_kernel, self.excitation(ctx, key, step), integrator, flags)
-            for i, row in zip(idx, valve_rows(ctx["points"], idx), strict=True):
-                ctx["cost"][i], ctx["cost_iqr"][i] = acc.timing_per_case(run, row)
+                run = partial(_run_kernel, self.excitation(state, key, step), integrator, flags)
+            for i, row in zip(idx, valve_rows(state.points, idx), strict=True):
+                state.cost[i], state.cost_iqr[i] = acc.timing_per_case(run, row)
 
     def dopri_cost_run(
-        self, ctx: dict[str, Any], key: tuple, step: float, rows: np.ndarray
+        self, state: ValveState, key: tuple, step: float, rows: np.ndarray
     ) -> object:
         """``dopri`` on ``rows`` as the dynamics stage runs it (for its timing)."""
-        return self.dopri_run(ctx, key, rows, step, False)
+        return self.dopri_run(state, key, rows, step, False)
 
-    def ladder_run(self, ctx: dict[str, Any], key: tuple, rows: np.ndarray) -> object:
+    def ladder_run(self, state: ValveState, key: tuple, rows: np.ndarray) -> object:
         """The tolerance ladder of the dynamics stage on ``rows`` (for its timing)."""
-        settings = ctx["settings"]
+        settings = state.settings
         return tolerance_rungs(
-            lambda step, unclipped: self.excitation(ctx, key, step, unclipped=unclipped),
+            lambda step, unclipped: self.excitation(state, key, step, unclipped=unclipped),
             rows,
             lambda method: kernel_settings(settings, method, False),
             settings["integrator"],
@@ -239,14 +247,16 @@ class ValveAccuracyScene(ValveScene):
             False,
         )
 
-    def scalar(self, ctx: dict[str, Any], response: str) -> np.ndarray:
+    def scalar(self, state: ValveState, response: str) -> np.ndarray:
+        if not isinstance(state, CostState):
+            return super().scalar(state, response)
         if response == "reference_error":
-            return ctx["reference_error"] * MM
+            return state.reference_error * MM
         if response == "cost_per_case":
-            return ctx["cost"] * MS
+            return state.cost * MS
         if response == "cost_per_case_iqr":
-            return ctx["cost_iqr"] * MS
-        return super().scalar(ctx, response)
+            return state.cost_iqr * MS
+        return super().scalar(state, response)
 
 
 def _run_kernel(

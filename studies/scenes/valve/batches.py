@@ -12,8 +12,8 @@ from engine_kernels import valvetrain as valve
 from engine_kernels.valvetrain.dopri import integrate as valve_dopri
 from engine_kernels.valvetrain.dopri.jump import dopri_jump_speed
 from engine_kernels.valvetrain.valve import lane_batch as valve_lanes
-from studies.scenes.chain import step_deg
 from studies.scenes.checks import PointProblems
+from studies.scenes.linkage.scene import step_deg
 from studies.scenes.valve.parameters import LANE_PRECISION
 
 RPM = 30.0 / math.pi  # rpm per rad/s

@@ -6,7 +6,7 @@ rung of the model ladder changes and costs, this scene declares the rung as a pa
 masses. Design points of one rung are evaluated together by the ``valve`` machinery with that
 rung's settings, and a ``cost`` stage measures the seconds per case of the rung's batch kernel
 (``lanes`` for the lumped rung, the chain batch for N ≥ 1) on enough copies of a point that
-fixed overhead stays small (:func:`studies.scenes.valve.accuracy_reference.seconds_per_case`).
+fixed overhead stays small (:func:`studies.scenes.valve.reference.accuracy.seconds_per_case`).
 
 The lumped rung answers the spring responses from its own assumptions: the spring force at the
 retainer is the static ``Ps0 + ks·y`` (ratio 1, deviation 0, no surge), the run status is the
@@ -21,12 +21,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from studies.scenes.base import Parameter, Response, SceneOutput
-from studies.scenes.chain import step_deg
-from studies.scenes.valve import accuracy_reference as acc
+from studies.scenes.linkage.scene import step_deg
 from studies.scenes.valve import spring
 from studies.scenes.valve.parameters import PARAMETERS, RESPONSES, SETTINGS
+from studies.scenes.valve.reference import accuracy as acc
 from studies.scenes.valve.scene import MM, ValveScene, integrate, kernel_settings, valve_rows
 from studies.scenes.valve.spring_parameters import SPRING_MASSES, SPRING_MODEL, SURGE_RESPONSES
+from studies.scenes.valve.state import CostState, ValveState
 
 if TYPE_CHECKING:
     from studies.scenes.base import FigureBuilder
@@ -73,11 +74,12 @@ class ValveSpringLadderScene(ValveScene):
     status_responses = (*ValveScene.status_responses, "cost_per_case_iqr")  # beside every cost
     curves = ()
     curve_axis = None
+    state_type = CostState
     stage_order = ("tappet", "rocker", "dynamics", "surge", "jump_speed", "cost")
 
     def figures(self) -> dict[str, FigureBuilder]:
-        from studies.scenes.valve.ladder_figures import ladder_figure  # noqa: PLC0415
-        from studies.scenes.valve.surge_figures import surge_sweep_figure  # noqa: PLC0415
+        from studies.scenes.valve.figures.ladder import ladder_figure  # noqa: PLC0415
+        from studies.scenes.valve.figures.surge import surge_sweep_figure  # noqa: PLC0415
 
         return {"spring_model_ladder": ladder_figure, "surge_sweep": surge_sweep_figure}
 
@@ -110,28 +112,30 @@ class ValveSpringLadderScene(ValveScene):
                 _lumped_spring_answers(scalars, idx, points, out.scalars)
         return SceneOutput(scalars)
 
-    def stage_cost(self, ctx: dict[str, Any]) -> None:
-        settings = ctx["settings"]
+    def stage_cost(self, state: CostState) -> None:
+        settings = state.settings
         chained = spring.uses_chain(settings)
         flags = kernel_settings(settings, "lanes", False)
-        ctx["cost"] = np.full(ctx["n"], np.nan)
-        ctx["cost_iqr"] = np.full(ctx["n"], np.nan)
+        state.cost = np.full(state.n, np.nan)
+        state.cost_iqr = np.full(state.n, np.nan)
         step = step_deg(settings["angle_step"])
-        for key, idx in ctx["groups"].items():
-            if not self.chain_valid(ctx, key):
+        for key, idx in state.groups.items():
+            if not self.linkage_valid(state, key):
                 continue
-            excitation = self.excitation(ctx, key, step)
-            rows = self.spring_rows(ctx, idx) if chained else valve_rows(ctx["points"], idx)
+            excitation = self.excitation(state, key, step)
+            rows = self.spring_rows(state, idx) if chained else valve_rows(state.points, idx)
             run = partial(_run_rung, excitation, flags, chained)
             for i, row in zip(idx, rows, strict=True):
-                ctx["cost"][i], ctx["cost_iqr"][i] = acc.timing_per_case(run, row)
+                state.cost[i], state.cost_iqr[i] = acc.timing_per_case(run, row)
 
-    def scalar(self, ctx: dict[str, Any], response: str) -> np.ndarray:
+    def scalar(self, state: ValveState, response: str) -> np.ndarray:
+        if not isinstance(state, CostState):
+            return super().scalar(state, response)
         if response == "cost_per_case":
-            return ctx["cost"] * MS
+            return state.cost * MS
         if response == "cost_per_case_iqr":
-            return ctx["cost_iqr"] * MS
-        return super().scalar(ctx, response)
+            return state.cost_iqr * MS
+        return super().scalar(state, response)
 
 
 def _run_rung(

@@ -50,10 +50,10 @@ import numpy as np
 
 from engine_kernels import valvetrain as valve
 from studies.scenes.base import Curve, Parameter, Response
-from studies.scenes.chain_parameters import CURVES as ROCKER_CURVES
-from studies.scenes.chain_parameters import PARAMETERS as ROCKER_PARAMETERS
-from studies.scenes.chain_parameters import RESPONSES as ROCKER_RESPONSES
-from studies.scenes.chain_parameters import TAPPET_STEP
+from studies.scenes.linkage.parameters import CURVES as ROCKER_CURVES
+from studies.scenes.linkage.parameters import PARAMETERS as ROCKER_PARAMETERS
+from studies.scenes.linkage.parameters import RESPONSES as ROCKER_RESPONSES
+from studies.scenes.linkage.parameters import TAPPET_STEP
 from studies.scenes.valve.spring_parameters import (
     SPRING_PARAMETERS,
     SPRING_SETTINGS,
@@ -105,7 +105,7 @@ def dopri_table_deg(tolerance: float) -> float:
 LANE_PRECISION = {"lanes": np.float64, "lanes_f32": np.float32}
 MAX_HALVINGS = 6
 STATUS_NOT_RUN = len(valve.VALVE_STATUS_NAMES)
-"""Scene status code: the kinematic chain is invalid, so the dynamics did not run."""
+"""Scene status code: the kinematic linkage is invalid, so the dynamics did not run."""
 JUMP_NOT_RUN = len(valve.JUMP_STATUS_NAMES)
 
 DYNAMICS_PARAMETERS: tuple[Parameter, ...] = (

@@ -1,7 +1,7 @@
 """Scene ``valve``: single-DOF valve-train dynamics driven through the rocker (physics §4).
 
-The excitation is the theoretical valve lift Y(θ) of the ``rocker`` scene's chain, so this
-scene extends :class:`~studies.scenes.chain.ChainScene` and adds two stages:
+The excitation is the theoretical valve lift Y(θ) of the ``rocker`` scene's linkage, so this
+scene extends :class:`~studies.scenes.linkage.scene.LinkageScene` and adds two stages:
 
 * ``dynamics`` — fixed-step RK4 of [V2] over the integration window (valve opening − 2° …
   closure + ``closing_window``, snapped outward to whole multiples of 2°), with the integrator
@@ -13,8 +13,8 @@ scene extends :class:`~studies.scenes.chain.ChainScene` and adds two stages:
   geometric speeds, then bisection), at ``angle_step``.
 
 Kinematic responses run only ``tappet`` and ``rocker``. Points sharing the cam and rocker
-parameters share one excitation table (cached per chain and step): it is the table every
-lane of a block reads. Jumps, bounces, an unstable run or an invalid chain are results
+parameters share one excitation table (cached per linkage and step): it is the table every
+lane of a block reads. Jumps, bounces, an unstable run or an invalid linkage are results
 (``follows_cam``, ``status``, ``run_ok``), never exceptions. How a tolerance picks the step is
 described in :mod:`studies.scenes.valve.parameters`.
 """
@@ -29,16 +29,17 @@ import numpy as np
 from engine_kernels import valvetrain as valve
 from engine_kernels.valvetrain import rocker
 from engine_kernels.valvetrain.spring_chain.jump import chain_jump_speed
-from studies.scenes.chain import (
+from studies.scenes.linkage.parameters import RESPONSES as ROCKER_RESPONSES
+from studies.scenes.linkage.scene import (
     CACHE_SIZE,
     GRID_UNIT_DEG,
     HALF_TURN_DEG,
     BoundedCache,
-    ChainScene,
+    LinkageScene,
     open_range,
     step_deg,
 )
-from studies.scenes.chain_parameters import RESPONSES as ROCKER_RESPONSES
+from studies.scenes.state import RunState
 from studies.scenes.valve import spring, work
 from studies.scenes.valve.batches import (
     N_CURVES,
@@ -66,6 +67,7 @@ from studies.scenes.valve.parameters import (
     dopri_table_deg,
     dopri_tolerance,
 )
+from studies.scenes.valve.state import ValveState
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -84,7 +86,7 @@ BAR_RESPONSES = (
 KINEMATIC_RESPONSES = frozenset(r.name for r in ROCKER_RESPONSES)
 
 
-class ValveScene(ChainScene):
+class ValveScene(LinkageScene[ValveState]):
     name = "valve"
     seconds_per_point = 1e-3
     work_estimate = staticmethod(work.work_estimate)  # type: ignore[assignment]
@@ -95,12 +97,24 @@ class ValveScene(ChainScene):
     curves = CURVES
     stage_order: tuple[str, ...] = ("tappet", "rocker", "dynamics", "surge", "jump_speed")
     status_responses: tuple[str, ...] = ("chain_status", "status", "surge_status")
+    state_type: type[RunState] = ValveState
+
+    def stages_to_run(
+        self, settings: dict[str, Any], responses: list[str], curves: list[str]
+    ) -> list[str]:
+        """Under ``spring_model = "multi_mass"`` the ``surge`` stage answers the dynamic
+        responses too: it runs in place of ``dynamics``."""
+        stages = self.stages_for(responses, curves)
+        if spring.uses_chain(settings) and "dynamics" in stages:
+            wanted = {*stages, "surge"} - {"dynamics"}
+            stages = [s for s in self.stage_order if s in wanted]
+        return stages
 
     # --- outputs beside the generic ones -----------------------------------------------------
     def figures(self) -> dict[str, FigureBuilder]:
-        from studies.scenes.chain_figures import valve_lift_figure  # noqa: PLC0415
-        from studies.scenes.valve.figures import jump_speed_map_figure  # noqa: PLC0415
-        from studies.scenes.valve.surge_figures import surge_sweep_figure  # noqa: PLC0415
+        from studies.scenes.linkage.figures import valve_lift_figure  # noqa: PLC0415
+        from studies.scenes.valve.figures.maps import jump_speed_map_figure  # noqa: PLC0415
+        from studies.scenes.valve.figures.surge import surge_sweep_figure  # noqa: PLC0415
 
         return {
             "valve_lift": valve_lift_figure,
@@ -114,10 +128,10 @@ class ValveScene(ChainScene):
         return {"valve": bench_valve}
 
     def summaries(self, ds: xr.Dataset) -> list[str]:
-        from studies.scenes.chain_summaries import chain_status_summary  # noqa: PLC0415
+        from studies.scenes.linkage.summaries import linkage_status_summary  # noqa: PLC0415
         from studies.scenes.valve.summaries import dynamics_status_summary  # noqa: PLC0415
 
-        return chain_status_summary(ds) + dynamics_status_summary(ds)
+        return linkage_status_summary(ds) + dynamics_status_summary(ds)
 
     def __init__(self) -> None:
         super().__init__()
@@ -136,13 +150,13 @@ class ValveScene(ChainScene):
         return spring.request_problems(settings, responses, curves)
 
     # --- excitation -----------------------------------------------------------------------
-    def window(self, ctx: dict[str, Any], key: tuple) -> tuple[float, float]:
+    def window(self, state: ValveState, key: tuple) -> tuple[float, float]:
         """Integration window [deg]: opening − 2° … closure + closing window, on 2° marks."""
-        closing_window = math.degrees(ctx["settings"]["closing_window"])
-        spacing = step_deg(ctx["settings"]["tappet_step"])
+        closing_window = math.degrees(state.settings["closing_window"])
+        spacing = step_deg(state.settings["tappet_step"])
 
         def make() -> tuple[float, float]:
-            probe = self.chain(ctx, key, (-HALF_TURN_DEG, WINDOW_PROBE_DEG, HALF_TURN_DEG))
+            probe = self.linkage(state, key, (-HALF_TURN_DEG, WINDOW_PROBE_DEG, HALF_TURN_DEG))
             opening, closing = open_range(probe)
             if math.isnan(opening):
                 return -HALF_TURN_DEG, HALF_TURN_DEG
@@ -154,7 +168,7 @@ class ValveScene(ChainScene):
 
     def excitation(
         self,
-        ctx: dict[str, Any],
+        state: ValveState,
         key: tuple,
         step: float,
         span: tuple[float, float] | None = None,
@@ -163,99 +177,98 @@ class ValveScene(ChainScene):
         """(Y, Y', Y'') table at half the RK4 ``step`` [deg] over the integration window (or
         over ``span`` = (start, stop) [deg]), its step [rad] and start [rad].
 
-        The chain's valve lift, clipped at zero where the lash is open: interpolated, its kink
+        The linkage's valve lift, clipped at zero where the lash is open: interpolated, its kink
         at lash take-up is smeared over a table interval, and fixed-step RK4 converges
         regularly as its table halves with its step (so its step-halving bar holds). With
         ``unclipped``, the lift before the take-up, which the kernels clip exactly at its zero
         (:mod:`studies.scenes.valve.excitation`): for ``dopri``, whose table does not follow
         its steps, and for the scipy reference.
         """
-        start, stop = self.window(ctx, key) if span is None else span
+        start, stop = self.window(state, key) if span is None else span
         grid = (start, step / 2.0, stop)
         if unclipped:
-            i = int(ctx["groups"][key][0])
-            table = self.chain_cache.get(
-                ("unclipped", key, step_deg(ctx["settings"]["tappet_step"]), grid),
-                lambda: unclipped_valve_lift(ctx["points"], i, self.tappet_table(ctx, key), grid),
+            i = int(state.groups[key][0])
+            table = self.linkage_cache.get(
+                ("unclipped", key, step_deg(state.settings["tappet_step"]), grid),
+                lambda: unclipped_valve_lift(state.points, i, self.tappet_table(state, key), grid),
             )
         else:
-            chain = self.chain(ctx, key, grid)
-            table = np.ascontiguousarray(chain.curves[: rocker.ROW_VALVE_ACCELERATION + 1])
+            linkage = self.linkage(state, key, grid)
+            table = np.ascontiguousarray(linkage.curves[: rocker.ROW_VALVE_ACCELERATION + 1])
         return table, math.radians(step / 2.0), math.radians(start)
 
-    def chain_valid(self, ctx: dict[str, Any], key: tuple) -> bool:
-        probe = self.chain(ctx, key, (-HALF_TURN_DEG, WINDOW_PROBE_DEG, HALF_TURN_DEG))
+    def linkage_valid(self, state: ValveState, key: tuple) -> bool:
+        probe = self.linkage(state, key, (-HALF_TURN_DEG, WINDOW_PROBE_DEG, HALF_TURN_DEG))
         return probe.status == rocker.ROCKER_OK
 
     # --- stages ---------------------------------------------------------------------------
-    def stage_dynamics(self, ctx: dict[str, Any]) -> None:
-        if spring.uses_chain(ctx["settings"]):
-            self.stage_surge(ctx)
-            return
-        n = ctx["n"]
-        ctx["out"] = np.full((n, N_OUT), np.nan)
-        ctx["step_used"] = np.full(n, np.nan)
-        want = any(c in CURVE_ROWS for c in ctx["curves"])
-        axis = self.curve_coordinate(ctx["settings"])
-        ctx["traces"] = np.full((n, N_CURVES, axis.size if want else 0), np.nan)
+    def stage_dynamics(self, state: ValveState) -> None:
+        """The lumped rung [V2] per linkage group (:meth:`run_group`); under
+        ``spring_model = "multi_mass"`` the ``surge`` stage runs instead (:meth:`stages_to_run`)."""
+        n = state.n
+        state.out = np.full((n, N_OUT), np.nan)
+        state.step_used = np.full(n, np.nan)
+        want = any(c in CURVE_ROWS for c in state.curves)
+        axis = self.curve_coordinate(state.settings)
+        state.traces = np.full((n, N_CURVES, axis.size if want else 0), np.nan)
         names = ("error_estimate", "tolerance_met", *DERIVED_BARS, *BUDGET_RESPONSES)
-        ctx["bars"] = {name: np.full(n, np.nan) for name in names}
-        ctx["method"] = np.full(n, float(INTEGRATORS.index(ctx["settings"]["integrator"])))
-        for key, idx in ctx["groups"].items():
-            if not self.chain_valid(ctx, key):
-                ctx["out"][idx, valve.O_STATUS] = STATUS_NOT_RUN
+        state.bars = {name: np.full(n, np.nan) for name in names}
+        state.method = np.full(n, float(INTEGRATORS.index(state.settings["integrator"])))
+        for key, idx in state.groups.items():
+            if not self.linkage_valid(state, key):
+                state.out[idx, valve.O_STATUS] = STATUS_NOT_RUN
                 continue
-            self.run_group(ctx, key, idx, want)
+            self.run_group(state, key, idx, want)
 
-    def run_group(self, ctx: dict[str, Any], key: tuple, idx: np.ndarray, want: bool) -> None:
-        """Integrate the points ``idx`` of one chain; with error bars or a tolerance, down the
+    def run_group(self, state: ValveState, key: tuple, idx: np.ndarray, want: bool) -> None:
+        """Integrate the points ``idx`` of one linkage; with error bars or a tolerance, down the
         halving ladder of :mod:`studies.scenes.valve.error_bar`.
 
         Under a tolerance the method is picked per point too
         (:func:`~studies.scenes.valve.error_bar.tolerance_rungs`).
         """
-        settings = ctx["settings"]
+        settings = state.settings
         tolerance = settings["tolerance"]
         integrator = settings["integrator"]
-        rows = valve_rows(ctx["points"], idx)
+        rows = valve_rows(state.points, idx)
         coarse = step_deg(settings["angle_step"])
-        if tolerance <= 0.0 and not ctx["responses"] & BAR_RESPONSES:
+        if tolerance <= 0.0 and not BAR_RESPONSES.intersection(state.responses):
             if integrator == DOPRI:
-                out, trace = self.dopri_run(ctx, key, rows, coarse, want)
+                out, trace = self.dopri_run(state, key, rows, coarse, want)
             else:
                 flags = kernel_settings(settings, integrator, False)
-                excitation = self.excitation(ctx, key, coarse)
+                excitation = self.excitation(state, key, coarse)
                 out, trace = integrate(excitation, rows, integrator, flags, want)
-            ctx["out"][idx] = out
-            ctx["step_used"][idx] = coarse
+            state.out[idx] = out
+            state.step_used[idx] = coarse
             if trace is not None:
-                self.store_traces(ctx, key, idx, trace, coarse, 0)
+                self.store_traces(state, key, idx, trace, coarse, 0)
             return
         rungs = tolerance_rungs(
-            lambda step, unclipped: self.excitation(ctx, key, step, unclipped=unclipped),
+            lambda step, unclipped: self.excitation(state, key, step, unclipped=unclipped),
             rows,
             lambda method: kernel_settings(settings, method, False),
             integrator,
             coarse,
             tolerance,
-            bool(ctx["responses"] & BUDGET_RESPONSES),
-            bool(ctx["responses"] & DERIVED_BARS.keys()),
+            not BUDGET_RESPONSES.isdisjoint(state.responses),
+            not DERIVED_BARS.keys().isdisjoint(state.responses),
         )
         for pending, method, ladder in rungs:
             at = idx[pending]
-            ctx["out"][at] = ladder.out
-            ctx["step_used"][at] = coarse / 2.0**ladder.level
-            ctx["method"][at] = INTEGRATORS.index(method)
-            ctx["bars"]["error_estimate"][at] = ladder.bar
-            ctx["bars"]["tolerance_met"][at] = ladder.met
+            state.out[at] = ladder.out
+            state.step_used[at] = coarse / 2.0**ladder.level
+            state.method[at] = INTEGRATORS.index(method)
+            state.bars["error_estimate"][at] = ladder.bar
+            state.bars["tolerance_met"][at] = ladder.met
             for name, values in (ladder.derived | ladder.budget).items():
-                ctx["bars"][name][at] = values
+                state.bars[name][at] = values
             if want:
-                self.ladder_curves(ctx, key, at, rows[pending], ladder, coarse, method)
+                self.ladder_curves(state, key, at, rows[pending], ladder, coarse, method)
 
     def ladder_curves(
         self,
-        ctx: dict[str, Any],
+        state: ValveState,
         key: tuple,
         idx: np.ndarray,
         rows: np.ndarray,
@@ -265,34 +278,34 @@ class ValveScene(ChainScene):
     ) -> None:
         """Curves of each point at the level the ladder stopped at (its sub-step count)."""
         if integrator == DOPRI:
-            trace = self.dopri_run(ctx, key, rows, coarse, True)[1]
+            trace = self.dopri_run(state, key, rows, coarse, True)[1]
             assert trace is not None
-            self.store_traces(ctx, key, idx, trace, coarse, 0)
+            self.store_traces(state, key, idx, trace, coarse, 0)
             return
         pairs = np.stack([ladder.level, ladder.substeps], axis=1)
         for level, count in np.unique(pairs, axis=0):
             members = np.flatnonzero((pairs == (level, count)).all(axis=1))
             step = coarse / 2.0**level
-            flags = kernel_settings(ctx["settings"], integrator, False, int(count))
+            flags = kernel_settings(state.settings, integrator, False, int(count))
             trace = integrate(
-                self.excitation(ctx, key, step), rows[members], integrator, flags, True
+                self.excitation(state, key, step), rows[members], integrator, flags, True
             )[1]
             assert trace is not None
-            self.store_traces(ctx, key, idx[members], trace, coarse, int(level))
+            self.store_traces(state, key, idx[members], trace, coarse, int(level))
 
     def dopri_run(
-        self, ctx: dict[str, Any], key: tuple, rows: np.ndarray, grid_deg: float, curves: bool
+        self, state: ValveState, key: tuple, rows: np.ndarray, grid_deg: float, curves: bool
     ) -> tuple[np.ndarray, np.ndarray | None]:
         """``dopri`` on its own excitation table (``dopri_table_deg``), reported on the
         grid every ``grid_deg`` [deg], at the per-step tolerance of the study's tolerance."""
-        tolerance = ctx["settings"]["tolerance"]
-        excitation = self.excitation(ctx, key, 2.0 * dopri_table_deg(tolerance), unclipped=True)
+        tolerance = state.settings["tolerance"]
+        excitation = self.excitation(state, key, 2.0 * dopri_table_deg(tolerance), unclipped=True)
         atol = dopri_tolerance(tolerance)
         return integrate_dopri(excitation, rows, grid_deg, atol, curves)
 
     def store_traces(
         self,
-        ctx: dict[str, Any],
+        state: ValveState,
         key: tuple,
         idx: np.ndarray,
         trace: np.ndarray,
@@ -300,43 +313,44 @@ class ValveScene(ChainScene):
         level: int,
     ) -> None:
         """Curves at step coarse/2^level into the study's curve axis (the coarse grid)."""
-        first = round((self.window(ctx, key)[0] + HALF_TURN_DEG) / coarse)
+        first = round((self.window(state, key)[0] + HALF_TURN_DEG) / coarse)
         kept = trace[:, :, :: 2**level]
-        ctx["traces"][idx, :, first : first + kept.shape[2]] = kept
+        state.traces[idx, :, first : first + kept.shape[2]] = kept
 
-    def stage_surge(self, ctx: dict[str, Any]) -> None:
-        spring.surge_stage(self, ctx)
+    def stage_surge(self, state: ValveState) -> None:
+        """The multi-mass spring [V4] (:func:`studies.scenes.valve.spring.surge_stage`)."""
+        spring.surge_stage(self, state)
 
-    def spring_rows(self, ctx: dict[str, Any], idx: np.ndarray) -> np.ndarray:
-        masses = int(ctx["settings"]["spring_masses"])
-        return spring.chain_rows(valve_rows(ctx["points"], idx), ctx["points"], idx, masses)
+    def spring_rows(self, state: ValveState, idx: np.ndarray) -> np.ndarray:
+        masses = int(state.settings["spring_masses"])
+        return spring.chain_rows(valve_rows(state.points, idx), state.points, idx, masses)
 
-    def stage_jump_speed(self, ctx: dict[str, Any]) -> None:
-        settings = ctx["settings"]
+    def stage_jump_speed(self, state: ValveState) -> None:
+        settings = state.settings
         flags = kernel_settings(settings, settings["integrator"], False)
-        ctx["jump"] = np.full((ctx["n"], 2), np.nan)
-        for key, idx in ctx["groups"].items():
-            if not self.chain_valid(ctx, key):
-                ctx["jump"][idx, 1] = JUMP_NOT_RUN
+        state.jump = np.full((state.n, 2), np.nan)
+        for key, idx in state.groups.items():
+            if not self.linkage_valid(state, key):
+                state.jump[idx, 1] = JUMP_NOT_RUN
                 continue
             chained = spring.uses_chain(settings)
             if settings["integrator"] == DOPRI and not chained:  # the search honours dopri
                 tolerance = settings["tolerance"]
                 table_deg = 2 * dopri_table_deg(tolerance)
-                ctx["jump"][idx] = dopri_jump_speeds(
-                    self.excitation(ctx, key, table_deg, unclipped=True),
-                    valve_rows(ctx["points"], idx),
+                state.jump[idx] = dopri_jump_speeds(
+                    self.excitation(state, key, table_deg, unclipped=True),
+                    valve_rows(state.points, idx),
                     step_deg(settings["angle_step"]),
                     dopri_tolerance(tolerance),
                     settings,
                     JUMP_SCAN_POINTS,
                 )
                 continue
-            table, table_step, start = self.excitation(ctx, key, step_deg(settings["angle_step"]))
-            rows = self.spring_rows(ctx, idx) if chained else valve_rows(ctx["points"], idx)
+            table, table_step, start = self.excitation(state, key, step_deg(settings["angle_step"]))
+            rows = self.spring_rows(state, idx) if chained else valve_rows(state.points, idx)
             search = chain_jump_speed if chained else valve.jump_speed
             for i, row in zip(idx, rows, strict=True):
-                ctx["jump"][i] = search(
+                state.jump[i] = search(
                     table,
                     table_step,
                     start,
@@ -349,18 +363,18 @@ class ValveScene(ChainScene):
                 )
 
     # --- outputs --------------------------------------------------------------------------
-    def scalar(self, ctx: dict[str, Any], response: str) -> np.ndarray:
+    def scalar(self, state: ValveState, response: str) -> np.ndarray:
         if response in KINEMATIC_RESPONSES:
-            return super().scalar(ctx, response)
+            return super().scalar(state, response)
         if response in ("jump_speed", "jump_speed_status"):
-            jump = ctx["jump"]
+            jump = state.jump
             return jump[:, 0] * RPM if response == "jump_speed" else jump[:, 1]
         if response == "surge_frequency":
-            return spring.surge_frequency(ctx["points"], int(ctx["settings"]["spring_masses"]))
+            return spring.surge_frequency(state.points, int(state.settings["spring_masses"]))
         if response in spring.SURGE_OUTPUT:
             column, scale = spring.SURGE_OUTPUT[response]
-            return ctx["chain_out"][:, column] * scale
-        out = ctx["out"]
+            return state.chain_out[:, column] * scale
+        out = state.out
         if response in OUTPUT_COLUMNS:
             column, scale = OUTPUT_COLUMNS[response]
             return out[:, column] * scale
@@ -371,27 +385,27 @@ class ValveScene(ChainScene):
             duration = out[:, valve.O_JUMP_DURATION]
             return np.where(np.isnan(duration), np.nan, (duration == 0.0).astype(float))
         if response == "angle_step_used":
-            return ctx["step_used"].copy()
+            return state.step_used.copy()
         if response == "integrator_used":
-            return ctx["method"].copy()
-        bars = ctx["bars"]
+            return state.method.copy()
+        bars = state.bars
         if response == "step_halving_difference":
             return bars["error_estimate"] / BAR_FACTOR * MM
         if response == "error_estimate":
             return bars["error_estimate"] * MM
         if response in BAR_SCALE:
             return bars[response] * BAR_SCALE[response]
-        if ctx["settings"]["tolerance"] > 0.0:
+        if state.settings["tolerance"] > 0.0:
             return bars["tolerance_met"].copy()
-        return np.ones(ctx["n"])
+        return np.ones(state.n)
 
-    def curve_values(self, ctx: dict[str, Any], name: str) -> np.ndarray:
+    def curve_values(self, state: ValveState, name: str) -> np.ndarray:
         if name in spring.SURGE_CURVE_NAMES or (
-            name in spring.CHAIN_CURVE_ROW and spring.uses_chain(ctx["settings"])
+            name in spring.CHAIN_CURVE_ROW and spring.uses_chain(state.settings)
         ):
             row, scale = spring.CHAIN_CURVE_ROW[name]
-            return ctx["chain_traces"][:, row, :] * scale
+            return state.chain_traces[:, row, :] * scale
         if name not in CURVE_ROWS:
-            return super().curve_values(ctx, name)
+            return super().curve_values(state, name)
         row, scale = CURVE_ROWS[name]
-        return ctx["traces"][:, row, :] * scale
+        return state.traces[:, row, :] * scale

@@ -20,11 +20,12 @@ from engine_kernels.valvetrain.spring_chain.one_case import (
     spring_chain_response,
     spring_chain_response_batch,
 )
-from studies.scenes.chain import HALF_TURN_DEG, step_deg
 from studies.scenes.checks import PointProblems
+from studies.scenes.linkage.scene import HALF_TURN_DEG, step_deg
 from studies.scenes.valve.batches import N_OUT, kernel_settings
 from studies.scenes.valve.parameters import STATUS_NOT_RUN
 from studies.scenes.valve.spring_parameters import CHAIN_UNOBSERVED, SURGE_CURVES
+from studies.scenes.valve.state import ValveState
 
 
 class SurgeHost(Protocol):
@@ -33,15 +34,15 @@ class SurgeHost(Protocol):
 
     def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray: ...
 
-    def chain_valid(self, ctx: dict[str, Any], key: tuple) -> bool: ...
+    def linkage_valid(self, state: ValveState, key: tuple) -> bool: ...
 
-    def spring_rows(self, ctx: dict[str, Any], idx: np.ndarray) -> np.ndarray: ...
+    def spring_rows(self, state: ValveState, idx: np.ndarray) -> np.ndarray: ...
 
-    def window(self, ctx: dict[str, Any], key: tuple) -> tuple[float, float]: ...
+    def window(self, state: ValveState, key: tuple) -> tuple[float, float]: ...
 
     def excitation(
         self,
-        ctx: dict[str, Any],
+        state: ValveState,
         key: tuple,
         step: float,
         span: tuple[float, float] | None = None,
@@ -213,38 +214,36 @@ def spring_point_problems(points: dict[str, np.ndarray]) -> list[str]:
     return found.messages()
 
 
-def surge_stage(scene: SurgeHost, ctx: dict[str, Any]) -> None:
+def surge_stage(scene: SurgeHost, state: ValveState) -> None:
     """The ``surge`` stage: the multi-mass spring (once per study chunk) at ``angle_step``, and
     over ``revolutions`` turns when asked; under ``spring_model = "multi_mass"`` its outputs
-    also answer the dynamic responses."""
-    if "chain_out" in ctx:
-        return
-    n, settings = ctx["n"], ctx["settings"]
+    also answer the dynamic responses (it then runs in place of ``dynamics``)."""
+    n, settings = state.n, state.settings
     chain_curves = set(CHAIN_CURVE_ROW) if uses_chain(settings) else set()
-    want = bool(ctx["curves"] & (chain_curves | SURGE_CURVE_NAMES))
+    want = not (chain_curves | SURGE_CURVE_NAMES).isdisjoint(state.curves)
     axis = scene.curve_coordinate(settings) if want else np.empty(0)
-    ctx["chain_out"] = np.full((n, N_CHAIN_OUT), np.nan)
-    ctx["chain_traces"] = np.full((n, N_CHAIN_CURVES, axis.size), np.nan)
+    state.chain_out = np.full((n, N_CHAIN_OUT), np.nan)
+    state.chain_traces = np.full((n, N_CHAIN_CURVES, axis.size), np.nan)
     step = step_deg(settings["angle_step"])
     flags = kernel_settings(settings, "rk4", False)
-    for key, idx in ctx["groups"].items():
-        if not scene.chain_valid(ctx, key):
-            ctx["chain_out"][idx, sc.CO_STATUS] = STATUS_NOT_RUN
+    for key, idx in state.groups.items():
+        if not scene.linkage_valid(state, key):
+            state.chain_out[idx, sc.CO_STATUS] = STATUS_NOT_RUN
             continue
-        rows = scene.spring_rows(ctx, idx)
+        rows = scene.spring_rows(state, idx)
         turns = int(settings["revolutions"])
         if turns == 1 or want or uses_chain(settings):  # else every answer is the steady run's
-            out, trace = run_chain(scene.excitation(ctx, key, step), rows, flags, want)
-            ctx["chain_out"][idx] = out
+            out, trace = run_chain(scene.excitation(state, key, step), rows, flags, want)
+            state.chain_out[idx] = out
             if trace is not None:
-                first = round((scene.window(ctx, key)[0] + HALF_TURN_DEG) / step)
-                ctx["chain_traces"][idx, :, first : first + trace.shape[2]] = trace
+                first = round((scene.window(state, key)[0] + HALF_TURN_DEG) / step)
+                state.chain_traces[idx, :, first : first + trace.shape[2]] = trace
         if turns > 1:
-            turn = scene.excitation(ctx, key, step, (-HALF_TURN_DEG, HALF_TURN_DEG))
+            turn = scene.excitation(state, key, step, (-HALF_TURN_DEG, HALF_TURN_DEG))
             steady = steady_surge(turn, rows, flags, turns)
-            ctx["chain_out"][np.ix_(idx, STEADY_COLUMNS)] = steady[:, STEADY_COLUMNS]
+            state.chain_out[np.ix_(idx, np.asarray(STEADY_COLUMNS))] = steady[:, STEADY_COLUMNS]
     if uses_chain(settings):
-        ctx["out"] = np.full((n, N_OUT), np.nan)
+        state.out = np.full((n, N_OUT), np.nan)
         for column, chain_column in LUMPED_FROM_CHAIN.items():
-            ctx["out"][:, column] = ctx["chain_out"][:, chain_column]
-        ctx["step_used"] = np.full(n, step)
+            state.out[:, column] = state.chain_out[:, chain_column]
+        state.step_used = np.full(n, step)

@@ -20,11 +20,12 @@ from engine_kernels.valvetrain.valve import lane_batch as valve_lanes
 from studies.common.simd import host_lanes
 from studies.common.timing import best_time, best_times
 from studies.scenes.base import BenchKit
-from studies.scenes.chain import HALF_TURN_DEG, grid_deg
-from studies.scenes.valve.accuracy_reference import reference_lift
+from studies.scenes.linkage.scene import HALF_TURN_DEG, grid_deg
 from studies.scenes.valve.batches import kernel_settings, valve_rows
 from studies.scenes.valve.bench.multi_mass import chain_figures
 from studies.scenes.valve.reference import c_valve
+from studies.scenes.valve.reference.accuracy import reference_lift
+from studies.scenes.valve.state import ValveState
 
 VALVE_STUDY = """
 name = "bench_valve"
@@ -84,16 +85,16 @@ def bench_valve(kit: BenchKit, cases: int, step: float, repeat: int) -> dict[str
         figures[f"scene_{name}_over_one_case"] = (
             figures[f"scene_{name}"]["cases_per_s"] / figures["scene_rk4"]["cases_per_s"]
         )
-    scene, ctx, key, idx = _valve_case(
+    scene, state, key, idx = _valve_case(
         kit,
         VALVE_STUDY.format(
             integrator="rk4", step=step, speeds=list(SCIPY_SPEEDS), preloads=[205.8]
         ),
     )
-    excitation = scene.excitation(ctx, key, step)
-    start, stop = scene.window(ctx, key)
+    excitation = scene.excitation(state, key, step)
+    start, stop = scene.window(state, key)
     theta = np.radians(grid_deg(start, step, stop))
-    rows = valve_rows(ctx["points"], idx)
+    rows = valve_rows(state.points, idx)
     for rtol in SCIPY_RTOLS:
         t0 = time.perf_counter()
         for row in rows:
@@ -107,14 +108,14 @@ def bench_valve(kit: BenchKit, cases: int, step: float, repeat: int) -> dict[str
     return figures
 
 
-def _valve_case(kit: BenchKit, text: str) -> tuple[Any, dict[str, Any], tuple, np.ndarray]:
-    """Scene (the valve scene of the plan), context, chain key and points of a valve study
-    with one cam/rocker chain."""
+def _valve_case(kit: BenchKit, text: str) -> tuple[Any, ValveState, tuple, np.ndarray]:
+    """Scene (the valve scene of the plan), run state, linkage key and points of a valve
+    study with one cam–rocker linkage."""
     plan = kit.plan(text)
     scene = plan.scene
-    ctx = scene.context(plan.points, plan.settings, [], [])
-    ((key, idx),) = ctx["groups"].items()
-    return scene, ctx, key, idx
+    state = scene.start(plan.points, plan.settings, [], [])
+    ((key, idx),) = state.groups.items()
+    return scene, state, key, idx
 
 
 def _valve_kernels(kit: BenchKit, cases: int, step: float, repeat: int) -> dict[str, Any]:
@@ -125,14 +126,16 @@ def _valve_kernels(kit: BenchKit, cases: int, step: float, repeat: int) -> dict[
     valve_lanes.c``, lanes and one case at a time, both precisions) built with this machine's
     compiler: the issue's "C -O3 kernel of this form", measured here rather than quoted.
     """
-    scene, ctx, key, idx = _valve_case(kit, _valve_plan(kit, "lanes", cases, step).definition.text)
-    first, last = scene.window(ctx, key)
+    scene, state, key, idx = _valve_case(
+        kit, _valve_plan(kit, "lanes", cases, step).definition.text
+    )
+    first, last = scene.window(state, key)
     tables = {
-        "window": scene.excitation(ctx, key, step),
-        "revolution": scene.excitation(ctx, key, step, (-HALF_TURN_DEG, HALF_TURN_DEG)),
+        "window": scene.excitation(state, key, step),
+        "revolution": scene.excitation(state, key, step, (-HALF_TURN_DEG, HALF_TURN_DEG)),
     }
-    rows = valve_rows(ctx["points"], idx)
-    flags = kernel_settings(ctx["settings"], "lanes", estimate=False)
+    rows = valve_rows(state.points, idx)
+    flags = kernel_settings(state.settings, "lanes", estimate=False)
     out = np.empty((rows.shape[0], len(valve.VALVE_OUTPUT_NAMES)))
     figures: dict[str, Any] = {"window_span_deg": last - first, "step_deg": step}
     libraries, skipped = _c_reference(tables["revolution"], rows, flags, out)
@@ -175,10 +178,12 @@ def _valve_kernels(kit: BenchKit, cases: int, step: float, repeat: int) -> dict[
 
 def _multi_mass(kit: BenchKit, cases: int, step: float, repeat: int) -> dict[str, Any]:
     """The multi-mass spring kernel on the rows and window table of :func:`_valve_kernels`."""
-    scene, ctx, key, idx = _valve_case(kit, _valve_plan(kit, "lanes", cases, step).definition.text)
-    rows = valve_rows(ctx["points"], idx)
-    flags = kernel_settings(ctx["settings"], "lanes", estimate=False)
-    return chain_figures(scene.excitation(ctx, key, step), rows, flags, repeat)
+    scene, state, key, idx = _valve_case(
+        kit, _valve_plan(kit, "lanes", cases, step).definition.text
+    )
+    rows = valve_rows(state.points, idx)
+    flags = kernel_settings(state.settings, "lanes", estimate=False)
+    return chain_figures(scene.excitation(state, key, step), rows, flags, repeat)
 
 
 def _c_reference(

@@ -1,9 +1,9 @@
 """Input errors of the cam laws and rocker geometries of the ``rocker`` and ``valve`` scenes.
 
-Every check runs over all distinct chains at once (numpy masks, one kernel call for the nose
+Every check runs over all distinct linkages at once (numpy masks, one kernel call for the nose
 lifts and one for the segment widths); a message is formatted once per distinct set of the
 values it shows and names every design point it concerns, in the order a loop over the
-chains gives (:class:`~studies.scenes.checks.LoopOrder`; the checks of one chain: geometry,
+linkages gives (:class:`~studies.scenes.checks.LoopOrder`; the checks of one linkage: geometry,
 nose, segments, ramp, polydyne, event width).
 """
 
@@ -15,19 +15,19 @@ import numpy as np
 
 from engine_kernels.cam import multi_segment
 from studies.scenes.cam_laws import polydyne_problems
-from studies.scenes.chain_tappet import nose_tappet_lifts, shape_codes
 from studies.scenes.checks import LoopOrder, fixed, groups_of
+from studies.scenes.linkage.tappet import nose_tappet_lifts, shape_codes
 
 MM = 1e3
 MAX_EVENT_HALF_DEG = 150.0
 """Largest event half-width (rise + ramp) that leaves room for the closing window."""
 
 
-def chain_point_problems(
-    points: dict[str, np.ndarray], first: np.ndarray, chain: np.ndarray
+def linkage_point_problems(
+    points: dict[str, np.ndarray], first: np.ndarray, linkage: np.ndarray
 ) -> list[str]:
-    """Input errors of the chains (``first`` design point of each, ``chain`` of each design
-    point, as :func:`studies.scenes.chain.chain_groups` gives them), grouped by design points
+    """Input errors of the linkages (``first`` design point of each, ``linkage`` of each design
+    point, as :func:`studies.scenes.linkage.scene.linkage_groups` gives them), grouped by design points
     (mm and deg shown)."""
     p = {name: np.asarray(values) for name, values in points.items()}
     found = LoopOrder()
@@ -39,7 +39,7 @@ def chain_point_problems(
     high = p["pad_arm"] + p["centre_distance"]
     bad_triangle = ~((low < reach) & (reach < high))
     found.add(1, bad_triangle, [reach, low, high], lambda i: _triangle_message(p, i))
-    _nose_problems(p, first, chain, ~(bad_arm | bad_triangle), found)
+    _nose_problems(p, first, linkage, ~(bad_arm | bad_triangle), found)
     six = p["law"] == "six_segment"
     _six_segment_problems(p, six, found)
     _polydyne_problems(p, found)
@@ -79,16 +79,16 @@ def _triangle_message(p: dict[str, np.ndarray], i: int) -> str:
 def _nose_problems(
     p: dict[str, np.ndarray],
     first: np.ndarray,
-    chain: np.ndarray,
+    linkage: np.ndarray,
     closes: np.ndarray,
     found: LoopOrder,
 ) -> None:
     """The valve lift out of reach of the rocker, or a ramp above the tappet nose lift, at the
-    points whose geometry closes (the nose lift of each distinct chain, one kernel call)."""
+    points whose geometry closes (the nose lift of each distinct linkage, one kernel call)."""
     checked = np.flatnonzero(closes[first])
     nose = np.full(first.size, np.nan)
     nose[checked] = nose_tappet_lifts(p, first[checked])
-    nose = nose[chain]
+    nose = nose[linkage]
     reach = p["base_radius"] + p["pad_radius"] + nose
     reachable = np.isfinite(nose) & (nose > 0.0) & (reach < p["pad_arm"] + p["centre_distance"])
     found.add(

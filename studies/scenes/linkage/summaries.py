@@ -1,5 +1,5 @@
 """The table the ``rocker`` and ``valve`` scenes share for ``analysis.txt``: the design points
-whose kinematic chain is invalid, by reason."""
+whose kinematic linkage is invalid, by reason."""
 
 from __future__ import annotations
 
@@ -10,8 +10,8 @@ from engine_kernels.valvetrain import rocker
 from studies.common.summary_tables import runs_line
 
 
-def chain_status_summary(ds: xr.Dataset) -> list[str]:
-    """Design points whose kinematic chain is invalid, by reason (they explain NaN responses)."""
+def linkage_status_summary(ds: xr.Dataset) -> list[str]:
+    """Design points whose kinematic linkage is invalid, by reason (they explain NaN responses)."""
     blocks = []
     if "chain_status" in ds:
         flags = ds["chain_status"].values.astype(float)

@@ -1,9 +1,9 @@
-"""The flat-tappet cam law of a rocker chain, and advice where that cam is concave.
+"""The flat-tappet cam law of a rocker linkage, and advice where that cam is concave.
 
 Every design point's tappet law comes from :func:`engine_kernels.cam.kinematics.cam_kinematics_batch`
 with the nose lift that gives the target valve lift through the rocker
 (:func:`engine_kernels.valvetrain.rocker.tappet_lift_for_valve_lift`). A concave cam (r0 + h + h'' ≤ 0
-somewhere, physics §3) is a per-point result, not an error; :func:`concave_chains` says before a
+somewhere, physics §3) is a per-point result, not an error; :func:`concave_linkages` says before a
 run which points will have one and from which rise angle their law is convex.
 """
 
@@ -28,7 +28,7 @@ ADVICE_STEP_DEG = 0.5
 ADVICE_LIMIT_DEG = 150.0
 """Largest rise angle the search tries (the event must fit in one camshaft turn)."""
 LISTED_CHAINS = 10
-"""At most this many concave chains are warned one by one, each with a rise-angle search; the
+"""At most this many concave linkages are warned one by one, each with a rise-angle search; the
 others are counted in one line (a check of 10⁴ points stays short and fast)."""
 BISECT_DEPTH = 4
 """Bisection steps of the rise-angle advice per kernel call (15 candidate angles per law)."""
@@ -36,7 +36,7 @@ BISECT_DEPTH = 4
 
 @dataclass(frozen=True)
 class TappetTable:
-    """Flat-tappet law of one chain on the tappet-angle grid ``phi`` [rad]."""
+    """Flat-tappet law of one linkage on the tappet-angle grid ``phi`` [rad]."""
 
     phi: np.ndarray
     curves: np.ndarray  # (3, m): h [m], h' [m/rad], h'' [m/rad²]
@@ -137,21 +137,21 @@ def tappet_table(points: dict[str, np.ndarray], i: int, spacing: float) -> Tappe
     return TappetTable(phi, law, float(nose[0]), radius)
 
 
-def concave_chains(
-    points: dict[str, np.ndarray], first: np.ndarray, chain: np.ndarray
+def concave_linkages(
+    points: dict[str, np.ndarray], first: np.ndarray, linkage: np.ndarray
 ) -> list[str]:
-    """Warnings for the chains whose tappet cam is concave, grouped by design points: these
+    """Warnings for the linkages whose tappet cam is concave, grouped by design points: these
     points will not run (``chain_status`` says so per point); the first
     :data:`LISTED_CHAINS` one by one, the others counted in one line. ``first`` is the first
-    design point of each chain and ``chain`` the chain of each design point
-    (:func:`studies.scenes.chain.chain_groups`). One kernel call per block scans every chain.
+    design point of each linkage and ``linkage`` the linkage of each design point
+    (:func:`studies.scenes.linkage.scene.linkage_groups`). One kernel call per block scans every linkage.
     A standard rise law scales as h'' ∝ lift/β², so its smallest radius of curvature rises
     with the rise angle β: bisections side by side find the rise angle from which each listed
     law is convex."""
     radius, scanned = min_radii(points, first, ADVICE_STEP_DEG)
     concave = np.flatnonzero(radius <= 0.0)
     listed = concave[:LISTED_CHAINS]
-    members = {int(g): np.flatnonzero(chain == g) for g in listed}
+    members = {int(g): np.flatnonzero(linkage == g) for g in listed}
     laws = np.asarray(points["law"])[first[listed]].astype(str)
     advised = [int(g) for g, law in zip(listed, laws, strict=True) if law != "six_segment"]
     advice = dict(zip(advised, _convex_from(points, first[advised]), strict=True))
@@ -169,7 +169,7 @@ def concave_chains(
     rest = concave[LISTED_CHAINS:]
     if rest.size == 0:
         return found.messages()
-    sizes = np.bincount(chain, minlength=first.size)
+    sizes = np.bincount(linkage, minlength=first.size)
     more = more_concave_line(rest, sizes, radius * 1e3, "these points will not run either")
     return [*found.messages(), more + scanned]
 

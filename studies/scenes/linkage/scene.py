@@ -4,16 +4,16 @@ Two stages, each a compiled kernel:
 
 * ``tappet`` — :func:`engine_kernels.cam.kinematics.cam_kinematics_batch`: the flat-tappet lift law
   h, h', h'' on a tappet-angle grid (a standard rise law, a polydyne, or the six-segment
-  profile), scaled so that the chain gives the target valve lift at the nose
+  profile), scaled so that the linkage gives the target valve lift at the nose
   (:func:`engine_kernels.valvetrain.rocker.tappet_lift_for_valve_lift`);
-* ``rocker`` — :func:`engine_kernels.valvetrain.rocker.rocker_valve_lift`: the chain [R1]–[R6], valve
+* ``rocker`` — :func:`engine_kernels.valvetrain.rocker.rocker_valve_lift`: the linkage [R1]–[R6], valve
   lift Y and its derivatives, force ratio and rocker angle on a cam-angle grid.
 
-Design points that share the cam and rocker parameters share one chain: both stages work per
+Design points that share the cam and rocker parameters share one linkage: both stages work per
 distinct parameter set and keep their tables in a bounded cache on the scene, so a study that
 varies only speeds or springs computes the kinematics once. A cam that is not convex, or a
-chain that does not close, is a per-point result (``chain_status``, ``cam_convex``), never an
-exception; impossible geometry is refused by :meth:`ChainScene.check_points` before anything
+linkage that does not close, is a per-point result (``chain_status``, ``cam_convex``), never an
+exception; impossible geometry is refused by :meth:`LinkageScene.check_points` before anything
 runs.
 """
 
@@ -21,31 +21,32 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Hashable
-from dataclasses import dataclass
-from typing import Any
+from dataclasses import dataclass, field
+from typing import Any, TypeVar, cast
 
 import numpy as np
 
 from engine_kernels.valvetrain import rocker
 from studies.scenes.base import CurveAxis, Scene, SceneOutput
-from studies.scenes.chain_checks import chain_point_problems
-from studies.scenes.chain_parameters import (
+from studies.scenes.checks import distinct
+from studies.scenes.linkage.checks import linkage_point_problems
+from studies.scenes.linkage.parameters import (
     CAM_ANGLE,
     CURVES,
     PARAMETERS,
     RESPONSES,
     SETTINGS,
 )
-from studies.scenes.chain_tappet import (
+from studies.scenes.linkage.tappet import (
     HALF_TURN_DEG,
     TappetTable,
-    concave_chains,
+    concave_linkages,
     geometry_row,
     grid_deg,
     step_deg,
     tappet_table,
 )
-from studies.scenes.checks import distinct
+from studies.scenes.state import RunState
 
 MM = 1e3
 GRID_UNIT_DEG = 2.0
@@ -53,9 +54,9 @@ GRID_UNIT_DEG = 2.0
 CACHE_SIZE = 64
 SIDES = {"ahead": rocker.PAD_AHEAD, "behind": rocker.PAD_BEHIND}
 KEY_NAMES = tuple(p.name for p in PARAMETERS if p.kind != "vector")
-"""Parameters that fix the chain (with the polydyne coefficients): the cache key."""
+"""Parameters that fix the linkage (with the polydyne coefficients): the cache key."""
 
-# response -> (row of the chain curves, reduction, factor to the response's units)
+# response -> (row of the linkage curves, reduction, factor to the response's units)
 _CURVE_ROWS: dict[str, tuple[int, float]] = {
     "valve_lift": (rocker.ROW_VALVE_LIFT, MM),
     "valve_velocity": (rocker.ROW_VALVE_VELOCITY, MM),
@@ -82,28 +83,40 @@ class BoundedCache:
 
 
 @dataclass(frozen=True)
-class ChainCurves:
-    """The chain [R1]–[R6] of one parameter set on a cam-angle grid (``ROW_*`` rows, SI)."""
+class LinkageCurves:
+    """The linkage [R1]–[R6] of one parameter set on a cam-angle grid (``ROW_*`` rows, SI)."""
 
     theta_deg: np.ndarray
     curves: np.ndarray
     status: int
 
 
-def chain_groups(points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-    """The first design point of each distinct chain (its cam law and rocker parameters) and
-    the chain of each design point, numbered in order of first appearance. Vectorised (O(N log
-    N) over the parameters that vary): a 10⁶-point study may have 10⁶ chains."""
+@dataclass(slots=True)
+class LinkageState(RunState):
+    """Run state of a linkage chunk (the ``rocker`` scene, and the ``valve`` scenes on it)."""
+
+    groups: dict[tuple, np.ndarray] = field(init=False)  # linkage key → its design points
+    tappet: dict[tuple, TappetTable] = field(init=False)  # stage tappet: law per linkage key
+    kinematics: dict[tuple, LinkageCurves] = field(init=False)  # stage rocker: [R1]–[R6] per key
+
+
+Linkage = TypeVar("Linkage", bound=LinkageState)
+
+
+def linkage_groups(points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """The first design point of each distinct linkage (its cam law and rocker parameters) and
+    the linkage of each design point, numbered in order of first appearance. Vectorised (O(N log
+    N) over the parameters that vary): a 10⁶-point study may have 10⁶ linkages."""
     coefficients = np.asarray(points["polydyne_coefficients"], dtype=float)
     return distinct([coefficients, *(np.asarray(points[name]) for name in KEY_NAMES)])
 
 
-def chain_keys(points: dict[str, np.ndarray]) -> dict[tuple, np.ndarray]:
-    """The design points of each distinct chain, keyed by the tuple of its chain parameters
+def linkage_keys(points: dict[str, np.ndarray]) -> dict[tuple, np.ndarray]:
+    """The design points of each distinct linkage, keyed by the tuple of its linkage parameters
     (the keys of the scene's table caches, shared across chunks)."""
-    first, chain = chain_groups(points)
-    order = np.argsort(chain, kind="stable")
-    members = np.split(order, np.cumsum(np.bincount(chain, minlength=first.size))[:-1])
+    first, linkage = linkage_groups(points)
+    order = np.argsort(linkage, kind="stable")
+    members = np.split(order, np.cumsum(np.bincount(linkage, minlength=first.size))[:-1])
     coefficients = np.asarray(points["polydyne_coefficients"], dtype=float)
     return {
         (*(points[name][i] for name in KEY_NAMES), tuple(coefficients[i].tolist())): idx
@@ -111,22 +124,23 @@ def chain_keys(points: dict[str, np.ndarray]) -> dict[tuple, np.ndarray]:
     }
 
 
-class ChainScene(Scene):
-    name = "rocker"
-    seconds_per_point = 2e-2
-    description = "OHC cam with variable-ratio rocker: valve lift, force ratio (kinematics)"
+class LinkageScene(Scene[Linkage]):
+    """The cam–rocker–valve linkage: two stages (``tappet``, ``rocker``), its tables cached per
+    distinct parameter set, and its kinematic responses and curves."""
+
     parameters = PARAMETERS
     settings = SETTINGS
     responses = RESPONSES
     curves = CURVES
     curve_axis: CurveAxis | None = CAM_ANGLE
     stage_order: tuple[str, ...] = ("tappet", "rocker")
+    state_type: type[RunState] = LinkageState
     status_responses: tuple[str, ...] = ("chain_status",)
 
     def __init__(self) -> None:
         super().__init__()
         self.tappet_cache = BoundedCache(CACHE_SIZE)
-        self.chain_cache = BoundedCache(CACHE_SIZE)
+        self.linkage_cache = BoundedCache(CACHE_SIZE)
         self.groups_seen: tuple[tuple[np.ndarray, ...], tuple[np.ndarray, np.ndarray]] | None = None
 
     def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray:
@@ -136,21 +150,21 @@ class ChainScene(Scene):
     # --- checks ---------------------------------------------------------------------------
     def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
         problem = angle_step_problem(settings["angle_step"], "setting angle_step")
-        return ([problem] if problem else []) + self.chain_point_problems(points)
+        return ([problem] if problem else []) + self.linkage_point_problems(points)
 
     def point_warnings(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
-        """The chains whose cam is concave: their points will not run (a result, not an error).
-        The last user of the chains :meth:`check_points` found: they are forgotten here."""
-        groups = self.chain_groups(points)
+        """The linkages whose cam is concave: their points will not run (a result, not an error).
+        The last user of the linkages :meth:`check_points` found: they are forgotten here."""
+        groups = self.linkage_groups(points)
         self.groups_seen = None
-        return concave_chains(points, *groups)
+        return concave_linkages(points, *groups)
 
-    def chain_point_problems(self, points: dict[str, np.ndarray]) -> list[str]:
+    def linkage_point_problems(self, points: dict[str, np.ndarray]) -> list[str]:
         """Input errors of the cam laws and rocker geometries, grouped by design points."""
-        return chain_point_problems(points, *self.chain_groups(points))
+        return linkage_point_problems(points, *self.linkage_groups(points))
 
-    def chain_groups(self, points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-        """:func:`chain_groups`, computed once for the points ``check`` and ``run`` plan with
+    def linkage_groups(self, points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        """:func:`linkage_groups`, computed once for the points ``check`` and ``run`` plan with
         (the same arrays: their checks and warnings share it)."""
         arrays = tuple(points.values())
         seen = self.groups_seen
@@ -159,98 +173,82 @@ class ChainScene(Scene):
             or len(seen[0]) != len(arrays)
             or any(a is not b for a, b in zip(seen[0], arrays, strict=True))
         ):
-            seen = self.groups_seen = (arrays, chain_groups(points))
+            seen = self.groups_seen = (arrays, linkage_groups(points))
         return seen[1]
 
     # --- evaluation -----------------------------------------------------------------------
-    def context(
+    def start(
         self,
         points: dict[str, np.ndarray],
         settings: dict[str, Any],
         responses: list[str],
         curves: list[str],
-    ) -> dict[str, Any]:
-        """What the stages share: the points, their chain keys and groups, the requests."""
-        groups = chain_keys(points)
-        return {
-            "points": points,
-            "settings": settings,
-            "groups": groups,
-            "responses": set(responses),
-            "curves": set(curves),
-            "n": len(points["polydyne_coefficients"]),
-        }
+    ) -> Linkage:
+        """The run state with the design points grouped by linkage (:func:`linkage_keys`)."""
+        state = cast(Linkage, self.state_type.of(points, settings, responses, curves))
+        state.groups = linkage_keys(points)
+        return state
 
-    def evaluate(
-        self,
-        points: dict[str, np.ndarray],
-        settings: dict[str, Any],
-        responses: list[str],
-        curves: list[str],
-    ) -> SceneOutput:
-        ctx = self.context(points, settings, responses, curves)
-        self.run_stages(ctx, responses, curves)
+    def finish(self, state: Linkage) -> SceneOutput:
         return SceneOutput(
-            {r: self.scalar(ctx, r) for r in responses},
-            {c: self.curve_values(ctx, c) for c in curves},
+            {r: self.scalar(state, r) for r in state.responses},
+            {c: self.curve_values(state, c) for c in state.curves},
         )
 
     def kinematic_grid(self, settings: dict[str, Any]) -> tuple[float, float, float]:
         """(start, spacing, stop) [deg] of the grid of kinematic responses and curves."""
         return -HALF_TURN_DEG, step_deg(settings["angle_step"]), HALF_TURN_DEG
 
-    def tappet_table(self, ctx: dict[str, Any], key: tuple) -> TappetTable:
-        """The flat-tappet law of the chain ``key`` (cached per key and tappet step)."""
-        spacing = step_deg(ctx["settings"]["tappet_step"])
-        i = int(ctx["groups"][key][0])
-        return self.tappet_cache.get(
-            (key, spacing), lambda: tappet_table(ctx["points"], i, spacing)
+    def tappet_table(self, state: Linkage, key: tuple) -> TappetTable:
+        """The flat-tappet law of the linkage ``key`` (cached per key and tappet step)."""
+        spacing = step_deg(state.settings["tappet_step"])
+        i = int(state.groups[key][0])
+        return self.tappet_cache.get((key, spacing), lambda: tappet_table(state.points, i, spacing))
+
+    def linkage(
+        self, state: Linkage, key: tuple, grid: tuple[float, float, float]
+    ) -> LinkageCurves:
+        """The linkage [R1]–[R6] of ``key`` on the cam-angle grid (start, spacing, stop) [deg]."""
+        table = self.tappet_table(state, key)
+        i = int(state.groups[key][0])
+        spacing = step_deg(state.settings["tappet_step"])
+        return self.linkage_cache.get(
+            (key, spacing, grid), lambda: _linkage_curves(state.points, i, table, grid)
         )
 
-    def chain(
-        self, ctx: dict[str, Any], key: tuple, grid: tuple[float, float, float]
-    ) -> ChainCurves:
-        """The chain [R1]–[R6] of ``key`` on the cam-angle grid (start, spacing, stop) [deg]."""
-        table = self.tappet_table(ctx, key)
-        i = int(ctx["groups"][key][0])
-        spacing = step_deg(ctx["settings"]["tappet_step"])
-        return self.chain_cache.get(
-            (key, spacing, grid), lambda: _chain_curves(ctx["points"], i, table, grid)
-        )
+    def stage_tappet(self, state: Linkage) -> None:
+        state.tappet = {key: self.tappet_table(state, key) for key in state.groups}
 
-    def stage_tappet(self, ctx: dict[str, Any]) -> None:
-        ctx["tappet"] = {key: self.tappet_table(ctx, key) for key in ctx["groups"]}
-
-    def stage_rocker(self, ctx: dict[str, Any]) -> None:
-        grid = self.kinematic_grid(ctx["settings"])
-        ctx["chain"] = {key: self.chain(ctx, key, grid) for key in ctx["groups"]}
+    def stage_rocker(self, state: Linkage) -> None:
+        grid = self.kinematic_grid(state.settings)
+        state.kinematics = {key: self.linkage(state, key, grid) for key in state.groups}
 
     # --- outputs --------------------------------------------------------------------------
-    def scalar(self, ctx: dict[str, Any], response: str) -> np.ndarray:
+    def scalar(self, state: Linkage, response: str) -> np.ndarray:
         """Values of a kinematic response per design point (response units)."""
-        out = np.empty(ctx["n"])
-        for key, idx in ctx["groups"].items():
-            out[idx] = _kinematic_value(response, ctx, key)
+        out = np.empty(state.n)
+        for key, idx in state.groups.items():
+            out[idx] = _kinematic_value(response, state, key)
         return out
 
-    def curve_values(self, ctx: dict[str, Any], name: str) -> np.ndarray:
+    def curve_values(self, state: Linkage, name: str) -> np.ndarray:
         """A kinematic curve per design point on the curve axis (curve units)."""
-        axis = self.curve_coordinate(ctx["settings"])
-        out = np.empty((ctx["n"], axis.size))
-        for key, idx in ctx["groups"].items():
+        axis = self.curve_coordinate(state.settings)
+        out = np.empty((state.n, axis.size))
+        for key, idx in state.groups.items():
             if name == "tappet_lift":
-                table = ctx["tappet"][key]
+                table = state.tappet[key]
                 values = np.interp(np.radians(axis), table.phi, table.curves[0]) * MM
             else:
                 row, scale = _CURVE_ROWS[name]
-                values = ctx["chain"][key].curves[row] * scale
+                values = state.kinematics[key].curves[row] * scale
             out[idx] = values
         return out
 
 
-def _chain_curves(
+def _linkage_curves(
     points: dict[str, np.ndarray], i: int, table: TappetTable, grid: tuple[float, float, float]
-) -> ChainCurves:
+) -> LinkageCurves:
     theta_deg = grid_deg(*grid)
     out = np.empty((len(rocker.ROCKER_CURVE_NAMES), theta_deg.size))
     status = rocker.rocker_valve_lift(
@@ -263,28 +261,28 @@ def _chain_curves(
         np.radians(theta_deg),
         out,
     )
-    return ChainCurves(theta_deg, out, int(status))
+    return LinkageCurves(theta_deg, out, int(status))
 
 
-def open_range(chain: ChainCurves) -> tuple[float, float]:
+def open_range(linkage: LinkageCurves) -> tuple[float, float]:
     """Cam angles [deg] of the first and last grid points with the valve open (NaN if none)."""
-    open_idx = np.flatnonzero(chain.curves[rocker.ROW_VALVE_LIFT] > 0.0)
+    open_idx = np.flatnonzero(linkage.curves[rocker.ROW_VALVE_LIFT] > 0.0)
     if open_idx.size == 0:
         return math.nan, math.nan
-    return float(chain.theta_deg[open_idx[0]]), float(chain.theta_deg[open_idx[-1]])
+    return float(linkage.theta_deg[open_idx[0]]), float(linkage.theta_deg[open_idx[-1]])
 
 
-def _kinematic_value(response: str, ctx: dict[str, Any], key: tuple) -> float:
+def _kinematic_value(response: str, state: LinkageState, key: tuple) -> float:
     if response in ("max_tappet_lift", "min_radius_of_curvature", "cam_convex"):
-        table = ctx["tappet"][key]
+        table = state.tappet[key]
         if response == "cam_convex":
             return float(table.min_radius > 0.0)
         return (table.nose_lift if response == "max_tappet_lift" else table.min_radius) * MM
-    chain = ctx["chain"][key]
-    c = chain.curves
+    linkage = state.kinematics[key]
+    c = linkage.curves
     lift = c[rocker.ROW_VALVE_LIFT]
     is_open = lift > 0.0
-    opening, closing = open_range(chain)
+    opening, closing = open_range(linkage)
     values: dict[str, Callable[[], float]] = {
         "max_valve_lift": lambda: lift.max() * MM,
         "max_valve_velocity": lambda: c[rocker.ROW_VALVE_VELOCITY].max() * MM,
@@ -294,15 +292,15 @@ def _kinematic_value(response: str, ctx: dict[str, Any], key: tuple) -> float:
         "valve_opening_angle": lambda: opening,
         "valve_closing_angle": lambda: closing,
         "valve_open_duration": lambda: closing - opening,
-        "lift_ratio": lambda: lift.max() / ctx["tappet"][key].nose_lift,
+        "lift_ratio": lambda: lift.max() / state.tappet[key].nose_lift,
         "force_ratio_nose": lambda: float(
-            np.interp(0.0, chain.theta_deg, c[rocker.ROW_FORCE_RATIO])
+            np.interp(0.0, linkage.theta_deg, c[rocker.ROW_FORCE_RATIO])
         ),
         "max_force_ratio": lambda: _masked(c[rocker.ROW_FORCE_RATIO], is_open, np.max),
         "min_force_ratio": lambda: _masked(c[rocker.ROW_FORCE_RATIO], is_open, np.min),
         "rocker_swing": lambda: math.degrees(np.ptp(c[rocker.ROW_ROCKER_ANGLE])),
-        "chain_status": lambda: float(chain.status),
-        "chain_ok": lambda: float(chain.status == rocker.ROCKER_OK),
+        "chain_status": lambda: float(linkage.status),
+        "chain_ok": lambda: float(linkage.status == rocker.ROCKER_OK),
     }
     return float(values[response]())
 

@@ -10,11 +10,12 @@ import numpy as np
 import pytest
 
 from studies.define.plan import plan_text
-from studies.scenes import chain, chain_tappet
-from studies.scenes.chain import chain_groups
-from studies.scenes.chain_checks import chain_point_problems
-from studies.scenes.chain_parameters import CONVEX_POLYDYNE
 from studies.scenes.checks import point_list
+from studies.scenes.linkage import scene as linkage_scene
+from studies.scenes.linkage import tappet as linkage_tappet
+from studies.scenes.linkage.checks import linkage_point_problems
+from studies.scenes.linkage.parameters import CONVEX_POLYDYNE
+from studies.scenes.linkage.scene import linkage_groups
 from study_text import scene_study
 
 N = 240
@@ -39,7 +40,7 @@ def per_point_problems(points: dict[str, np.ndarray]) -> list[str]:
     found: dict[str, list[int]] = {}
     for i in range(len(points["valve_lift"])):
         one = {name: values[i : i + 1] for name, values in points.items()}
-        for line in chain_point_problems(one, *chain_groups(one)):
+        for line in linkage_point_problems(one, *linkage_groups(one)):
             found.setdefault(line.removeprefix("design point 0: "), []).append(i)
     return [f"{point_list(idx)}: {text}" for text, idx in found.items()]
 
@@ -78,7 +79,7 @@ def test_problems_of_a_mixed_grid_equal_a_loop_over_its_points() -> None:
         "exceeds 150 deg",
     )
     assert all(any(kind in line for line in expected) for kind in kinds)
-    assert chain_point_problems(points, *chain_groups(points)) == expected
+    assert linkage_point_problems(points, *linkage_groups(points)) == expected
 
 
 def test_concave_chains_count_what_a_loop_over_the_points_finds() -> None:
@@ -90,20 +91,19 @@ def test_concave_chains_count_what_a_loop_over_the_points_finds() -> None:
     points["law"] = rng.choice(np.array(["poly345", "six_segment", "cycloidal"], object), N)
     radius = np.array(
         [
-            chain_tappet.tappet_table(points, i, chain_tappet.ADVICE_STEP_DEG).min_radius
+            linkage_tappet.tappet_table(points, i, linkage_tappet.ADVICE_STEP_DEG).min_radius
             for i in range(N)
         ]
     )
-    # The scan keeps no curves and scales each rise law by its lift: the same values to rounding.
-    scanned = chain_tappet.min_radii(points, np.arange(N), chain_tappet.ADVICE_STEP_DEG)
-    np.testing.assert_allclose(
-        scanned[0], radius, rtol=0.0, atol=1e-15
-    )  # r0 + H·min(f + f″) vs min(r0 + h + h″)
-    assert scanned[1] == ""
+    # The scan keeps no curves and scales each rise law by its lift: the same values to
+    # rounding (r0 + H·min(f + f″) against min(r0 + h + h″)).
+    scanned, said = linkage_tappet.min_radii(points, np.arange(N), linkage_tappet.ADVICE_STEP_DEG)
+    np.testing.assert_allclose(scanned, radius, rtol=0.0, atol=1e-15)
+    assert said == ""
     concave = radius <= 0.0
     assert 20 < concave.sum() < N - 20  # the grid straddles the convexity limit
-    first, chain = chain_groups(points)
-    warnings = chain_tappet.concave_chains(points, first, chain)
+    first, linkage = linkage_groups(points)
+    warnings = linkage_tappet.concave_linkages(points, first, linkage)
     listed = [[int(i) for i in re.findall(r"(\d+)", w.split(":")[0])] for w in warnings[:10]]
     assert all(concave[idx].all() for idx in listed)
     for idx, line in zip(listed, warnings, strict=False):
@@ -124,16 +124,16 @@ def test_rise_angle_advice_equals_a_bisection_one_chain_at_a_time() -> None:
     def convex(i: int, beta_deg: float) -> bool:
         one = {name: values[i : i + 1].copy() for name, values in points.items()}
         one["rise_angle"] = np.array([math.radians(beta_deg)])
-        return chain_tappet.tappet_table(one, 0, chain_tappet.ADVICE_STEP_DEG).min_radius > 0.0
+        return linkage_tappet.tappet_table(one, 0, linkage_tappet.ADVICE_STEP_DEG).min_radius > 0.0
 
     expected = []
     for i in idx:
-        low, high = math.degrees(points["rise_angle"][i]), chain_tappet.ADVICE_LIMIT_DEG
+        low, high = math.degrees(points["rise_angle"][i]), linkage_tappet.ADVICE_LIMIT_DEG
         while high - low > 0.1:
             middle = 0.5 * (low + high)
             low, high = (low, middle) if convex(i, middle) else (middle, high)
         expected.append(f"it is convex from rise_angle = {math.ceil(high * 10) / 10:g} degree")
-    assert chain_tappet._convex_from(points, idx) == expected
+    assert linkage_tappet._convex_from(points, idx) == expected
 
 
 def test_check_and_warnings_group_the_chains_once(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -141,9 +141,9 @@ def test_check_and_warnings_group_the_chains_once(monkeypatch: pytest.MonkeyPatc
 
     def counted(points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
         calls.append(len(points["valve_lift"]))
-        return chain_groups(points)
+        return linkage_groups(points)
 
-    monkeypatch.setattr(chain, "chain_groups", counted)
+    monkeypatch.setattr(linkage_scene, "linkage_groups", counted)
     levels = np.linspace(6.0, 7.8, 30).round(6).tolist()
     text = scene_study(
         "rocker",
