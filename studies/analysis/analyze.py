@@ -28,6 +28,10 @@ a full factorial) and ``level_a`` × ``level_b`` for two-way tables of means.
   mean over the strongest factor pair (``map_mean``, factors in ``map_x``/``map_y``);
 * status codes and bit masks (counted, never averaged): ``<response>_count`` on
   ``<response>_flag`` (the CF flag meanings), the names in the attribute ``status_responses``;
+* responses under noise (:mod:`studies.analysis.robust`): per design point ``noise_mean``,
+  ``noise_sd``, ``noise_quantile`` and, for responses with ``[limits]``, the probability of
+  violating the limit with its Wilson interval, on (``noise_response``, ``run``); the S/N
+  ratios and run means over the noise are analysed like replicates;
 * several responses: the trade-off (``chosen_level``, ``decided_by``, ``conflict`` per term,
   ``compromise``, ``compromise_worst``, ``compromise_half_width`` per response and
   ``compromise_at`` per condition).
@@ -54,6 +58,7 @@ from studies.analysis import missing, prediction, taguchi
 from studies.analysis import optimum as analysis_optimum
 from studies.analysis.factorial import factorial, factorial_frame, grid_of
 from studies.analysis.grid_optimum import Grid
+from studies.analysis.robust import robust_statistics
 from studies.analysis.statistics import (
     SENSES,
     UNRANKED,
@@ -123,7 +128,8 @@ def analyze(
         present, ran = presence(ds, names)
         present = [r for r in present if r not in status]
         attrs |= {"points": ds.sizes["run"], "points_without_value": int((~ran).sum())}
-        return xr.Dataset(counts, attrs=attrs | {"analysed": json.dumps(present)})
+        robust = robust_statistics(ds, present)
+        return xr.Dataset(counts, attrs=attrs | {"analysed": json.dumps(present)}).merge(robust)
     view, analysed, ran = analyzed(ds, names)
     attrs |= {"points": ds.sizes["run"], "points_without_value": int((~ran).sum())}
     terms = taguchi.model_terms(view)
@@ -163,10 +169,12 @@ def analyze(
     if len(optimised) > 1:
         lazy = base.assign({n: replaced.get(n, view[n].variable) for n in optimised})
         analysis_optimum.trade(out, lazy, optimised, tables, optima, grid)
-    for r in names:  # run means of replicated responses, for the renderers' run tables
+    for r in names:  # run means and S/N of replicated responses (or under noise), per run
         if taguchi.mean_name(view, r) != r and taguchi.mean_name(view, r) in analysed:
             out[taguchi.mean_name(view, r)] = view[taguchi.mean_name(view, r)]
-    out = out.assign(counts)
+            if taguchi.sn_name(r) in analysed:
+                out[taguchi.sn_name(r)] = view[taguchi.sn_name(r)]
+    out = out.assign(counts).merge(robust_statistics(ds, names))
     out.attrs = attrs | {
         "analysed": json.dumps(analysed),
         "operating_factors": json.dumps(operating),

@@ -43,6 +43,7 @@ from studies.report.markdown_format import (
 from studies.report.markdown_response import constant_section, response_section
 from studies.report.markdown_terms import computed, optimum_levels
 from studies.report.markdown_tradeoff import tradeoff_section
+from studies.report.robust import robust_markdown
 from studies.report.text import status_line
 
 REPORT_NAME = "report.md"
@@ -106,6 +107,7 @@ def _report(
     view = ds.assign({n: an[n] for n in an.data_vars if "run" in an[n].dims})
     lines += _design(view, an)
     lines += _runs(view, an, listed)
+    lines += robust_markdown(ds, an)
     optimised = []
     for r in responses:
         name = taguchi.mean_name(view, r)
@@ -274,7 +276,7 @@ def _runs(view: xr.Dataset, an: xr.Dataset, responses: list[str]) -> list[str]:
         row += [num(float(view[m].values[i])) for m in means]
         rows.append(row)
     note = (
-        ["Responses with replicates are shown as the mean over the replicates.", ""]
+        ["Responses with replicates or noise are shown as the mean over them.", ""]
         if any(m != r for r, m in zip(responses, means, strict=True))
         else []
     )
