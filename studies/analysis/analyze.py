@@ -32,6 +32,8 @@ a full factorial) and ``level_a`` × ``level_b`` for two-way tables of means.
   ``noise_sd``, ``noise_quantile`` and, for responses with ``[limits]``, the probability of
   violating the limit with its Wilson interval, on (``noise_response``, ``run``); the S/N
   ratios and run means over the noise are analysed like replicates;
+* a Saltelli design (:mod:`studies.analysis.sobol_indices`): ``S1``, ``S1_conf``, ``ST``,
+  ``ST_conf`` on (response, factor) instead of everything above;
 * several responses: the trade-off (``chosen_level``, ``decided_by``, ``conflict`` per term,
   ``compromise``, ``compromise_worst``, ``compromise_half_width`` per response and
   ``compromise_at`` per condition).
@@ -59,6 +61,7 @@ from studies.analysis import optimum as analysis_optimum
 from studies.analysis.factorial import factorial, factorial_frame, grid_of
 from studies.analysis.grid_optimum import Grid
 from studies.analysis.robust import robust_statistics
+from studies.analysis.sobol_indices import sobol_analysis
 from studies.analysis.statistics import (
     SENSES,
     UNRANKED,
@@ -68,6 +71,7 @@ from studies.analysis.statistics import (
     status_counts,
     sweep_runs,
 )
+from studies.define.sampling import SAMPLING_DESIGNS
 from studies.run.results import NOT_EVALUATED, PASS_FAIL, is_status, write_netcdf
 
 __all__ = ["SENSES", "analyze", "anova", "has_values", "range_analysis", "sweep_runs"]
@@ -124,6 +128,12 @@ def analyze(
     status = [r for r in names if is_status(ds[r])]
     counts = {f"{r}_count": status_counts(ds[r]) for r in status}
     attrs["status_responses"] = json.dumps(status)
+    if design in SAMPLING_DESIGNS:  # Sobol' indices of the sample, no level means
+        present, ran = presence(ds, names)
+        present = [r for r in present if r not in status]
+        attrs |= {"points": ds.sizes["run"], "points_without_value": int((~ran).sum())}
+        sobol = sobol_analysis(ds, present, int(ds.attrs.get("seed", 1)))
+        return sobol.assign(counts).assign_attrs(attrs | {"analysed": json.dumps(present)})
     if design == "sweep":  # tables and plots of the runs themselves: nothing to estimate
         present, ran = presence(ds, names)
         present = [r for r in present if r not in status]

@@ -60,6 +60,7 @@ from studies.common.bounded_files import (
 )
 from studies.common.errors import StudyError
 from studies.define.noise import Noise, parse_limits, parse_noise
+from studies.define.sampling import parse_sampling
 from studies.define.values import Factor, ValueParser, suggest
 from studies.scenes import SCENES, Scene, get_scene
 from studies.scenes.base import NONE_MEANINGS, short
@@ -69,7 +70,7 @@ TOP_LEVEL_KEYS = {
     "name", "scene", "description", "responses", "curves", "design", "settings", "parameters",
     "factors", "sense", "none_means", "noise", "limits",
 }  # fmt: skip
-DESIGN_KEYS = {"type", "error_columns", "interactions", "pool"}
+DESIGN_KEYS = {"type", "error_columns", "interactions", "pool", "samples", "seed"}
 NAME_PATTERN = re.compile(r"[A-Za-z0-9_-]+")  # whole names only: used with fullmatch
 MAX_NAME_LENGTH = 64  # the name is a folder name; file systems allow 255 bytes
 MAX_NESTING = 10  # arrays/tables inside each other; a study needs 4 (factors.x.levels = [...])
@@ -109,6 +110,8 @@ class StudyDefinition:
     none_means: dict[str, str] = field(default_factory=dict)
     noise: Noise | None = None  # [noise]: see studies.define.noise
     limits: dict[str, dict[str, float]] = field(default_factory=dict)  # [limits]
+    samples: int = 0  # a sampling design's base sample (studies.define.sampling)
+    seed: int = 1
 
     def input_files(self) -> tuple[Path, ...]:
         """The files the study reads (its text parameters, e.g. ``lift_table``), in order."""
@@ -235,6 +238,7 @@ class _Parser(ValueParser):
         settings = self._settings(scene, settings_raw)
         noise = parse_noise(d.get("noise"), scene, factors, self.problems)
         limits = parse_limits(d.get("limits"), responses, scene, self.problems)
+        samples, seed = parse_sampling(d.get("design"), design, self.problems)
         interactions = self._interactions([f.name for f in factors], design)
         pool = self._pool([f.name for f in factors], design)
         if not factors and not self.problems:
@@ -258,6 +262,8 @@ class _Parser(ValueParser):
             none_means=dict(none_means),
             noise=noise,
             limits=limits,
+            samples=samples,
+            seed=seed,
         )
         return definition, self.problems
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import os
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +27,7 @@ from studies.define.definition import (
     read_study,
 )
 from studies.define.noise import noise_table, noisy, range_problems
+from studies.define.sampling import SAMPLING_DESIGNS, sampled_levels
 from studies.scenes import Scene, get_scene
 from studies.scenes.base import short
 
@@ -85,7 +86,10 @@ def _plan(definition: StudyDefinition | None, problems: list[str], source: str) 
     scene = get_scene(definition.scene)
     design = None
     try:
-        design = _design(definition)
+        if definition.design in SAMPLING_DESIGNS:
+            definition, design = _sampled(definition)
+        else:
+            design = _design(definition)
     except designs.DesignError as exc:
         problems = problems + exc.problems
     if design is None or problems:
@@ -304,6 +308,18 @@ def _points(
     return points
 
 
+def _sampled(d: StudyDefinition) -> tuple[StudyDefinition, designs.Design]:
+    """A sampling design: each factor's sampled values become its levels (the study's
+    ``range`` gives way to them) and each run's level code indexes them."""
+    ranges = [(float(f.levels[0]), float(f.levels[1])) for f in d.factors]
+    levels, codes = sampled_levels(ranges, d.samples, d.seed)
+    factors = tuple(
+        replace(f, levels=tuple(v.tolist())) for f, v in zip(d.factors, levels, strict=True)
+    )
+    named = {f.name: c for f, c in zip(d.factors, codes, strict=True)}
+    return replace(d, factors=factors), designs.Design(d.design, tuple(named), named)
+
+
 def _noisy_points(
     scene: Scene, d: StudyDefinition, points: dict[str, np.ndarray], runs: int
 ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], list[str]]:
@@ -312,8 +328,9 @@ def _noisy_points(
     can). Without [noise]: the points unchanged."""
     if d.noise is None:
         return points, {}, []
-    if d.design == "sweep":
-        return points, {}, ["[noise] needs an orthogonal array or a full factorial, not a sweep"]
+    if d.design in ("sweep", *SAMPLING_DESIGNS):
+        msg = f"[noise] needs an orthogonal array or a full factorial, not a {d.design} design"
+        return points, {}, [msg]
     try:
         table = noise_table(d.noise)
     except designs.DesignError as exc:

@@ -30,6 +30,7 @@ from studies.analysis.missing import nothing_to_analyse
 from studies.analysis.statistics import sense_words, sweep_runs
 from studies.common.text_safety import Markup, code_span, fence, md_escape
 from studies.define.designs import orthogonal_array
+from studies.define.sampling import SAMPLING_DESIGNS
 from studies.report.markdown_format import (
     figure,
     label,
@@ -44,6 +45,7 @@ from studies.report.markdown_response import constant_section, response_section
 from studies.report.markdown_terms import computed, optimum_levels
 from studies.report.markdown_tradeoff import tradeoff_section
 from studies.report.robust import robust_markdown
+from studies.report.sensitivity_report import sobol_markdown
 from studies.report.text import status_line
 
 REPORT_NAME = "report.md"
@@ -102,6 +104,10 @@ def _report(
     responses = [r for r in responses if taguchi.mean_name(ds, r) in analysed]
     if ds.attrs.get("design") == "sweep":
         lines += _sweep(ds, responses, figures)
+        lines += other_figures(lines, figures)
+        return "\n".join(lines).rstrip() + "\n", ""
+    if ds.attrs.get("design") in SAMPLING_DESIGNS:
+        lines += sobol_markdown(an, figures)
         lines += other_figures(lines, figures)
         return "\n".join(lines).rstrip() + "\n", ""
     view = ds.assign({n: an[n] for n in an.data_vars if "run" in an[n].dims})

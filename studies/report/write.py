@@ -22,8 +22,9 @@ from studies.analysis import taguchi
 from studies.analysis.missing import nothing_to_analyse
 from studies.common.errors import StudyError
 from studies.common.figure_layout import save_figures
+from studies.define.sampling import SAMPLING_DESIGNS
 from studies.report import html as html_report
-from studies.report import markdown_report, plots
+from studies.report import markdown_report, plots, sensitivity_report
 from studies.report import robust as robust_report
 from studies.report import text as analysis_text
 from studies.run.results import NOISE
@@ -59,6 +60,9 @@ def write_analysis(
     if ds.attrs.get("design") == "sweep":
         body = [analysis_text.format_sweep(ds, analysed)]
         figures = plots.save_sweep_plots(ds, analysed, folder)
+    elif ds.attrs.get("design") in SAMPLING_DESIGNS:
+        body = sensitivity_report.sobol_text(an)
+        figures = sensitivity_report.save_tornado(an, folder)
     else:
         body = [robust_report.robust_text(ds, an)] if robust_report.has_noise(an) else []
         body += [analysis_text.format_tables(an, means[r]) for r in analysed]
