@@ -8,8 +8,11 @@ statistics are checked against.
 
 from __future__ import annotations
 
+import errno
 import math
+import os
 from pathlib import Path
+from unittest import mock
 
 import numpy as np
 import pytest
@@ -19,6 +22,7 @@ from studies.analysis.robust import QUANTILES, quantile_interval, wilson
 from studies.common.errors import StudyError
 from studies.define.plan import plan_text
 from studies.pipeline import run_plan
+from studies.run.results import open_results
 
 BASE = """
 name = "crank_noise"
@@ -241,3 +245,52 @@ def test_order_statistic_and_wilson_intervals_agree_with_references() -> None:
     half = z / (1 + z * z / n) * math.sqrt(ph * (1 - ph) / n + z * z / (4 * n * n))
     assert (float(lo[0]), float(hi[0])) == pytest.approx((centre - half, centre + half), 1e-12)
     assert float(p[0]) == 3 / 40
+
+
+L4_NOISE = (
+    BASE + '[noise]\ntype = "L4"\n[noise.engine_speed]\ndistribution = "normal"\nsd = 100\n'
+    '[noise.stroke]\ndistribution = "normal"\nsd = 1.5\n'
+)
+
+
+def test_a_noise_run_stopped_at_a_checkpoint_resumes_to_the_same_numbers(tmp_path: Path) -> None:
+    from run_faults import failing_on_call
+
+    from studies import pipeline
+    from studies.cli import EXIT_OUTPUT_ERROR, main
+    from studies.tracking import store
+
+    study = tmp_path / "study.toml"
+    study.write_text(L4_NOISE, encoding="utf-8")
+    whole, broken = tmp_path / "whole", tmp_path / "broken"
+    args = ["run", str(study), "--no-progress", "--chunk-size", "6"]  # 6 → 4: one design point
+    assert main([*args, "--outputs", str(whole)]) == 0
+    crash = OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+    with mock.patch.object(
+        pipeline, "_save_chunk", failing_on_call(pipeline._save_chunk, 3, crash)
+    ):
+        assert main([*args, "--outputs", str(broken)]) == EXIT_OUTPUT_ERROR
+    (row,) = store.list_runs(broken)
+    assert len(list((Path(row["folder"]) / "chunks").glob("*.npz"))) == 2  # design points 1-2
+    assert main(["run", "--resume", row["run_id"], "--outputs", str(broken)]) == 0
+    (done,) = store.list_runs(broken)
+    (reference,) = store.list_runs(whole)
+    resumed = open_results(Path(done["folder"]) / "results.nc")
+    expected = open_results(Path(reference["folder"]) / "results.nc")
+    assert resumed["mean_piston_speed"].dims == ("run", "noise")
+    np.testing.assert_array_equal(resumed["mean_piston_speed"], expected["mean_piston_speed"])
+    np.testing.assert_array_equal(resumed["stroke_noise"], expected["stroke_noise"])
+
+
+def test_a_noise_study_larger_than_the_machine_allows_is_refused(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # 4 design points × 2^20 noise cases = 4.2e6 points > the limit set here: refused in the
+    # plan, before any point is allocated beyond the noise table.
+    monkeypatch.setenv("ENGINE_STUDIES_MAX_POINTS", "1000000")
+    text = BASE + SOBOL.replace("samples = 1024", f"samples = {2**20}")
+    problems = problems_of(text)
+    assert "noise study of 4 design points x 1048576 noise cases = 4.194e+06 design points" in (
+        problems
+    )
+    assert "this machine allows 1e+06 points" in problems
