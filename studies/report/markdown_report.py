@@ -113,7 +113,7 @@ def _report(
     view = ds.assign({n: an[n] for n in an.data_vars if "run" in an[n].dims})
     lines += _design(view, an)
     lines += _runs(view, an, listed)
-    lines += robust_markdown(ds, an)
+    lines += robust_markdown(ds, an, figures)
     optimised = []
     for r in responses:
         name = taguchi.mean_name(view, r)

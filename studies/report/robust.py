@@ -7,16 +7,20 @@ ratio over the noise prefers. Text for ``analysis.txt``, Markdown for ``report.m
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import xarray as xr
+from matplotlib.figure import Figure
 
 from studies.analysis.robust import DIM
+from studies.common.figure_style import axis_label
 from studies.common.text_safety import Markup, md_escape
-from studies.report.markdown_format import label, levels_of, num, table
+from studies.report.markdown_format import figure, label, levels_of, num, table
 from studies.run.results import NOISE
 
 MAX_ROWS = 100  # design points listed; larger designs point to analysis.nc
+MAX_CURVES = 30  # design points drawn in the figure; larger designs: the most robust only
 
 
 def has_noise(an: xr.Dataset) -> bool:
@@ -126,7 +130,47 @@ def robust_text(ds: xr.Dataset, an: xr.Dataset) -> str:
     return "\n".join(out)
 
 
-def robust_markdown(ds: xr.Dataset, an: xr.Dataset) -> list[str]:
+def figure_name(response: str) -> str:
+    return f"noise_{response}.png"
+
+
+def save_noise_figures(ds: xr.Dataset, an: xr.Dataset, folder: Path) -> list[Path]:
+    """``noise_<response>.png``: the empirical distribution (ECDF) of the response over the
+    noise cases of each design point (grey; up to ``MAX_CURVES``), the most robust one
+    highlighted, and the limits as vertical lines."""
+    paths = []
+    for name in an[DIM].values:
+        row = an.sel({DIM: name})
+        best = int(row["robust_run"])
+        y = ds[str(name)].transpose("run", NOISE).values
+        runs = range(y.shape[0]) if y.shape[0] <= MAX_CURVES else [best] if best >= 0 else []
+        fig = Figure(figsize=(6.4, 4.0))  # Agg on save, no pyplot state
+        ax = fig.add_subplot()
+        for i in runs:
+            values = y[i][np.isfinite(y[i])]
+            if values.size and i != best:
+                ax.ecdf(values, color="0.7", linewidth=0.8)
+        if best >= 0 and np.isfinite(y[best]).any():
+            values = y[best][np.isfinite(y[best])]
+            ax.ecdf(values, color="C0", linewidth=2.0, label=f"run {best + 1} (most robust)")
+        for key, style in (("limit_min", "--"), ("limit_max", ":")):
+            limit = float(row[key])
+            if np.isfinite(limit):
+                ax.axvline(limit, color="C3", linestyle=style, label=f"{key[6:]} {num(limit)}")
+        units = str(row["noise_units"].values)
+        ax.set_xlabel(axis_label(str(name), units))
+        ax.set_ylabel("share of noise cases ≤ value")
+        ax.set_title(f"{name} under noise, every design point (grey)")
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(loc="lower right")
+        fig.tight_layout()
+        path = folder / figure_name(str(name))
+        fig.savefig(path, dpi=100)
+        paths.append(path)
+    return paths
+
+
+def robust_markdown(ds: xr.Dataset, an: xr.Dataset, figures: set[str]) -> list[str]:
     """The statistics under noise as a ``report.md`` section."""
     if not has_noise(an):
         return []
@@ -147,4 +191,5 @@ def robust_markdown(ds: xr.Dataset, an: xr.Dataset) -> list[str]:
         lines += [f"### {label(str(name), units)}", "", table(header, rows), ""]
         for sentence in _choice(ds, an, str(name)):
             lines += [Markup(md_escape(sentence)), ""]
+        lines += figure(figure_name(str(name)), f"{name} under noise", figures)
     return lines

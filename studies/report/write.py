@@ -68,6 +68,8 @@ def write_analysis(
         body += [analysis_text.format_tables(an, means[r]) for r in analysed]
         varying = [means[r] for r in analysed if int(an["varies"].sel(response=means[r]))]
         figures = plots.save_main_effects(an, varying, folder)
+        if robust_report.has_noise(an):
+            figures += robust_report.save_noise_figures(ds, an, folder)
         sn = [r for r in analysed if f"{r}_sn" in an["response"].values]
         figures += plots.save_sn_plots(an, sn, folder)
         figures += plots.save_interaction_plots(an, [means[r] for r in analysed], folder)

@@ -208,6 +208,8 @@ def test_statistics_under_noise_match_the_closed_form(sobol_run) -> None:
     assert "P(mean_piston_speed > 13.5 m/s) [95 % Wilson]" in text
     report = (sobol_run.folder / "report.md").read_text(encoding="utf-8")
     assert "## Under noise" in report
+    assert "![mean_piston_speed under noise](noise_mean_piston_speed.png)" in report
+    assert (sobol_run.folder / "noise_mean_piston_speed.png").read_bytes()[:4] == b"\x89PNG"
 
 
 def test_an_outer_l4_gives_the_sn_ratio_computed_by_hand(tmp_path: Path) -> None:
