@@ -32,7 +32,7 @@ from studies.report.write import write_analysis
 from studies.run import provenance
 from studies.run.results import open_results
 from studies.run.results_writer import ResultsWriter
-from studies.run.runner import DEFAULT_CHUNK_SIZE, chunks, evaluate
+from studies.run.runner import DEFAULT_CHUNK_SIZE, chunk_cases, chunks, evaluate
 from studies.scenes import SceneOutput
 from studies.tracking import registry, store
 from studies.tracking.checkpoints import load_chunk, read_run_record, save_chunk
@@ -73,7 +73,7 @@ def run_plan(
 ) -> RunResult:
     """Run a validated plan in a new run folder under ``outputs`` (chunks on ``executor``)."""
     outputs = (outputs or store.default_outputs()).resolve()
-    chunk_size = min(chunk_size, plan.max_chunk)  # fine settings: fewer points per chunk
+    chunk_size = chunk_cases(plan, min(chunk_size, plan.max_chunk))  # fine settings: fewer
     d = plan.definition
     commit, dirty = provenance.git_state()
     code = provenance.code(type(plan.scene))
@@ -155,7 +155,7 @@ def resume_run(run_id: str, outputs: Path | None = None, progress: bool = True) 
             for path in sorted((folder / CHECKPOINTS).glob("*.npz"))
             if path.stem.isdigit()  # not a temporary file a kill left mid-write
         }
-        count = -(-plan.runs // record.chunk_size) if record.chunk_size > 0 else 0
+        count = -(-plan.cases // record.chunk_size) if record.chunk_size > 0 else 0
         beyond = sorted(str(done[i]) for i in done if i >= count)
         if record.chunk_size < 1 or beyond:
             msg = (
@@ -201,7 +201,7 @@ def _execute(
     try:
         heartbeat.start()
         writer = ResultsWriter(plan, folder / RESULTS_NAME, attrs, record.chunk_size)
-        parts = list(chunks(plan.runs, record.chunk_size))
+        parts = list(chunks(plan.cases, record.chunk_size))
         for index in sorted(done):
             writer.write(parts[index], _load_chunk(done[index], parts[index], plan, writer))
 

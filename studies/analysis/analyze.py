@@ -28,6 +28,12 @@ a full factorial) and ``level_a`` × ``level_b`` for two-way tables of means.
   mean over the strongest factor pair (``map_mean``, factors in ``map_x``/``map_y``);
 * status codes and bit masks (counted, never averaged): ``<response>_count`` on
   ``<response>_flag`` (the CF flag meanings), the names in the attribute ``status_responses``;
+* responses under noise (:mod:`studies.analysis.robust`): per design point ``noise_mean``,
+  ``noise_sd``, ``noise_quantile`` and, for responses with ``[limits]``, the probability of
+  violating the limit with its Wilson interval, on (``noise_response``, ``run``); the S/N
+  ratios and run means over the noise are analysed like replicates;
+* a Saltelli design (:mod:`studies.analysis.sobol_indices`): ``S1``, ``S1_conf``, ``ST``,
+  ``ST_conf`` on (response, factor) instead of everything above;
 * several responses: the trade-off (``chosen_level``, ``decided_by``, ``conflict`` per term,
   ``compromise``, ``compromise_worst``, ``compromise_half_width`` per response and
   ``compromise_at`` per condition).
@@ -54,6 +60,8 @@ from studies.analysis import missing, prediction, taguchi
 from studies.analysis import optimum as analysis_optimum
 from studies.analysis.factorial import factorial, factorial_frame, grid_of
 from studies.analysis.grid_optimum import Grid
+from studies.analysis.robust import robust_statistics
+from studies.analysis.sobol_indices import sobol_analysis
 from studies.analysis.statistics import (
     SENSES,
     UNRANKED,
@@ -63,6 +71,7 @@ from studies.analysis.statistics import (
     status_counts,
     sweep_runs,
 )
+from studies.define.sampling import SAMPLING_DESIGNS
 from studies.run.results import NOT_EVALUATED, PASS_FAIL, is_status, write_netcdf
 
 __all__ = ["SENSES", "analyze", "anova", "has_values", "range_analysis", "sweep_runs"]
@@ -119,11 +128,18 @@ def analyze(
     status = [r for r in names if is_status(ds[r])]
     counts = {f"{r}_count": status_counts(ds[r]) for r in status}
     attrs["status_responses"] = json.dumps(status)
+    if design in SAMPLING_DESIGNS:  # Sobol' indices of the sample, no level means
+        present, ran = presence(ds, names)
+        present = [r for r in present if r not in status]
+        attrs |= {"points": ds.sizes["run"], "points_without_value": int((~ran).sum())}
+        sobol = sobol_analysis(ds, present, int(ds.attrs.get("seed", 1)))
+        return sobol.assign(counts).assign_attrs(attrs | {"analysed": json.dumps(present)})
     if design == "sweep":  # tables and plots of the runs themselves: nothing to estimate
         present, ran = presence(ds, names)
         present = [r for r in present if r not in status]
         attrs |= {"points": ds.sizes["run"], "points_without_value": int((~ran).sum())}
-        return xr.Dataset(counts, attrs=attrs | {"analysed": json.dumps(present)})
+        robust = robust_statistics(ds, present)
+        return xr.Dataset(counts, attrs=attrs | {"analysed": json.dumps(present)}).merge(robust)
     view, analysed, ran = analyzed(ds, names)
     attrs |= {"points": ds.sizes["run"], "points_without_value": int((~ran).sum())}
     terms = taguchi.model_terms(view)
@@ -163,10 +179,12 @@ def analyze(
     if len(optimised) > 1:
         lazy = base.assign({n: replaced.get(n, view[n].variable) for n in optimised})
         analysis_optimum.trade(out, lazy, optimised, tables, optima, grid)
-    for r in names:  # run means of replicated responses, for the renderers' run tables
+    for r in names:  # run means and S/N of replicated responses (or under noise), per run
         if taguchi.mean_name(view, r) != r and taguchi.mean_name(view, r) in analysed:
             out[taguchi.mean_name(view, r)] = view[taguchi.mean_name(view, r)]
-    out = out.assign(counts)
+            if taguchi.sn_name(r) in analysed:
+                out[taguchi.sn_name(r)] = view[taguchi.sn_name(r)]
+    out = out.assign(counts).merge(robust_statistics(ds, names))
     out.attrs = attrs | {
         "analysed": json.dumps(analysed),
         "operating_factors": json.dumps(operating),

@@ -8,7 +8,8 @@ of :mod:`studies.run.results`; interaction columns are the ``<name>_level`` coor
 the attribute ``interaction_columns`` (JSON: column name → the two factors).
 
 Signal-to-noise ratios over the n observations y_i of one run (dimension ``replicate``:
-repeated runs or noise conditions; n = 1 without it), in dB (Phadke 1989, ch. 5):
+repeated runs, or ``noise``: the noise cases of a study's [noise]; n = 1 without either), in
+dB (Phadke 1989, ch. 5):
 
 * smaller is better  η = -10 log10( (1/n) Σ y_i² )
 * larger is better   η = -10 log10( (1/n) Σ 1/y_i² )
@@ -33,9 +34,11 @@ from scipy import stats
 from studies.analysis.statistics import anova
 from studies.common.errors import StudyError
 from studies.define.plan import first_runs
+from studies.run.results import NOISE
 
 SN_KINDS = ("smaller", "larger", "nominal")
 REPLICATE = "replicate"
+OBSERVATIONS = (REPLICATE, NOISE)  # dimensions of repeated observations of one run
 ALPHA = 0.05
 VARIATION_TOLERANCE = 1e-9  # relative spread below which a response counts as constant
 
@@ -52,24 +55,31 @@ def signal_to_noise(y: xr.DataArray, kind: str) -> xr.DataArray:
         msg = f"S/N kind must be one of {SN_KINDS}, got {kind!r}"
         raise StudyError(msg)
     y = y.astype(float)
-    if REPLICATE not in y.dims:
-        y = y.expand_dims(REPLICATE, axis=-1)
+    dim = observation_dim(y) or REPLICATE
+    if dim not in y.dims:
+        y = y.expand_dims(dim, axis=-1)
     seen = y.notnull()  # noqa: PD004 (xarray, not pandas)
-    n = seen.sum(REPLICATE)
+    n = seen.sum(dim)
     with np.errstate(divide="ignore", invalid="ignore"):
         if kind == "smaller":
-            eta = -10.0 * np.log10(xr.where(seen, y**2, 0.0).sum(REPLICATE) / n)
+            eta = -10.0 * np.log10(xr.where(seen, y**2, 0.0).sum(dim) / n)
         elif kind == "larger":
-            eta = -10.0 * np.log10(xr.where(seen, 1.0 / y**2, 0.0).sum(REPLICATE) / n)
+            eta = -10.0 * np.log10(xr.where(seen, 1.0 / y**2, 0.0).sum(dim) / n)
         else:
             if int(n.max()) < 2:
                 msg = "nominal-is-best S/N needs at least 2 observations (replicates) per run"
                 raise StudyError(msg)
-            mean = xr.where(seen, y, 0.0).sum(REPLICATE) / n
-            var = xr.where(seen, (y - mean) ** 2, 0.0).sum(REPLICATE) / (n - 1)
+            mean = xr.where(seen, y, 0.0).sum(dim) / n
+            var = xr.where(seen, (y - mean) ** 2, 0.0).sum(dim) / (n - 1)
             eta = xr.where(n >= 2, 10.0 * np.log10(mean**2 / var), np.nan)
     eta.attrs = {"units": "dB", "long_name": f"S/N ratio ({kind} is better)"}
     return eta
+
+
+def observation_dim(y: xr.DataArray) -> str | None:
+    """The dimension of repeated observations of ``y`` per run (``replicate`` or ``noise``),
+    or None."""
+    return next((d for d in OBSERVATIONS if d in y.dims), None)
 
 
 def varies(ds: xr.Dataset, response: str) -> bool:
@@ -87,13 +97,15 @@ def sn_responses(ds: xr.Dataset, responses: Sequence[str]) -> list[str]:
     return [
         r
         for r in responses
-        if "flag_values" not in ds[r].attrs and varies(ds, r) and (array or REPLICATE in ds[r].dims)
+        if "flag_values" not in ds[r].attrs
+        and varies(ds, r)
+        and (array or observation_dim(ds[r]) is not None)
     ]
 
 
 def mean_name(ds: xr.Dataset, response: str) -> str:
     """The run-mean variable of ``response``: itself, or ``<response>_mean`` with replicates."""
-    return f"{response}_mean" if REPLICATE in ds[response].dims else response
+    return f"{response}_mean" if observation_dim(ds[response]) else response
 
 
 def sn_name(response: str) -> str:
@@ -105,9 +117,9 @@ def with_means(ds: xr.Dataset, responses: str | Sequence[str]) -> xr.Dataset:
     names = [responses] if isinstance(responses, str) else list(responses)
     return ds.assign(
         {
-            mean_name(ds, r): ds[r].mean(REPLICATE).assign_attrs(ds[r].attrs)
+            mean_name(ds, r): ds[r].mean(str(observation_dim(ds[r]))).assign_attrs(ds[r].attrs)
             for r in names
-            if REPLICATE in ds[r].dims
+            if observation_dim(ds[r])
         }
     )
 
@@ -126,8 +138,8 @@ def with_sn(
     new = {}
     for r in names:
         y = ds[r]
-        if set(y.dims) not in ({"run"}, {"run", REPLICATE}):
-            msg = f"{r!r} has dims {y.dims}: S/N needs ('run',) or ('run', '{REPLICATE}')"
+        if set(y.dims) not in ({"run"}, *({"run", d} for d in OBSERVATIONS)):
+            msg = f"{r!r} has dims {y.dims}: S/N needs ('run',) or ('run', '{REPLICATE}'|'{NOISE}')"
             raise StudyError(msg)
         kind = kinds.get(r, y.attrs.get("better", "smaller"))
         eta = signal_to_noise(y, kind).transpose("run")
@@ -136,7 +148,7 @@ def with_sn(
             "long_name": f"S/N ratio of {y.attrs.get('long_name', r)} ({kind} is better)",
             "better": "larger",
             "sn_kind": kind,
-            "observations": y.sizes.get(REPLICATE, 1),
+            "observations": y.sizes.get(observation_dim(y) or REPLICATE, 1),
         }
         new[sn_name(r)] = eta
     return with_means(ds, names).assign(new)

@@ -59,25 +59,18 @@ from studies.common.bounded_files import (
     read_bounded_text,
 )
 from studies.common.errors import StudyError
+from studies.define.noise import Noise, parse_limits, parse_noise
+from studies.define.sampling import parse_sampling
 from studies.define.values import Factor, ValueParser, suggest
 from studies.scenes import SCENES, Scene, get_scene
 from studies.scenes.base import NONE_MEANINGS, short
 
 CATALOG = Path(__file__).resolve().parents[1] / "catalog"
 TOP_LEVEL_KEYS = {
-    "name",
-    "scene",
-    "description",
-    "responses",
-    "curves",
-    "design",
-    "settings",
-    "parameters",
-    "factors",
-    "sense",
-    "none_means",
-}
-DESIGN_KEYS = {"type", "error_columns", "interactions", "pool"}
+    "name", "scene", "description", "responses", "curves", "design", "settings", "parameters",
+    "factors", "sense", "none_means", "noise", "limits",
+}  # fmt: skip
+DESIGN_KEYS = {"type", "error_columns", "interactions", "pool", "samples", "seed"}
 NAME_PATTERN = re.compile(r"[A-Za-z0-9_-]+")  # whole names only: used with fullmatch
 MAX_NAME_LENGTH = 64  # the name is a folder name; file systems allow 255 bytes
 MAX_NESTING = 10  # arrays/tables inside each other; a study needs 4 (factors.x.levels = [...])
@@ -115,6 +108,10 @@ class StudyDefinition:
     interactions: tuple[tuple[str, str], ...] = ()
     pool: tuple[str, ...] | None = None
     none_means: dict[str, str] = field(default_factory=dict)
+    noise: Noise | None = None  # [noise]: see studies.define.noise
+    limits: dict[str, dict[str, float]] = field(default_factory=dict)  # [limits]
+    samples: int = 0  # a sampling design's base sample (studies.define.sampling)
+    seed: int = 1
 
     def input_files(self) -> tuple[Path, ...]:
         """The files the study reads (its text parameters, e.g. ``lift_table``), in order."""
@@ -239,6 +236,9 @@ class _Parser(ValueParser):
             if f.name in parameters:
                 self.problem(f"{f.name} is both fixed in [parameters] and varied in [factors]")
         settings = self._settings(scene, settings_raw)
+        noise = parse_noise(d.get("noise"), scene, factors, self.problems)
+        limits = parse_limits(d.get("limits"), responses, scene, self.problems)
+        samples, seed = parse_sampling(d.get("design"), design, self.problems)
         interactions = self._interactions([f.name for f in factors], design)
         pool = self._pool([f.name for f in factors], design)
         if not factors and not self.problems:
@@ -260,6 +260,10 @@ class _Parser(ValueParser):
             interactions=tuple(interactions),
             pool=pool,
             none_means=dict(none_means),
+            noise=noise,
+            limits=limits,
+            samples=samples,
+            seed=seed,
         )
         return definition, self.problems
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import os
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -26,7 +26,10 @@ from studies.define.definition import (
     parse_study,
     read_study,
 )
+from studies.define.noise import noise_table, noisy, range_problems
+from studies.define.sampling import SAMPLING_DESIGNS, sampled_levels
 from studies.scenes import Scene, get_scene
+from studies.scenes.base import short
 
 BYTES_PER_FACTOR = 48
 BYTES_PER_RESPONSE = 16
@@ -46,10 +49,18 @@ class Plan:
     stages: tuple[str, ...]
     responses: tuple[str, ...]  # stored: the study's, then the scene's status responses
     max_chunk: int = sys.maxsize  # design points per chunk that fit the memory (settings)
+    noise_cases: int = 1  # noise cases per design point (1 without [noise])
+    noise_values: dict[str, np.ndarray] = field(default_factory=dict)  # runs × cases, units
 
     @property
     def runs(self) -> int:
         return self.design.runs
+
+    @property
+    def cases(self) -> int:
+        """Points computed: design points × noise cases, design point major (the flat index
+        of design point i, noise case j is i · noise_cases + j)."""
+        return self.design.runs * self.noise_cases
 
     def factor_values(self, name: str, part: slice = slice(None)) -> np.ndarray:
         """The factor's value (as written in the study) in the runs ``part``."""
@@ -75,12 +86,19 @@ def _plan(definition: StudyDefinition | None, problems: list[str], source: str) 
     scene = get_scene(definition.scene)
     design = None
     try:
-        design = _design(definition)
+        if definition.design in SAMPLING_DESIGNS:
+            definition, design = _sampled(definition)
+        else:
+            design = _design(definition)
     except designs.DesignError as exc:
         problems = problems + exc.problems
     if design is None or problems:
         raise StudyFileError(source, problems)
     points = _points(scene, definition, design, design.runs)
+    points, noise_values, noise_problems = _noisy_points(scene, definition, points, design.runs)
+    if noise_problems:
+        raise StudyFileError(source, noise_problems)
+    cases = design.runs * (next(iter(noise_values.values())).shape[1] if noise_values else 1)
     settings = {
         s.name: s.to_si(definition.settings[s.name])
         if s.kind == "number"
@@ -88,7 +106,7 @@ def _plan(definition: StudyDefinition | None, problems: list[str], source: str) 
         for s in scene.settings
     }
     asked, curves = list(definition.responses), list(definition.curves)
-    max_chunk, work_problem = settings_fit(scene, definition, settings, design.runs)
+    max_chunk, work_problem = settings_fit(scene, definition, settings, cases)
     if work_problem:
         raise StudyFileError(source, [work_problem])
     point_problems = scene.check_points(points, settings)
@@ -101,7 +119,16 @@ def _plan(definition: StudyDefinition | None, problems: list[str], source: str) 
     if clashes:
         raise StudyFileError(source, clashes)
     return Plan(
-        definition, scene, design, points, settings, tuple(stages), tuple(stored), max_chunk
+        definition,
+        scene,
+        design,
+        points,
+        settings,
+        tuple(stages),
+        tuple(stored),
+        max_chunk,
+        cases // design.runs,
+        noise_values,
     )
 
 
@@ -279,6 +306,69 @@ def _points(
         else:
             points[p.name] = np.broadcast_to(np.array(value, dtype=object), (runs,))
     return points
+
+
+def _sampled(d: StudyDefinition) -> tuple[StudyDefinition, designs.Design]:
+    """A sampling design: each factor's sampled values become its levels (the study's
+    ``range`` gives way to them) and each run's level code indexes them."""
+    ranges = [(float(f.levels[0]), float(f.levels[1])) for f in d.factors]
+    levels, codes = sampled_levels(ranges, d.samples, d.seed)
+    factors = tuple(
+        replace(f, levels=tuple(v.tolist())) for f, v in zip(d.factors, levels, strict=True)
+    )
+    named = {f.name: c for f, c in zip(d.factors, codes, strict=True)}
+    return replace(d, factors=factors), designs.Design(d.design, tuple(named), named)
+
+
+def _noisy_points(
+    scene: Scene, d: StudyDefinition, points: dict[str, np.ndarray], runs: int
+) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], list[str]]:
+    """The SI points of every design point × noise case (flat, design point major), the noise
+    factors' values (runs × cases, parameter units) and why the noise cannot run ([] if it
+    can). Without [noise]: the points unchanged."""
+    if d.noise is None:
+        return points, {}, []
+    if d.design in ("sweep", *SAMPLING_DESIGNS):
+        msg = f"[noise] needs an orthogonal array or a full factorial, not a {d.design} design"
+        return points, {}, [msg]
+    try:
+        table = noise_table(d.noise)
+    except designs.DesignError as exc:
+        return points, {}, [f"[noise] {p}" for p in exc.problems]
+    cases = next(iter(table.values())).size
+    size_problem = full_factorial_size_problem({"design points": runs, "noise cases": cases}, 1)
+    if size_problem:
+        return points, {}, [size_problem.replace("full factorial of", "noise study of", 1)]
+    values, problems = {}, []
+    for f in d.noise.factors:
+        p = scene.parameter(f.name)
+        assert p is not None
+        nominal = np.asarray(points[f.name], dtype=float) / p.to_si(1.0)
+        problems += range_problems(d.noise, p, np.unique(nominal), p.units)
+        values[f.name] = noisy(f, nominal, table[f.name])
+    if problems:
+        return points, {}, problems
+    flat = {
+        name: np.repeat(v, cases, axis=0) if v.strides[0] else _broadcast(v, runs * cases)
+        for name, v in points.items()
+    }
+    for name, v in values.items():
+        flat[name] = v.reshape(-1) * scene.parameter(name).to_si(1.0)  # type: ignore[union-attr]
+    return flat, values, []
+
+
+def _broadcast(value: np.ndarray, n: int) -> np.ndarray:
+    """A fixed parameter (a broadcast view) over ``n`` points, still without memory per point."""
+    return np.broadcast_to(value[0], (n, *value.shape[1:]))
+
+
+def noise_label(d: StudyDefinition) -> str:
+    """How a study's noise is covered, for messages ("" without noise)."""
+    if d.noise is None:
+        return ""
+    names = ", ".join(short(f.name) for f in d.noise.factors)
+    how = f"{d.noise.type} sample of {d.noise.samples}" if d.noise.sampled else d.noise.type
+    return f"{how} over {names}"
 
 
 def first_runs(codes: np.ndarray, levels: int) -> np.ndarray:

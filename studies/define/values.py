@@ -13,7 +13,8 @@ from studies.common.units import UNITS, canonical, compatible_units
 from studies.scenes import Scene
 from studies.scenes.base import is_finite_number, short
 
-FACTOR_KEYS = {"levels", "units", "column", "base", "role"}
+FACTOR_KEYS = {"levels", "units", "column", "base", "role", "range"}
+SAMPLED = ("saltelli",)  # designs whose factors give a range = [lo, hi], not levels
 SHOWN_LEVEL_PROBLEMS = 3  # refused levels listed per factor; the rest are counted
 ROLES = ("control", "operating", "model")
 """A control factor is a design choice (its best level is chosen); an operating factor is a
@@ -112,6 +113,28 @@ class ValueParser:
                 continue
             units = spec.get("units", param.units)
             levels = spec.get("levels")
+            if (design in SAMPLED) != ("range" in spec) or (design in SAMPLED and "levels" in spec):
+                self.problem(
+                    f"factor {name}: a {design} design needs "
+                    + (
+                        "range = [lo, hi] (no levels)"
+                        if design in SAMPLED
+                        else "levels, not a range"
+                    )
+                )
+                continue
+            if design in SAMPLED:
+                levels = spec["range"]
+                if not (
+                    isinstance(levels, list)
+                    and len(levels) == 2
+                    and all(is_finite_number(v) for v in levels)
+                    and levels[0] < levels[1]
+                ):
+                    self.problem(
+                        f"factor {name}: range = {short(levels)} must be [lo, hi], lo < hi"
+                    )
+                    continue
             ok = self._units_ok(f"factor {name}", param, units)
             if not isinstance(levels, list) or not levels:
                 self.problem(f"factor {name} has no levels: give a non-empty list 'levels'")

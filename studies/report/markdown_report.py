@@ -30,6 +30,7 @@ from studies.analysis.missing import nothing_to_analyse
 from studies.analysis.statistics import sense_words, sweep_runs
 from studies.common.text_safety import Markup, code_span, fence, md_escape
 from studies.define.designs import orthogonal_array
+from studies.define.sampling import SAMPLING_DESIGNS
 from studies.report.markdown_format import (
     figure,
     label,
@@ -43,6 +44,8 @@ from studies.report.markdown_format import (
 from studies.report.markdown_response import constant_section, response_section
 from studies.report.markdown_terms import computed, optimum_levels
 from studies.report.markdown_tradeoff import tradeoff_section
+from studies.report.robust import robust_markdown
+from studies.report.sensitivity_report import sobol_markdown
 from studies.report.text import status_line
 
 REPORT_NAME = "report.md"
@@ -103,9 +106,14 @@ def _report(
         lines += _sweep(ds, responses, figures)
         lines += other_figures(lines, figures)
         return "\n".join(lines).rstrip() + "\n", ""
+    if ds.attrs.get("design") in SAMPLING_DESIGNS:
+        lines += sobol_markdown(an, figures)
+        lines += other_figures(lines, figures)
+        return "\n".join(lines).rstrip() + "\n", ""
     view = ds.assign({n: an[n] for n in an.data_vars if "run" in an[n].dims})
     lines += _design(view, an)
     lines += _runs(view, an, listed)
+    lines += robust_markdown(ds, an, figures)
     optimised = []
     for r in responses:
         name = taguchi.mean_name(view, r)
@@ -274,7 +282,7 @@ def _runs(view: xr.Dataset, an: xr.Dataset, responses: list[str]) -> list[str]:
         row += [num(float(view[m].values[i])) for m in means]
         rows.append(row)
     note = (
-        ["Responses with replicates are shown as the mean over the replicates.", ""]
+        ["Responses with replicates or noise are shown as the mean over them.", ""]
         if any(m != r for r, m in zip(responses, means, strict=True))
         else []
     )

@@ -18,12 +18,16 @@ from pathlib import Path
 import xarray as xr
 
 from studies.analysis import analyze as analysis
+from studies.analysis import taguchi
 from studies.analysis.missing import nothing_to_analyse
 from studies.common.errors import StudyError
 from studies.common.figure_layout import save_figures
+from studies.define.sampling import SAMPLING_DESIGNS
 from studies.report import html as html_report
-from studies.report import markdown_report, plots
+from studies.report import markdown_report, plots, sensitivity_report
+from studies.report import robust as robust_report
 from studies.report import text as analysis_text
+from studies.run.results import NOISE
 from studies.scenes import SCENES, get_scene
 
 
@@ -40,7 +44,7 @@ def write_analysis(
     gets a line saying so instead of tables and figures.
     """
     names = responses or json.loads(ds.attrs.get("responses", "[]")) or list(ds.data_vars)
-    scalar = [r for r in names if r in ds and ds[r].dims == ("run",)]
+    scalar = [r for r in names if r in ds and ds[r].dims in (("run",), ("run", NOISE))]
     missing = [r for r in names if r not in ds]
     if missing:
         raise StudyError(
@@ -50,18 +54,25 @@ def write_analysis(
     folder.mkdir(parents=True, exist_ok=True)
     an = analysis.analyze(ds, scalar, pool)
     done = json.loads(an.attrs["analysed"])
-    analysed = [r for r in scalar if r in done]
+    means = {r: taguchi.mean_name(ds, r) for r in scalar}  # under noise: <r>_mean per run
+    analysed = [r for r in scalar if means[r] in done]
     header = _header(ds) + not_run_line(an, "\n")
     if ds.attrs.get("design") == "sweep":
         body = [analysis_text.format_sweep(ds, analysed)]
         figures = plots.save_sweep_plots(ds, analysed, folder)
+    elif ds.attrs.get("design") in SAMPLING_DESIGNS:
+        body = sensitivity_report.sobol_text(an)
+        figures = sensitivity_report.save_tornado(an, folder)
     else:
-        body = [analysis_text.format_tables(an, r) for r in analysed]
-        varying = [r for r in analysed if int(an["varies"].sel(response=r))]
+        body = [robust_report.robust_text(ds, an)] if robust_report.has_noise(an) else []
+        body += [analysis_text.format_tables(an, means[r]) for r in analysed]
+        varying = [means[r] for r in analysed if int(an["varies"].sel(response=means[r]))]
         figures = plots.save_main_effects(an, varying, folder)
+        if robust_report.has_noise(an):
+            figures += robust_report.save_noise_figures(ds, an, folder)
         sn = [r for r in analysed if f"{r}_sn" in an["response"].values]
         figures += plots.save_sn_plots(an, sn, folder)
-        figures += plots.save_interaction_plots(an, analysed, folder)
+        figures += plots.save_interaction_plots(an, [means[r] for r in analysed], folder)
         figures += plots.save_maps(an, varying, folder)
     status = json.loads(an.attrs.get("status_responses", "[]"))
     body += [analysis_text.wrap(analysis_text.status_line(an, r)) for r in status]
@@ -71,7 +82,9 @@ def write_analysis(
         if r not in analysed and r not in status
     ]
     scene_name = str(ds.attrs.get("scene", ""))
-    if scene_name in SCENES:  # a plugin scene that is not installed here: generic outputs only
+    if NOISE in ds.dims:
+        body.append(analysis_text.wrap(NOISE_SUMMARIES))
+    elif scene_name in SCENES:  # a plugin scene that is not installed here: generic outputs only
         scene = get_scene(scene_name)
         body += scene.summaries(ds)
         figures += save_figures(ds, folder, scene.figures())
@@ -81,6 +94,12 @@ def write_analysis(
     page = html_report.write_html(reports[0], figures)
     nc = analysis.write_analysis_nc(an, folder)
     return [text_path, *reports, page, nc, *figures]
+
+
+NOISE_SUMMARIES = (
+    "The scene's own summaries and figures describe single points; under noise they are not "
+    "drawn (the statistics over the noise cases are above)."
+)
 
 
 def not_run_line(an: xr.Dataset, before: str = "") -> str:

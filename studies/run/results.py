@@ -7,7 +7,9 @@ Layout (dimension ``run`` = design point):
   empty orthogonal-array columns (error columns) and for the interaction columns (named in the
   attribute ``interaction_columns``: column name → the two factors); design labels such as
   ``swept_factor``; the attribute ``array_columns`` maps every name to its 1-based column;
-* scalar responses on ``run``; curves on ``run × <angle>`` only when the study asks;
+* scalar responses on ``run``; curves on ``run × <angle>`` only when the study asks; with
+  ``[noise]`` both gain a ``noise`` dimension after ``run`` (the noise cases) and every noise
+  factor's value is the coordinate ``<factor>_noise`` on ``run × noise``;
 * ``units`` and ``long_name`` on every variable; the study text, design, provenance and
   timings as global attributes (str/number only: dicts as JSON strings, booleans as ints).
 """
@@ -24,7 +26,7 @@ import numpy as np
 import xarray as xr
 
 from studies.common.errors import StudyError
-from studies.define.plan import Plan, first_runs
+from studies.define.plan import Plan, first_runs, noise_label
 from studies.run.runner import Evaluation
 
 COMPRESSION_LEVEL: Final = 4
@@ -35,6 +37,8 @@ COMPRESSION = {"zlib": True, "complevel": COMPRESSION_LEVEL}
 CHUNK_CACHE_BYTES = 1 << 20
 NOT_EVALUATED: Final = -1  # stored value of a flag or status code at a point that did not run
 PASS_FAIL: Final = "not_evaluated fails passes"
+NOISE: Final = "noise"  # the dimension of the noise cases of each design point
+NOISE_SUFFIX: Final = "_noise"  # <factor>_noise: a noise factor's value per run and case
 
 
 def small_chunk_cache() -> None:
@@ -58,17 +62,39 @@ def build_dataset(plan: Plan, ev: Evaluation, attrs: dict[str, Any]) -> xr.Datas
         if name not in ev.scalars:
             continue  # a status response missing from chunks an older version checkpointed
         dims, dtype, attrs_r = response_layout(plan, name)
-        data_vars[name] = (dims, stored_values(ev.scalars[name], dtype), attrs_r)
+        values = stored_values(ev.scalars[name], dtype)
+        data_vars[name] = (
+            dims,
+            values.reshape(plan.runs, -1) if len(dims) > 1 else values,
+            attrs_r,
+        )
     for name in plan.definition.curves:
         dims, _, attrs_c = curve_layout(plan, name)
-        data_vars[name] = (dims, ev.curves[name], attrs_c)
+        curve = ev.curves[name]
+        shape = (plan.runs, plan.noise_cases, curve.shape[-1])
+        data_vars[name] = (dims, curve.reshape(shape) if len(dims) > 2 else curve, attrs_c)
     return ds.assign(data_vars)
+
+
+def run_dims(plan: Plan) -> tuple[str, ...]:
+    """The dimensions of a scalar response: ``run``, and ``noise`` for a study with noise."""
+    return ("run", NOISE) if plan.definition.noise is not None else ("run",)
 
 
 def layout(plan: Plan, attrs: dict[str, Any]) -> xr.Dataset:
     """Coordinates and global attributes of a run's results, without its responses."""
     d, scene, design = plan.definition, plan.scene, plan.design
     coords: dict[str, Any] = {"run": ("run", np.arange(plan.runs), {"long_name": "design point"})}
+    if d.noise is not None:
+        coords[NOISE] = (NOISE, np.arange(plan.noise_cases), {"long_name": "noise case"})
+    for name, values in plan.noise_values.items():
+        param = scene.parameter(name)
+        assert param is not None
+        coords[f"{name}{NOISE_SUFFIX}"] = (
+            ("run", NOISE),
+            values,
+            {"units": param.units, "long_name": f"{param.long_name} under noise"},
+        )
     for f in d.factors:
         param = scene.parameter(f.name)
         long_name = param.long_name if param else f.name
@@ -120,6 +146,10 @@ def layout(plan: Plan, attrs: dict[str, Any]) -> xr.Dataset:
         **({} if d.pool is None else {"pool": json.dumps(list(d.pool))}),
         "array_columns": json.dumps(design.columns),
         "responses": json.dumps(list(d.responses)),
+        "noise_factors": json.dumps([f.name for f in d.noise.factors] if d.noise else []),
+        "noise_design": noise_label(d),
+        "limits": json.dumps(d.limits),
+        **({"samples": d.samples, "seed": d.seed} if d.samples else {}),
         "settings": json.dumps(d.settings),
         "study_toml": d.text,
         "Conventions": "CF-1.10",
@@ -157,15 +187,15 @@ def response_layout(plan: Plan, name: str) -> tuple[tuple[str, ...], type, dict[
             "valid_range": np.array([0, (1 << len(r.bits)) - 1], dtype=np.int8),
             "comment": f"0: none of the bits set; {NOT_EVALUATED}: not evaluated",
         }
-        return ("run",), np.int8, attrs_r | masks
+        return run_dims(plan), np.int8, attrs_r | masks
     meanings = ("fails", "passes") if r.flag else r.codes
     if not meanings:
-        return ("run",), np.float64, attrs_r
+        return run_dims(plan), np.float64, attrs_r
     flags = {
         "flag_values": np.arange(NOT_EVALUATED, len(meanings), dtype=np.int8),
         "flag_meanings": " ".join(("not_evaluated", *meanings)),
     }
-    return ("run",), np.int8, attrs_r | flags
+    return run_dims(plan), np.int8, attrs_r | flags
 
 
 def is_status(da: xr.DataArray) -> bool:
@@ -180,7 +210,8 @@ def curve_layout(plan: Plan, name: str) -> tuple[tuple[str, ...], type, dict[str
     c, axis = plan.scene.curve(name), plan.scene.curve_axis
     assert c is not None
     assert axis is not None
-    return ("run", axis.name), np.float64, {"units": c.units, "long_name": c.long_name}
+    dims = (*run_dims(plan), axis.name)
+    return dims, np.float64, {"units": c.units, "long_name": c.long_name}
 
 
 def stored_values(values: np.ndarray, dtype: type) -> np.ndarray:

@@ -53,15 +53,17 @@ class ResultsWriter:
 
     def _layout(self, plan: Plan, chunk_size: int) -> None:
         self.file.set_auto_maskandscale(False)
-        run_chunk = max(1, min(chunk_size, plan.runs))
+        cases = plan.noise_cases
+        run_chunk = max(1, min(chunk_size // cases, plan.runs))
         self.dtypes: dict[str, type] = {}
         for name in plan.responses:
             dims, dtype, attrs_r = response_layout(plan, name)
-            self._variable(name, dims, dtype, attrs_r, (run_chunk,))
+            self._variable(name, dims, dtype, attrs_r, (run_chunk, cases)[: len(dims)])
         for name in plan.definition.curves:
             dims, dtype, attrs_c = curve_layout(plan, name)
-            width = len(self.file.dimensions[dims[1]])
-            self._variable(name, dims, dtype, attrs_c, (run_chunk, width))
+            width = len(self.file.dimensions[dims[-1]])
+            inner = (cases, width) if len(dims) > 2 else (width,)
+            self._variable(name, dims, dtype, attrs_c, (run_chunk, *inner))
 
     def _variable(
         self,
@@ -88,15 +90,20 @@ class ResultsWriter:
         return int(self.file[curve].shape[1])
 
     def write(self, part: slice, out: SceneOutput) -> None:
-        """Store one chunk's responses and curves (design points ``part``)."""
+        """Store one chunk's responses and curves (computed points ``part``: design points ×
+        noise cases, flat)."""
         self._netcdf(self._write, part, out)
 
     def _write(self, part: slice, out: SceneOutput) -> None:
+        n = self.plan.noise_cases  # a chunk holds whole design points (pipeline.chunk_cases)
+        rows = slice(part.start // n, part.stop // n)
+        noisy = self.plan.definition.noise is not None
         for name, values in out.scalars.items():
             if name in self.dtypes:
-                self.file[name][part] = stored_values(values, self.dtypes[name])
+                stored = stored_values(values, self.dtypes[name])
+                self.file[name][rows] = stored.reshape(-1, n) if noisy else stored
         for name, values in out.curves.items():
-            self.file[name][part, :] = values
+            self.file[name][rows] = values.reshape(-1, n, values.shape[-1]) if noisy else values
 
     def close(self, attrs: dict[str, Any]) -> Path:
         """Add the global ``attrs`` known only at the end (timings), finish the file and

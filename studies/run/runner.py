@@ -48,8 +48,15 @@ def chunks(runs: int, size: int) -> Iterator[slice]:
         yield slice(start, min(start + size, runs))
 
 
+def chunk_cases(plan: Plan, size: int) -> int:
+    """A chunk size of whole design points: ``size`` points rounded down to a multiple of the
+    noise cases per design point (at least one design point's cases)."""
+    n = plan.noise_cases
+    return max(n, size // n * n)
+
+
 def chunk_points(plan: Plan, part: slice) -> dict[str, np.ndarray]:
-    """The SI parameter values of the design points ``part``."""
+    """The SI parameter values of the computed points ``part`` (design points × noise cases)."""
     return {k: v[part] for k, v in plan.points.items()}
 
 
@@ -100,7 +107,7 @@ def evaluate(
         raise ValueError(msg)
     finished = set(done or {})
     parts: dict[int, SceneOutput] = {i: o for i, o in (done or {}).items() if o is not None}
-    todo = [(i, part) for i, part in enumerate(chunks(plan.runs, chunk_size)) if i not in finished]
+    todo = [(i, part) for i, part in enumerate(chunks(plan.cases, chunk_size)) if i not in finished]
     t0 = time.perf_counter()
     if todo:
         evaluate_chunk(plan, slice(todo[0][1].start, todo[0][1].start + 1))
@@ -108,8 +115,8 @@ def evaluate(
     t1 = time.perf_counter()
     computed = sum(part.stop - part.start for _, part in todo)
     bar = tqdm(
-        total=plan.runs,
-        initial=plan.runs - computed,
+        total=plan.cases,
+        initial=plan.cases - computed,
         unit="pt",
         desc=plan.definition.name,
         disable=not progress,

@@ -1,5 +1,5 @@
 """Fuzzing study files (issue 18, "What to build" 4): hypothesis writes study files, valid and
-broken (types, ranges, units, names, design sizes), for four scenes, and ``check`` answers each
+broken (types, ranges, units, names, design sizes, [noise] tables), for four scenes, and ``check`` answers each
 with either "OK" (exit 0) or exit 2 and a list of problems, one line each, every line naming a
 key of the file — never a traceback, never an error that is not a study problem.
 
@@ -151,7 +151,7 @@ def valid_document(draw: st.DrawFn, scene_name: str) -> dict[str, Any]:
     responses = [r.name for r in scene.responses]
     some = st.lists(st.sampled_from(scene.settings), max_size=2, unique=True)
     settings_ = draw(some) if scene.settings else []
-    return {
+    doc = {
         "name": draw(st.from_regex(r"[A-Za-z0-9_-]{1,20}", fullmatch=True)),
         "scene": scene_name,
         "responses": draw(
@@ -165,6 +165,30 @@ def valid_document(draw: st.DrawFn, scene_name: str) -> dict[str, Any]:
         },
         "settings": {p.name: draw(allowed(p)) for p in settings_} if settings_ else {},
     }
+    numbers = [p for p in scene.parameters if p.kind == "number"]
+    noisy = draw(st.lists(st.sampled_from(numbers), max_size=2, unique=True))
+    if noisy and doc["design"] != "sweep":  # a sweep takes no noise
+        doc["noise"] = draw(noise_table(noisy))
+    return doc
+
+
+@st.composite
+def noise_table(draw: st.DrawFn, noisy: list[Any]) -> dict[str, Any]:
+    """A [noise] table a user could mean: a small outer array or sample of tolerances (the
+    range check may still refuse a spread that leaves a parameter's range)."""
+    kind = draw(st.sampled_from(["L4", "L9", "sobol", "lhs", "random"]))
+    table: dict[str, Any] = {"type": kind}
+    if kind in ("sobol", "lhs", "random"):
+        table["samples"] = 4
+    for p in noisy:
+        distribution = draw(st.sampled_from(["normal", "uniform", "triangular"]))
+        spread = "sd" if distribution == "normal" else "half_width"
+        table[p.name] = {
+            "distribution": distribution,
+            spread: draw(st.floats(0.1, 10.0)),
+            "relative": True,
+        }
+    return table
 
 
 @st.composite
@@ -173,7 +197,7 @@ def broken(draw: st.DrawFn, doc: dict[str, Any], scene_name: str) -> str:
     scene = get_scene(scene_name)
     factor = draw(st.sampled_from(sorted(doc["factors"])))
     spec, param = doc["factors"][factor], scene.parameter(factor)
-    kind = draw(st.integers(0, 10))
+    kind = draw(st.integers(0, 11))
     if kind == 0:
         doc["name"] = draw(
             NAMES.filter(
@@ -225,6 +249,8 @@ def broken(draw: st.DrawFn, doc: dict[str, Any], scene_name: str) -> str:
         target = draw(st.sampled_from(scene.settings))
         doc["settings"][target.name] = draw(hostile(target))
         return target.name
+    if kind == 10:  # the [noise] table
+        return draw(broken_noise(doc, scene, factor))
     # design sizes: two factors of 40 to 2000 levels, more points than MAX_POINTS
     numbers = [
         p for p in scene.parameters if p.kind == "number" and p.name not in doc["parameters"]
@@ -235,6 +261,28 @@ def broken(draw: st.DrawFn, doc: dict[str, Any], scene_name: str) -> str:
     }
     doc["design"] = "full_factorial"
     return "design points"
+
+
+@st.composite
+def broken_noise(draw: st.DrawFn, doc: dict[str, Any], scene: Any, factor: str) -> str:
+    """Break (or add) the [noise] table in one way; return the key a message must name."""
+    table = doc.setdefault("noise", {"type": "L4"})
+    target = draw(st.sampled_from([p for p in scene.parameters if p.kind == "number"]))
+    how = draw(st.integers(0, 3))
+    if how == 0:  # a spread that is no spread: negative, zero, NaN, text, a boolean
+        table[target.name] = {
+            "distribution": "normal",
+            "sd": draw(st.one_of(st.floats(max_value=0.0), st.text(max_size=3), st.booleans())),
+        }
+        return target.name
+    if how == 1:
+        table[target.name] = {"distribution": "uniform", "half_width": 1.0, "spread": 2.0}
+        return "spread"
+    if how == 2:
+        table["type"] = draw(st.one_of(st.sampled_from(["L7", "halton"]), ANY_VALUE))
+        return "type"
+    table[factor] = {"levels": [1.0, 2.0]}  # explicit levels on a control factor
+    return factor
 
 
 @st.composite
