@@ -325,12 +325,13 @@ def _default_outputs() -> Path:
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
-    from studies.define.plan import plan_study
+    from studies.define.plan import noise_label, plan_study
 
     plan = plan_study(args.study)
     d = plan.definition
+    noise = f" x {plan.noise_cases} noise cases ({noise_label(d)})" if d.noise else ""
     print(
-        f"{d.name}: OK — scene {d.scene}, design {plan.design.name}, {plan.runs} runs, "
+        f"{d.name}: OK — scene {d.scene}, design {plan.design.name}, {plan.runs} runs{noise}, "
         f"stages {', '.join(plan.stages)}"
     )
     _warn(plan)

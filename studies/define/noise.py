@@ -39,8 +39,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy import stats
-from scipy.stats import qmc
 
 from studies.define.designs import orthogonal
 from studies.define.designs.assignment import DesignError, array_info
@@ -174,6 +172,11 @@ def _noise_factor(
     factor = next((f for f in factors if f.name == name), None)
     if "levels" in spec:
         return _levels(name, spec, param, factor, problems)
+    if param.integer:
+        problems.append(
+            f"{where}: {name} is a whole number (a count): give explicit levels, not a distribution"
+        )
+        return None
     distribution = spec.get("distribution")
     if distribution not in DISTRIBUTIONS:
         problems.append(
@@ -290,6 +293,10 @@ def _array_levels(name: str) -> int:
 
 
 def _sampled(noise: Noise) -> dict[str, np.ndarray]:
+    # scipy on use: reading a study (and every light command) must not import it
+    from scipy import stats  # noqa: PLC0415
+    from scipy.stats import qmc  # noqa: PLC0415
+
     d, n = len(noise.factors), noise.samples
     rng = np.random.default_rng(noise.seed)
     if noise.type == "sobol":

@@ -22,7 +22,6 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from scipy.stats import qmc
 
 from studies.scenes.base import short
 
@@ -60,6 +59,8 @@ def parse_sampling(design: Any, kind: str, problems: list[str]) -> tuple[int, in
 
 def saltelli_unit(n: int, d: int, seed: int) -> np.ndarray:
     """Saltelli's N (D + 2) × D points in the unit cube, in SALib's order (module docstring)."""
+    from scipy.stats import qmc  # noqa: PLC0415  (on use: reading a study must not import scipy)
+
     base = qmc.Sobol(2 * d, scramble=True, rng=np.random.default_rng(seed)).random(n)
     a, b = base[:, :d], base[:, d:]
     out = np.empty((n, d + 2, d))

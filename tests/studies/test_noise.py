@@ -101,6 +101,10 @@ def problems_of(text: str) -> str:
             '[noise]\ntype = "L4"\n[noise.engine_speed]\ndistribution = "gamma"\nsd = 5',
             "[noise.engine_speed] distribution = 'gamma' must be one of 'normal', 'uniform'",
         ),
+        (  # a count takes explicit levels, not a distribution
+            '[noise]\ntype = "L4"\n[noise.cylinders]\ndistribution = "normal"\nsd = 1',
+            "[noise.cylinders]: cylinders is a whole number (a count): give explicit levels",
+        ),
         (
             '[noise]\ntype = "L4"\n[noise.engine_sped]\ndistribution = "normal"\nsd = 5',
             "did you mean 'engine_speed'?",
