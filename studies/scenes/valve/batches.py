@@ -11,10 +11,11 @@ import numpy as np
 from engine_kernels import valvetrain as valve
 from engine_kernels.valvetrain.dopri import integrate as valve_dopri
 from engine_kernels.valvetrain.dopri.jump import dopri_jump_speed
+from engine_kernels.valvetrain.spring_chain.jump import chain_jump_speed
 from engine_kernels.valvetrain.valve import lane_batch as valve_lanes
 from studies.scenes.checks import PointProblems
 from studies.scenes.linkage.scene import step_deg
-from studies.scenes.valve.parameters import LANE_PRECISION
+from studies.scenes.valve.parameters import LANE_PRECISION, dopri_tolerance
 
 RPM = 30.0 / math.pi  # rpm per rad/s
 N_OUT = len(valve.VALVE_OUTPUT_NAMES)
@@ -146,16 +147,15 @@ def dopri_lifts(
     return out, lifts
 
 
+JUMP_SCAN_POINTS = 16
+"""Speeds the jump-speed search scans before it bisects (:mod:`engine_kernels.valvetrain.jump_search`)."""
+
+
 def dopri_jump_speeds(
-    excitation: tuple[np.ndarray, float, float],
-    rows: np.ndarray,
-    grid_deg: float,
-    tolerance: float,
-    settings: dict[str, Any],
-    scan_points: int,
+    excitation: tuple[np.ndarray, float, float], rows: np.ndarray, settings: dict[str, Any]
 ) -> np.ndarray:
     """(jump speed [rad/s], ``JUMP_*`` code) of every row, each speed of the search one
-    ``dopri`` run (see :func:`integrate_dopri`; ``tolerance``: lift tolerance per step [m])."""
+    ``dopri`` run (see :func:`integrate_dopri`) at the study's tolerance on its angle grid."""
     table, table_step, start = excitation
     found = np.empty((rows.shape[0], 2))
     for j, row in enumerate(rows):
@@ -163,12 +163,36 @@ def dopri_jump_speeds(
             table,
             table_step,
             start,
-            math.radians(grid_deg),
+            math.radians(step_deg(settings["angle_step"])),
             row,
-            tolerance,
+            dopri_tolerance(settings["tolerance"]),
             settings["jump_speed_low"],
             settings["jump_speed_high"],
-            scan_points,
+            JUMP_SCAN_POINTS,
+            settings["jump_speed_tolerance"],
+        )
+    return found
+
+
+def rk4_jump_speeds(
+    excitation: tuple[np.ndarray, float, float],
+    rows: np.ndarray,
+    settings: dict[str, Any],
+    chained: bool,
+) -> np.ndarray:
+    """(jump speed [rad/s], ``JUMP_*`` code) of every row (``chained``: multi-mass spring
+    rows [V4], else single-mass rows [V2]), each speed of the search one RK4 run."""
+    search = chain_jump_speed if chained else valve.jump_speed
+    flags = kernel_settings(settings, settings["integrator"], False)
+    found = np.empty((rows.shape[0], 2))
+    for j, row in enumerate(rows):
+        found[j] = search(
+            *excitation,
+            row,
+            flags,
+            settings["jump_speed_low"],
+            settings["jump_speed_high"],
+            JUMP_SCAN_POINTS,
             settings["jump_speed_tolerance"],
         )
     return found

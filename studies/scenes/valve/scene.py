@@ -28,7 +28,6 @@ import numpy as np
 
 from engine_kernels import valvetrain as valve
 from engine_kernels.valvetrain import rocker
-from engine_kernels.valvetrain.spring_chain.jump import chain_jump_speed
 from studies.scenes.linkage.parameters import RESPONSES as ROCKER_RESPONSES
 from studies.scenes.linkage.scene import (
     CACHE_SIZE,
@@ -49,6 +48,7 @@ from studies.scenes.valve.batches import (
     integrate_dopri,
     jump_setting_problems,
     kernel_settings,
+    rk4_jump_speeds,
     stability_problems,
     valve_rows,
 )
@@ -78,7 +78,6 @@ RPM = 30.0 / math.pi
 WINDOW_PROBE_DEG = 0.25
 """Grid on which the valve opening and closing angles that set the window are found."""
 PRE_OPEN_DEG = 2.0
-JUMP_SCAN_POINTS = 16
 BUDGET_RESPONSES = frozenset(("integration_error", "excitation_error"))
 BAR_RESPONSES = (
     frozenset(("error_estimate", "step_halving_difference", *DERIVED_BARS)) | BUDGET_RESPONSES
@@ -327,40 +326,19 @@ class ValveScene(LinkageScene[ValveState]):
 
     def stage_jump_speed(self, state: ValveState) -> None:
         settings = state.settings
-        flags = kernel_settings(settings, settings["integrator"], False)
         state.jump = np.full((state.n, 2), np.nan)
+        chained = spring.uses_chain(settings)
         for key, idx in state.groups.items():
             if not self.linkage_valid(state, key):
                 state.jump[idx, 1] = JUMP_NOT_RUN
-                continue
-            chained = spring.uses_chain(settings)
-            if settings["integrator"] == DOPRI and not chained:  # the search honours dopri
-                tolerance = settings["tolerance"]
-                table_deg = 2 * dopri_table_deg(tolerance)
-                state.jump[idx] = dopri_jump_speeds(
-                    self.excitation(state, key, table_deg, unclipped=True),
-                    valve_rows(state.points, idx),
-                    step_deg(settings["angle_step"]),
-                    dopri_tolerance(tolerance),
-                    settings,
-                    JUMP_SCAN_POINTS,
-                )
-                continue
-            table, table_step, start = self.excitation(state, key, step_deg(settings["angle_step"]))
-            rows = self.spring_rows(state, idx) if chained else valve_rows(state.points, idx)
-            search = chain_jump_speed if chained else valve.jump_speed
-            for i, row in zip(idx, rows, strict=True):
-                state.jump[i] = search(
-                    table,
-                    table_step,
-                    start,
-                    row,
-                    flags,
-                    settings["jump_speed_low"],
-                    settings["jump_speed_high"],
-                    JUMP_SCAN_POINTS,
-                    settings["jump_speed_tolerance"],
-                )
+            elif settings["integrator"] == DOPRI and not chained:  # the search honours dopri
+                table_deg = 2 * dopri_table_deg(settings["tolerance"])
+                table = self.excitation(state, key, table_deg, unclipped=True)
+                state.jump[idx] = dopri_jump_speeds(table, valve_rows(state.points, idx), settings)
+            else:
+                table = self.excitation(state, key, step_deg(settings["angle_step"]))
+                rows = self.spring_rows(state, idx) if chained else valve_rows(state.points, idx)
+                state.jump[idx] = rk4_jump_speeds(table, rows, settings, chained)
 
     # --- outputs --------------------------------------------------------------------------
     def scalar(self, state: ValveState, response: str) -> np.ndarray:
