@@ -108,7 +108,8 @@ def load_plugins() -> dict[str, type[Scene]]:
     """Import the scenes installed packages register (entry-point group ``engine_studies.scenes``).
 
     Each import is guarded: a plugin that fails to import (even by ``sys.exit`` or
-    ``KeyboardInterrupt``), is not a Scene, reuses a built-in name or registers a name another
+    ``KeyboardInterrupt``), is not a Scene, defines neither ``finish`` nor ``evaluate`` (it
+    could not answer a single chunk), reuses a built-in name or registers a name another
     package registers too is skipped with one line on stderr naming its package: a broken
     third-party package must not take the engine down."""
     by_name: dict[str, list[EntryPoint]] = {}
@@ -130,6 +131,11 @@ def load_plugins() -> dict[str, type[Scene]]:
             continue
         if not (isinstance(loaded, type) and issubclass(loaded, Scene)):
             _warn(f"scene plugin {_origin(point)} is not a Scene subclass: skipped")
+        elif loaded.finish is Scene.finish and loaded.evaluate is Scene.evaluate:
+            _warn(
+                f"scene plugin {_origin(point)} defines neither finish (the stage protocol's "
+                "last step) nor evaluate: skipped (see docs/scenes.md)"
+            )
         elif name in BUILT_IN or loaded.name != name:
             _warn(
                 f"scene plugin {_origin(point)} registers {short(name)}, which is a built-in "

@@ -309,7 +309,11 @@ class Scene(ABC, Generic[State]):
         return cast(State, self.state_type.of(points, settings, responses, curves))
 
     def finish(self, state: State) -> SceneOutput:
-        """The responses and curves asked for, in their declared units, from the run state."""
+        """The responses and curves asked for, in their declared units, from the run state.
+
+        Every scene defines this or overrides :meth:`evaluate`; a plugin that does neither is
+        refused when it is loaded (:func:`studies.scenes.load_plugins`), so this line is
+        reached only by a scene class used without the registry."""
         raise NotImplementedError(f"scene {self.name!r} defines neither finish nor evaluate")
 
     # --- to be provided by each scene ---------------------------------------------------

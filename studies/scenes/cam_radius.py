@@ -28,10 +28,16 @@ computes every point on the study's own grid whatever the check saw)."""
 COARSEST_SCAN_DEG = 2.0
 
 
-def angle_grid(step_deg: float) -> np.ndarray:
-    """Cam angles −180 … 180 deg every ``step_deg`` (180 a multiple of it) [rad]."""
+def turn_deg(step_deg: float) -> np.ndarray:
+    """Cam angles −180 … 180 deg every ``step_deg`` (180 a multiple of it) [deg]: the cam
+    scene's curve axis and the grid its convexity is scanned on."""
     count = round(HALF_TURN_DEG / step_deg)
-    return np.radians(np.linspace(-HALF_TURN_DEG, HALF_TURN_DEG, 2 * count + 1))
+    return np.linspace(-HALF_TURN_DEG, HALF_TURN_DEG, 2 * count + 1)
+
+
+def angle_grid(step_deg: float) -> np.ndarray:
+    """:func:`turn_deg` in radians [rad]."""
+    return np.radians(turn_deg(step_deg))
 
 
 def scan_step_deg(laws: int, step_deg: float) -> float:

@@ -16,6 +16,7 @@ from pathlib import Path
 import pytest
 
 from studies.cli import main
+from studies.common.errors import StudyError
 from studies.scenes import BUILT_IN, SCENES, get_scene
 
 SCENE_CLASS = """
@@ -160,3 +161,21 @@ def test_a_plugin_that_exits_at_import_does_not_change_the_exit_code_of_a_real_p
     assert done.stderr.splitlines() == [
         "warning: scene plugin package 'exits' (exits_mod:Plugin) did not load: SystemExit: 3"
     ]
+
+
+def test_a_plugin_that_can_answer_no_chunk_is_refused_when_loaded(
+    site: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A Scene subclass with neither ``finish`` nor ``evaluate`` would fail on its first chunk,
+    after the study was planned and its folder made: it is refused at load, in one line."""
+    body = SCENE_CLASS.format(cls="Plugin", scene="halfway")
+    body = body[: body.index("    def evaluate")]
+    install(site, "halfway", "halfway_mod", body)
+    assert "halfway" not in SCENES
+    (warning,) = capsys.readouterr().err.splitlines()
+    assert warning == (
+        "warning: scene plugin package 'halfway' (halfway_mod:Plugin) defines neither finish "
+        "(the stage protocol's last step) nor evaluate: skipped (see docs/scenes.md)"
+    )
+    with pytest.raises(StudyError, match="unknown scene 'halfway'"):
+        get_scene("halfway")

@@ -32,13 +32,13 @@ from studies.scenes.cam.parameters import (
     SETTINGS,
 )
 from studies.scenes.cam_laws import LAW_CODES, SHAPE_CODES, codes, polydyne_problems
+from studies.scenes.cam_radius import HALF_TURN_DEG, turn_deg
 from studies.scenes.checks import checked_groups
 from studies.scenes.state import RunState
 
 if TYPE_CHECKING:
     from studies.scenes.base import FigureBuilder, SceneBenchmark
 
-HALF_TURN_DEG = 180.0
 
 # parameter name -> kernel column (all other kernel columns are named alike)
 _COLUMN = {
@@ -170,9 +170,7 @@ class CamScene(Scene[CamState]):
         return {"cam": bench_cam}
 
     def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray:
-        step = np.rad2deg(settings["angle_step"])
-        n = round(HALF_TURN_DEG / step)
-        return np.linspace(-HALF_TURN_DEG, HALF_TURN_DEG, 2 * n + 1)
+        return turn_deg(np.rad2deg(settings["angle_step"]))
 
     # --- checks ---------------------------------------------------------------------------
     def point_warnings(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
