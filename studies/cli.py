@@ -199,7 +199,7 @@ def _parser() -> argparse.ArgumentParser:
         "--points",
         type=float,
         default=1e6,
-        help="design points of the end-to-end 'study' benchmark (e.g. 1e7)",
+        help="cases of the end-to-end 'study' and 'noise_study' benchmarks (e.g. 1e7)",
     )
     bench.add_argument("--step", type=float, default=0.5, help="angle step [deg]")
     bench.add_argument("--repeat", type=int, default=3, help="timed repetitions (best kept)")
@@ -225,7 +225,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
     names = list(benchmarks()) if args.name == "all" else [args.name]
     for name in names:
-        cases = int(args.points) if name == "study" else args.cases
+        cases = int(args.points) if name in ("study", "noise_study") else args.cases
         path = run_benchmark(name, cases, args.step, args.repeat, args.outputs)
         figures = json.loads(path.read_text(encoding="utf-8"))["figures"]
         print(f"benchmark {name} ({cases} cases, step {args.step} deg):")

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from studies.bench.plots import save_bench_figure
-from studies.bench.study import bench_study
+from studies.bench.study import bench_noise_study, bench_study
 from studies.common.errors import StudyError
 from studies.define.plan import plan_text
 from studies.run import provenance
@@ -31,8 +31,9 @@ KIT = BenchKit(plan=plan_text, evaluate=evaluate_chunk)
 
 
 def benchmarks() -> dict[str, Benchmark]:
-    """Every benchmark by name: the engine's ``study`` and each scene's own."""
-    found: dict[str, Benchmark] = {"study": bench_study}
+    """Every benchmark by name: the engine's ``study`` and ``noise_study``, and each scene's
+    own."""
+    found: dict[str, Benchmark] = {"study": bench_study, "noise_study": bench_noise_study}
     for scene in SCENES.values():
         for name, bench in scene().benchmarks().items():
             found[name] = partial(bench, KIT)  # the engine's kit lent to the scene's benchmark

@@ -7,6 +7,10 @@ speed × spring preload × spring rate × drive stiffness with that study's nine
 factors of about equal level counts. What the kernels cost is ``compute`` (``run.json``
 ``run_s``); everything else — imports, planning, writing results.nc, the analysis, the figures —
 is the rest of ``end_to_end``.
+
+``noise_study`` is the same valve study with a tolerance (noise) sample crossed with fewer
+design points, about as many computed cases: its cost per case beside ``study``'s is the cost of
+a noise case beside a design point's.
 """
 
 from __future__ import annotations
@@ -44,15 +48,47 @@ def level_counts(points: int) -> tuple[int, ...]:
     return (side,) * 4
 
 
-def study_text(points: int) -> str:
-    """``ohc125_dynamics`` with its four factors at ``level_counts(points)`` levels each."""
+def study_text(points: int, counts: tuple[int, ...] = ()) -> str:
+    """``ohc125_dynamics`` with its four factors at ``counts`` (default ``level_counts(points)``)
+    levels each."""
     text = find_study("ohc125_dynamics").read_text(encoding="utf-8")
     text = text[: text.index("[factors.")].replace(
         'name = "ohc125_dynamics"', 'name = "bench_study"'
     )
-    for (name, (low, high, units)), n in zip(RANGES.items(), level_counts(points), strict=True):
+    for (name, (low, high, units)), n in zip(
+        RANGES.items(), counts or level_counts(points), strict=True
+    ):
         levels = np.linspace(low, high, n).round(6).tolist()
         text += f'\n[factors.{name}]\nlevels = {levels}\nunits = "{units}"\n'
+    return text
+
+
+NOISE_CASES = 1024
+"""Noise cases per design point of ``noise_study`` (a scrambled Sobol' sample, 2¹⁰)."""
+NOISE = {  # noise factor: relative half width of its uniform tolerance [%]
+    "spring_rate": 5.0,
+    "spring_preload": 8.0,
+    "drive_stiffness": 10.0,
+    "equivalent_mass": 3.0,
+}
+
+
+def noise_design(points: int) -> tuple[int, ...]:
+    """Level counts of the noise study's design: camshaft speeds × 4 × 4 × 4, with NOISE_CASES
+    noise cases each at least ``points`` cases (10⁶: 16 × 4 × 4 × 4 × 1024 = 1 048 576)."""
+    return (max(1, math.ceil(points / (NOISE_CASES * 64))), 4, 4, 4)
+
+
+def noise_study_text(points: int) -> str:
+    """:func:`study_text` at ``points`` / NOISE_CASES design points crossed with a Sobol' sample
+    of NOISE_CASES tolerance cases over the spring, drive and mass (:data:`NOISE`): about
+    ``points`` computed cases. The lash is left out on purpose: it fixes the linkage, so a
+    noise over it makes one cam–rocker table per case (about 10 ms each)."""
+    text = study_text(0, noise_design(points)).replace("bench_study", "bench_noise_study")
+    text += f'\n[noise]\ntype = "sobol"\nsamples = {NOISE_CASES}\nseed = 1\n'
+    for name, half_width in NOISE.items():
+        text += f'\n[noise.{name}]\ndistribution = "uniform"\nhalf_width = {half_width}\n'
+        text += "relative = true\n"
     return text
 
 
@@ -72,33 +108,48 @@ def run_command(args: list[str]) -> tuple[float, float]:
 def bench_study(points: int, step: float, repeat: int) -> dict[str, Any]:  # noqa: ARG001
     """Run the valve study of about ``points`` design points once through the command line
     (``repeat`` is not used: one run of a large study is the measurement)."""
-    with tempfile.TemporaryDirectory(prefix="bench_study_") as tmp:
+    figures = _run_study("bench_study", study_text(points), step)
+    runs = int(math.prod(level_counts(points)))
+    return {"points": runs, "levels": "x".join(str(n) for n in level_counts(points)), **figures}
+
+
+def bench_noise_study(points: int, step: float, repeat: int) -> dict[str, Any]:  # noqa: ARG001
+    """Like :func:`bench_study` for :func:`noise_study_text`: about ``points`` cases, of which
+    NOISE_CASES per design point are noise cases."""
+    figures = _run_study("bench_noise_study", noise_study_text(points), step)
+    designs = "x".join(str(n) for n in noise_design(points))
+    return {"design_levels": designs, "noise_cases": NOISE_CASES, **figures}
+
+
+def _run_study(name: str, text: str, step: float) -> dict[str, Any]:
+    """Run the study ``text`` (called ``name``) once through the command line; its compute
+    and end-to-end throughput over the computed cases, peak memory and results file."""
+    with tempfile.TemporaryDirectory(prefix=f"{name}_") as tmp:
         folder = Path(tmp)
-        study = folder / "bench_study.toml"
-        study.write_text(study_text(points).replace("angle_step = 0.5", f"angle_step = {step}"))
+        study = folder / f"{name}.toml"
+        study.write_text(text.replace("angle_step = 0.5", f"angle_step = {step}"))
         outputs = folder / "outputs"
         command = [sys.executable, "-m", "studies", "run", str(study), "--no-progress"]
         wall, peak = run_command([*command, "--outputs", str(outputs)])
-        (record,) = outputs.glob("bench_study/*/run.json")
+        (record,) = outputs.glob(f"{name}/*/run.json")
         timings = json.loads(record.read_text(encoding="utf-8"))["timings"]
-        (results,) = outputs.glob("bench_study/*/results.nc")
+        (results,) = outputs.glob(f"{name}/*/results.nc")
         size = results.stat().st_size
         with netCDF4.Dataset(results) as stored:
-            stored_runs = len(stored.dimensions["run"])
+            cases = len(stored.dimensions["run"])
+            if "noise" in stored.dimensions:
+                cases *= len(stored.dimensions["noise"])
         shutil.rmtree(outputs, ignore_errors=True)
-    runs = int(math.prod(level_counts(points)))
     return {
-        "points": runs,
-        "levels": "x".join(str(n) for n in level_counts(points)),
         "compute": {
-            "cases": runs,
+            "cases": cases,
             "seconds": timings["run_s"],
-            "cases_per_s": runs / timings["run_s"],
+            "cases_per_s": cases / timings["run_s"],
         },
-        "end_to_end": {"cases": runs, "seconds": wall, "cases_per_s": runs / wall},
+        "end_to_end": {"cases": cases, "seconds": wall, "cases_per_s": cases / wall},
         "compile_s": round(timings["compile_s"], 3),
         "wall_over_compute": wall / timings["run_s"],
         "peak_rss_mb": round(peak, 1),
         "results_nc_mb": round(size / 1e6, 1),
-        "results_nc_runs": stored_runs,
+        "results_nc_cases": cases,
     }

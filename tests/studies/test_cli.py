@@ -80,13 +80,28 @@ def test_bench_figure_has_one_bar_per_timing(tmp_path) -> None:
     assert save_bench_figure("empty", {"c_reference": "skipped"}, tmp_path / "none.png") is None
 
 
+def test_the_noise_bench_study_computes_a_million_cases_with_noise_on_every_design_point() -> None:
+    from studies.bench.study import NOISE, NOISE_CASES, noise_study_text
+    from studies.define.plan import plan_text
+
+    plan = plan_text(noise_study_text(10**6))
+    assert plan.cases == 16 * 4 * 4 * 4 * NOISE_CASES == 1_048_576
+    assert plan.noise_cases == NOISE_CASES
+    assert set(plan.noise_values) == set(NOISE)
+    factors = {f.name for f in plan.definition.factors}
+    for name, half_width in NOISE.items():  # relative uniform tolerances about each nominal
+        nominal = plan.factor_values(name)[:, None] if name in factors else 0.04252  # kg
+        ratio = plan.noise_values[name] / nominal
+        assert 1 - half_width / 100 <= ratio.min() < ratio.max() <= 1 + half_width / 100
+
+
 def test_bench_study_runs_the_valve_study_end_to_end() -> None:
     from studies.bench.study import bench_study, level_counts
 
     assert level_counts(10**6) == (40, 25, 25, 40)
     assert level_counts(10**7) == (100, 40, 50, 50)
     figures = bench_study(16, 0.5, 1)
-    assert figures["points"] == figures["results_nc_runs"] == 16
+    assert figures["points"] == figures["results_nc_cases"] == 16
     assert figures["end_to_end"]["seconds"] > figures["compute"]["seconds"] > 0
     assert figures["wall_over_compute"] > 1
     assert figures["peak_rss_mb"] > 0

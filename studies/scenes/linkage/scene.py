@@ -96,7 +96,7 @@ class LinkageState(RunState):
     """Run state of a linkage chunk (the ``rocker`` scene, and the ``valve`` scenes on it)."""
 
     groups: dict[tuple, np.ndarray] = field(init=False)  # linkage key → its design points
-    tappet: dict[tuple, TappetTable] = field(init=False)  # stage tappet: law per linkage key
+    tappet: dict[tuple, TappetTable] = field(init=False, default_factory=dict)  # law per key
     kinematics: dict[tuple, LinkageCurves] = field(init=False)  # stage rocker: [R1]–[R6] per key
 
 
@@ -200,10 +200,19 @@ class LinkageScene(Scene[Linkage]):
         return -HALF_TURN_DEG, step_deg(settings["angle_step"]), HALF_TURN_DEG
 
     def tappet_table(self, state: Linkage, key: tuple) -> TappetTable:
-        """The flat-tappet law of the linkage ``key`` (cached per key and tappet step)."""
-        spacing = step_deg(state.settings["tappet_step"])
-        i = int(state.groups[key][0])
-        return self.tappet_cache.get((key, spacing), lambda: tappet_table(state.points, i, spacing))
+        """The flat-tappet law of the linkage ``key``: made once per chunk (the run state keeps
+        it for every stage) and cached across chunks per key and tappet step. The cross-chunk
+        cache alone would make it again in each stage of a chunk with more linkages than the
+        cache holds."""
+        table = state.tappet.get(key)
+        if table is None:
+            spacing = step_deg(state.settings["tappet_step"])
+            i = int(state.groups[key][0])
+            table = self.tappet_cache.get(
+                (key, spacing), lambda: tappet_table(state.points, i, spacing)
+            )
+            state.tappet[key] = table
+        return table
 
     def linkage(
         self, state: Linkage, key: tuple, grid: tuple[float, float, float]
@@ -217,7 +226,8 @@ class LinkageScene(Scene[Linkage]):
         )
 
     def stage_tappet(self, state: Linkage) -> None:
-        state.tappet = {key: self.tappet_table(state, key) for key in state.groups}
+        for key in state.groups:
+            self.tappet_table(state, key)
 
     def stage_rocker(self, state: Linkage) -> None:
         grid = self.kinematic_grid(state.settings)
