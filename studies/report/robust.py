@@ -46,17 +46,22 @@ def _rows(ds: xr.Dataset, an: xr.Dataset, name: str) -> tuple[list[str], list[li
     limited = bool(_limit_words(an, name))
     if limited:
         header.append(f"P({_limit_words(an, name)}) [95 % Wilson]")
+    shown = slice(0, min(ds.sizes["run"], MAX_ROWS))  # read once, as arrays: never per cell
+    at = [ds[f][shown].values for f in factors]
+    first = row.isel(run=shown).load()
+    stats = {k: first[k].values for k in ("noise_mean", "noise_mean_low", "noise_mean_high")}
+    n, sd, quantiles = first["noise_n"].values, first["noise_sd"].values, first["noise_quantile"]
     rows = []
-    for i in range(min(ds.sizes["run"], MAX_ROWS)):
+    for i in range(shown.stop):
         mean = (
-            f"{num(float(row['noise_mean'][i]))} [{num(float(row['noise_mean_low'][i]))}, "
-            f"{num(float(row['noise_mean_high'][i]))}]"
+            f"{num(float(stats['noise_mean'][i]))} [{num(float(stats['noise_mean_low'][i]))}, "
+            f"{num(float(stats['noise_mean_high'][i]))}]"
         )
-        values = [str(i + 1), *(_value(ds[f].values[i]) for f in factors)]
-        values += [str(int(row["noise_n"][i])), mean, num(float(row["noise_sd"][i]))]
-        values += [num(float(v)) for v in row["noise_quantile"].values[i]]
+        values = [str(i + 1), *(_value(v[i]) for v in at)]
+        values += [str(int(n[i])), mean, num(float(sd[i]))]
+        values += [num(float(v)) for v in quantiles.values[i]]
         if limited:
-            values.append(_probability(row, i))
+            values.append(_probability(first, i))
         rows.append(values)
     return header, rows
 
@@ -142,15 +147,17 @@ def save_noise_figures(ds: xr.Dataset, an: xr.Dataset, folder: Path) -> list[Pat
     for name in an[DIM].values:
         row = an.sel({DIM: name})
         best = int(row["robust_run"])
-        y = ds[str(name)].transpose("run", NOISE).values
-        runs = range(y.shape[0]) if y.shape[0] <= MAX_CURVES else [best] if best >= 0 else []
+        count = ds.sizes["run"]
+        runs = list(range(count)) if count <= MAX_CURVES else [best] if best >= 0 else []
+        drawn = ds[str(name)].transpose("run", NOISE).isel(run=runs).values  # only those read
+        y = dict(zip(runs, drawn, strict=True))
         fig = Figure(figsize=(6.4, 4.0))  # Agg on save, no pyplot state
         ax = fig.add_subplot()
         for i in runs:
             values = y[i][np.isfinite(y[i])]
             if values.size and i != best:
                 ax.ecdf(values, color="0.7", linewidth=0.8)
-        if best >= 0 and np.isfinite(y[best]).any():
+        if best in y and np.isfinite(y[best]).any():
             values = y[best][np.isfinite(y[best])]
             ax.ecdf(values, color="C0", linewidth=2.0, label=f"run {best + 1} (most robust)")
         for key, style in (("limit_min", "--"), ("limit_max", ":")):
@@ -160,7 +167,11 @@ def save_noise_figures(ds: xr.Dataset, an: xr.Dataset, folder: Path) -> list[Pat
         units = str(row["noise_units"].values)
         ax.set_xlabel(axis_label(str(name), units))
         ax.set_ylabel("share of noise cases ≤ value")
-        ax.set_title(f"{name} under noise, every design point (grey)")
+        ax.set_title(
+            f"{name} under noise, every design point (grey)"
+            if count <= MAX_CURVES
+            else f"{name} under noise, the most robust of {count} design points"
+        )
         if ax.get_legend_handles_labels()[0]:
             ax.legend(loc="lower right")
         fig.tight_layout()

@@ -300,3 +300,30 @@ def test_a_noise_study_larger_than_the_machine_allows_is_refused(
         problems
     )
     assert "this machine allows 1e+06 points" in problems
+
+
+def test_the_noise_table_prints_each_design_points_own_statistics(
+    sobol_run, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Each row of the table under noise holds its run's factor values, mean and sd — checked
+    against numpy over that run's noise cases in results.nc (not against the analysis) — and a
+    design larger than MAX_ROWS lists MAX_ROWS rows."""
+    import xarray as xr
+
+    from studies.report import robust
+    from studies.report.markdown_format import num
+
+    ds = sobol_run.dataset
+    an = xr.open_dataset(sobol_run.folder / "analysis.nc")
+    header, rows = robust._rows(ds, an, "mean_piston_speed")
+    assert len(rows) == ds.sizes["run"] == 4
+    y = ds["mean_piston_speed"].values
+    for i, row in enumerate(rows):
+        cells = dict(zip(header, row, strict=True))
+        assert cells["run"] == str(i + 1)
+        assert cells["stroke"] == num(float(ds["stroke"].values[i]))
+        assert cells["rod_ratio"] == num(float(ds["rod_ratio"].values[i]))
+        assert cells["mean [95 % CI]"].startswith(f"{num(float(y[i].mean()))} [")
+        assert cells["sd"] == num(float(y[i].std(ddof=1)))
+    monkeypatch.setattr(robust, "MAX_ROWS", 2)
+    assert len(robust._rows(ds, an, "mean_piston_speed")[1]) == 2
