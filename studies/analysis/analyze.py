@@ -33,7 +33,9 @@ a full factorial) and ``level_a`` × ``level_b`` for two-way tables of means.
   violating the limit with its Wilson interval, on (``noise_response``, ``run``); the S/N
   ratios and run means over the noise are analysed like replicates;
 * a Saltelli design (:mod:`studies.analysis.sobol_indices`): ``S1``, ``S1_conf``, ``ST``,
-  ``ST_conf`` on (response, factor) instead of everything above;
+  ``ST_conf`` on (response, factor) (and ``S2``, ``S2_conf`` where asked) instead of
+  everything above; a Sobol' or Latin-hypercube sample
+  (:mod:`studies.analysis.sample_statistics`): moments, quantiles and correlations instead;
 * several responses: the trade-off (``chosen_level``, ``decided_by``, ``conflict`` per term,
   ``compromise``, ``compromise_worst``, ``compromise_half_width`` per response and
   ``compromise_at`` per condition).
@@ -61,6 +63,7 @@ from studies.analysis import optimum as analysis_optimum
 from studies.analysis.factorial import factorial, factorial_frame, grid_of
 from studies.analysis.grid_optimum import Grid
 from studies.analysis.robust import robust_statistics
+from studies.analysis.sample_statistics import sample_analysis
 from studies.analysis.sobol_indices import sobol_analysis
 from studies.analysis.statistics import (
     SENSES,
@@ -132,8 +135,8 @@ def analyze(
         present, ran = presence(ds, names)
         present = [r for r in present if r not in status]
         attrs |= {"points": ds.sizes["run"], "points_without_value": int((~ran).sum())}
-        sobol = sobol_analysis(ds, present, int(ds.attrs.get("seed", 1)))
-        return sobol.assign(counts).assign_attrs(attrs | {"analysed": json.dumps(present)})
+        sampled = (sobol_analysis if design == "saltelli" else sample_analysis)(ds, present)
+        return sampled.assign(counts).assign_attrs(attrs | {"analysed": json.dumps(present)})
     if design == "sweep":  # tables and plots of the runs themselves: nothing to estimate
         present, ran = presence(ds, names)
         present = [r for r in present if r not in status]

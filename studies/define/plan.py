@@ -312,7 +312,7 @@ def _sampled(d: StudyDefinition) -> tuple[StudyDefinition, designs.Design]:
     """A sampling design: each factor's sampled values become its levels (the study's
     ``range`` gives way to them) and each run's level code indexes them."""
     ranges = [(float(f.levels[0]), float(f.levels[1])) for f in d.factors]
-    levels, codes = sampled_levels(ranges, d.samples, d.seed)
+    levels, codes = sampled_levels(d.design, ranges, d.samples, d.seed, d.second_order)
     factors = tuple(
         replace(f, levels=tuple(v.tolist())) for f, v in zip(d.factors, levels, strict=True)
     )

@@ -10,11 +10,11 @@ from difflib import get_close_matches
 from typing import Any
 
 from studies.common.units import UNITS, canonical, compatible_units
+from studies.define.sampling import SAMPLING_DESIGNS as SAMPLED  # factors give range = [lo, hi]
 from studies.scenes import Scene
 from studies.scenes.base import is_finite_number, short
 
 FACTOR_KEYS = {"levels", "units", "column", "base", "role", "range"}
-SAMPLED = ("saltelli",)  # designs whose factors give a range = [lo, hi], not levels
 SHOWN_LEVEL_PROBLEMS = 3  # refused levels listed per factor; the rest are counted
 ROLES = ("control", "operating", "model")
 """A control factor is a design choice (its best level is chosen); an operating factor is a
