@@ -168,7 +168,7 @@ def test_second_order_indices_agree_with_salib_on_the_same_outputs() -> None:
 
 def test_second_order_indices_of_ishigami_match_the_closed_form_within_their_intervals() -> None:
     assert pytest.approx(0.2437, abs=1e-4) == S13_EXACT  # the value
-    ds, an = indices(2**12, second_order=True)
+    _, an = indices(2**12, second_order=True)
     row = an.sel(response="f")
     s2, conf = row["S2"].values, row["S2_conf"].values
     for (i, j), exact in {(0, 1): 0.0, (0, 2): S13_EXACT, (1, 2): 0.0}.items():
