@@ -30,8 +30,8 @@ a full factorial) and ``level_a`` × ``level_b`` for two-way tables of means.
   ``<response>_flag`` (the CF flag meanings), the names in the attribute ``status_responses``;
 * responses under noise (:mod:`studies.analysis.robust`): per design point ``noise_mean``,
   ``noise_sd``, ``noise_quantile`` and, for responses with ``[limits]``, the probability of
-  violating the limit with its Wilson interval, on (``noise_response``, ``run``); the S/N
-  ratios and run means over the noise are analysed like replicates;
+  violating the limit with its Wilson interval, on (``noise_response``, ``run``), and its
+  ``violation_map`` (:mod:`studies.analysis.violation_map`); S/N and means as replicates;
 * a Saltelli design (:mod:`studies.analysis.sobol_indices`): ``S1``, ``S1_conf``, ``ST``,
   ``ST_conf`` on (response, factor) (and ``S2``, ``S2_conf`` where asked) instead of
   everything above; a Sobol' or Latin-hypercube sample
@@ -74,6 +74,7 @@ from studies.analysis.statistics import (
     status_counts,
     sweep_runs,
 )
+from studies.analysis.violation_map import with_violation_maps
 from studies.define.sampling import SAMPLING_DESIGNS
 from studies.run.results import NOT_EVALUATED, PASS_FAIL, is_status, write_netcdf
 
@@ -187,7 +188,7 @@ def analyze(
             out[taguchi.mean_name(view, r)] = view[taguchi.mean_name(view, r)]
             if taguchi.sn_name(r) in analysed:
                 out[taguchi.sn_name(r)] = view[taguchi.sn_name(r)]
-    out = out.assign(counts).merge(robust_statistics(ds, names))
+    out = with_violation_maps(out.assign(counts).merge(robust_statistics(ds, names)), ds)
     out.attrs = attrs | {
         "analysed": json.dumps(analysed),
         "operating_factors": json.dumps(operating),
