@@ -6,7 +6,8 @@ factors with the largest range R of the response's mean over the noise (range an
 that pair (pandas ``groupby``; O(runs)).
 
 Variables on ``noise_response``: ``violation_map`` (``violation_level_x`` ×
-``violation_level_y``, NaN for a pair without runs and for responses without a limit), the
+``violation_level_y``, NaN for a pair without runs and for responses without a limit) with
+the design points in each cell (``violation_map_runs``), the
 factors ``violation_map_x`` (the strongest) and ``violation_map_y``, and
 ``violation_map_basis`` (which analysis chose them).
 """
@@ -45,6 +46,7 @@ def with_violation_maps(out: xr.Dataset, ds: xr.Dataset) -> xr.Dataset:
     limited = np.isfinite(out["limit_min"].values) | np.isfinite(out["limit_max"].values)
     levels = out.sizes["level"]
     grid = np.full((len(names), levels, levels), np.nan)
+    runs = np.zeros((len(names), levels, levels), dtype=np.int64)
     xs, ys, basis = [""] * len(names), [""] * len(names), [""] * len(names)
     for i, name in enumerate(names):
         mean = f"{name}_mean"
@@ -62,12 +64,14 @@ def with_violation_maps(out: xr.Dataset, ds: xr.Dataset) -> xr.Dataset:
                 "p": out["violation_probability"].values[i],
             }
         )
-        cells = frame.groupby(["x", "y"])["p"].mean()
-        grid[i, cells.index.get_level_values("x"), cells.index.get_level_values("y")] = cells.values
+        cells = frame.groupby(["x", "y"])["p"].agg(["mean", "size"])
+        at = (i, cells.index.get_level_values("x"), cells.index.get_level_values("y"))
+        grid[at], runs[at] = cells["mean"].to_numpy(), cells["size"].to_numpy()
     if not any(xs):
         return out
     return out.assign(
         violation_map=((DIM, X, Y), grid, {"units": "1", "long_name": "probability of violation"}),
+        violation_map_runs=((DIM, X, Y), runs, {"units": "1"}),
         violation_map_x=(DIM, xs),
         violation_map_y=(DIM, ys),
         violation_map_basis=(DIM, basis),

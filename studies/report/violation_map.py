@@ -36,10 +36,17 @@ def sentence(an: xr.Dataset, name: str, limit: str) -> str:
     """How the map was made (for the text and the report)."""
     row = an.sel({DIM: name})
     x, y = str(row["violation_map_x"].values), str(row["violation_map_y"].values)
+    counts = row["violation_map_runs"].values
+    counts = np.unique(counts[counts > 0])
+    each = (
+        f"{counts[0]} design point{'s' if counts[0] > 1 else ''}"
+        if counts.size == 1
+        else f"{counts.min()} to {counts.max()} design points"
+    )
     return (
         f"P({limit}) over {x} × {y}, the two control factors with the largest range in the "
-        f"{row['violation_map_basis'].values}: each cell is the mean of the design points' "
-        "probabilities at that level pair (over the other factors' runs)"
+        f"{row['violation_map_basis'].values}: each cell is the mean of the probabilities of "
+        f"the design points at that level pair ({each} per cell, over the other factors)"
     )
 
 

@@ -70,6 +70,7 @@ def test_the_map_is_the_mean_probability_per_level_pair(crossed) -> None:
             assert len(runs) == 2  # the two rod ratios
             averaged += share[runs[0]] != share[runs[1]]
             assert found[i, j] == pytest.approx(sum(share[r] for r in runs) / 2, abs=1e-15)
+    assert (row["violation_map_runs"].values[:3, :2] == 2).all()
     assert np.isnan(found[:, 2:]).all()  # engine speed has 2 levels of the 3 the frame holds
     assert averaged >= 3  # cells where picking one run instead of the mean would show
 
@@ -85,3 +86,4 @@ def test_the_robust_report_draws_the_map(crossed) -> None:
     ) in report
     text = (folder / "analysis.txt").read_text(encoding="utf-8")
     assert "P(max_piston_velocity > 22 m/s) over stroke × engine_speed" in text
+    assert "(2 design points per cell, over the other factors)" in text
