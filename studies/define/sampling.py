@@ -1,8 +1,9 @@
 """Sampling designs of the control factors: Saltelli's design for Sobol' indices, and scrambled
 Sobol' or Latin-hypercube samples for moments, quantiles and rank correlations.
 
-Every factor gives ``range = [lo, hi]`` (uniform) instead of levels; ``samples`` and ``seed``
-are in ``[design]``::
+Every factor gives ``range = [lo, hi]`` (uniform) or a distribution
+(:mod:`studies.define.distributions`) instead of levels; ``samples`` and ``seed`` are in
+``[design]``::
 
     [design]
     type = "saltelli"            # | "sobol" | "lhs"
@@ -24,6 +25,7 @@ B_A^(1)_j … B_A^(D)_j when asked, then B_j — N (D + 2), or N (2D + 2), runs.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -118,13 +120,19 @@ def unit_sample(kind: str, n: int, d: int, seed: int, second_order: bool = False
 
 
 def sampled_levels(
-    kind: str, ranges: list[tuple[float, float]], n: int, seed: int, second_order: bool = False
+    kind: str,
+    columns: list[Callable[[np.ndarray], np.ndarray]],
+    n: int,
+    seed: int,
+    second_order: bool = False,
 ) -> tuple[list[np.ndarray], list[np.ndarray]]:
-    """Per factor: its distinct sampled values (as levels) and each run's level code."""
-    unit = unit_sample(kind, n, len(ranges), seed, second_order)
+    """Per factor: its distinct sampled values (as levels) and each run's level code;
+    ``columns`` map a factor's unit-cube coordinates to its values (a range's linear map or a
+    distribution's inverse CDF)."""
+    unit = unit_sample(kind, n, len(columns), seed, second_order)
     levels, codes = [], []
-    for j, (lo, hi) in enumerate(ranges):
-        values, code = np.unique(lo + (hi - lo) * unit[:, j], return_inverse=True)
+    for j, column in enumerate(columns):
+        values, code = np.unique(column(unit[:, j]), return_inverse=True)
         levels.append(values)
         codes.append(code.astype(np.int32))
     return levels, codes

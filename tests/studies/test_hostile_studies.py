@@ -186,7 +186,7 @@ SAMPLED = (
             64,
             "",
             "levels = [150.0, 170.0]",
-            "factor stroke: a sobol design needs range = [lo, hi] (no levels)",
+            "factor stroke: a sobol design needs range = [lo, hi] or a distribution (no levels)",
         ),
         (
             "lhs",
@@ -202,8 +202,42 @@ SAMPLED = (
             "range = [150.0, 170.0]",
             "[design] second_order applies to type = \"saltelli\", not 'lhs'",
         ),
+        (
+            "lhs",
+            50,
+            "",
+            'distribution = "normal"\nnominal = 160.0\nsd = 30',
+            (
+                "factor stroke: normal sd = 30 mm about 160 mm reaches -20 mm ± 6 sd, outside "
+                "the valid range: stroke allows a number in (0, 5000] mm (refused, never "
+                "truncated: use a smaller spread)"
+            ),
+        ),
+        (
+            "lhs",
+            50,
+            "",
+            'range = [150.0, 170.0]\ndistribution = "uniform"\nhalf_width = 5',
+            "factor stroke: give a range or a distribution, not both",
+        ),
+        (
+            "sobol",
+            64,
+            "",
+            'distribution = "normal"\nhalf_width = 5',
+            "factor stroke: a normal distribution takes sd, not half_width",
+        ),
     ],
-    ids=["sobol-not-power-of-two", "range-reversed", "levels-with-sobol", "lhs-one", "lhs-S2"],
+    ids=[
+        "sobol-not-power-of-two",
+        "range-reversed",
+        "levels-with-sobol",
+        "lhs-one",
+        "lhs-S2",
+        "normal-leaves-range",
+        "range-and-distribution",
+        "normal-half-width",
+    ],
 )
 def test_a_sampling_design_is_refused_with_one_message(
     tmp_path: Path,

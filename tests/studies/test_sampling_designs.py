@@ -153,3 +153,42 @@ def test_the_outputs_of_a_sample_render_its_statistics(tmp_path: Path) -> None:
     assert "![correlations with y](correlation_y.png)" in report
     saved = xr.open_dataset(tmp_path / "analysis.nc")
     assert saved["spearman"].dims == ("response", "factor")
+
+
+DISTRIBUTED = """
+[factors.x1]
+distribution = "normal"
+nominal = 0.5
+sd = 0.1
+[factors.x2]
+range = [-1.0, 2.0]
+[factors.x3]
+distribution = "triangular"
+nominal = 1.0
+half_width = 20
+relative = true
+"""
+# σ of a normal: sd; of a uniform on [lo, hi]: (hi − lo)/√12; of a symmetric triangular of
+# half width a: a/√6 (here a = 20 % of 1.0)
+SIGMA_D = np.array([0.1, 3.0 / math.sqrt(12.0), 0.2 / math.sqrt(6.0)])
+MEAN_D = float(COEFFICIENTS @ [0.5, 0.5, 1.0])
+SD_D = math.sqrt(float(np.sum((COEFFICIENTS * SIGMA_D) ** 2)))
+
+
+def test_factors_may_give_a_distribution_drawn_by_its_inverse_cdf() -> None:
+    from scipy.stats import qmc
+
+    head = study("sobol", 512, seed=2).split("[factors.x1]")[0]
+    plan = plan_text(head + DISTRIBUTED)
+    unit = qmc.Sobol(3, scramble=True, rng=np.random.default_rng(2)).random(512)
+    # scipy's own inverse CDFs of the declared distributions at the same Sobol' points
+    assert plan.points["x1"] == pytest.approx(stats.norm.ppf(unit[:, 0], 0.5, 0.1), abs=1e-12)
+    assert plan.points["x2"] == pytest.approx(-1.0 + 3.0 * unit[:, 1], abs=1e-12)
+    triangle = stats.triang.ppf(unit[:, 2], 0.5, loc=0.8, scale=0.4)
+    assert plan.points["x3"] == pytest.approx(triangle, abs=1e-12)
+    ds = build_dataset(plan, evaluate(plan, progress=False), {})
+    row = analyze(ds).sel(response="y")
+    assert float(row.sample_mean_low) <= MEAN_D <= float(row.sample_mean_high)
+    assert float(row.sample_sd_low) <= SD_D <= float(row.sample_sd_high)
+    exact = COEFFICIENTS * SIGMA_D / SD_D  # r_i = a_i σ_i / σ_Y (module docstring)
+    assert np.all((row.pearson_low.values <= exact) & (exact <= row.pearson_high.values))
