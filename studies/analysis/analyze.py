@@ -30,10 +30,12 @@ a full factorial) and ``level_a`` × ``level_b`` for two-way tables of means.
   ``<response>_flag`` (the CF flag meanings), the names in the attribute ``status_responses``;
 * responses under noise (:mod:`studies.analysis.robust`): per design point ``noise_mean``,
   ``noise_sd``, ``noise_quantile`` and, for responses with ``[limits]``, the probability of
-  violating the limit with its Wilson interval, on (``noise_response``, ``run``); the S/N
-  ratios and run means over the noise are analysed like replicates;
+  violating the limit with its Wilson interval, on (``noise_response``, ``run``), and its
+  ``violation_map`` (:mod:`studies.analysis.violation_map`); S/N and means as replicates;
 * a Saltelli design (:mod:`studies.analysis.sobol_indices`): ``S1``, ``S1_conf``, ``ST``,
-  ``ST_conf`` on (response, factor) instead of everything above;
+  ``ST_conf`` on (response, factor) (and ``S2``, ``S2_conf`` where asked) instead of
+  everything above; a Sobol' or Latin-hypercube sample
+  (:mod:`studies.analysis.sample_statistics`): moments, quantiles and correlations instead;
 * several responses: the trade-off (``chosen_level``, ``decided_by``, ``conflict`` per term,
   ``compromise``, ``compromise_worst``, ``compromise_half_width`` per response and
   ``compromise_at`` per condition).
@@ -61,6 +63,7 @@ from studies.analysis import optimum as analysis_optimum
 from studies.analysis.factorial import factorial, factorial_frame, grid_of
 from studies.analysis.grid_optimum import Grid
 from studies.analysis.robust import robust_statistics
+from studies.analysis.sample_statistics import sample_analysis
 from studies.analysis.sobol_indices import sobol_analysis
 from studies.analysis.statistics import (
     SENSES,
@@ -71,6 +74,7 @@ from studies.analysis.statistics import (
     status_counts,
     sweep_runs,
 )
+from studies.analysis.violation_map import with_violation_maps
 from studies.define.sampling import SAMPLING_DESIGNS
 from studies.run.results import NOT_EVALUATED, PASS_FAIL, is_status, write_netcdf
 
@@ -132,8 +136,8 @@ def analyze(
         present, ran = presence(ds, names)
         present = [r for r in present if r not in status]
         attrs |= {"points": ds.sizes["run"], "points_without_value": int((~ran).sum())}
-        sobol = sobol_analysis(ds, present, int(ds.attrs.get("seed", 1)))
-        return sobol.assign(counts).assign_attrs(attrs | {"analysed": json.dumps(present)})
+        sampled = (sobol_analysis if design == "saltelli" else sample_analysis)(ds, present)
+        return sampled.assign(counts).assign_attrs(attrs | {"analysed": json.dumps(present)})
     if design == "sweep":  # tables and plots of the runs themselves: nothing to estimate
         present, ran = presence(ds, names)
         present = [r for r in present if r not in status]
@@ -184,7 +188,7 @@ def analyze(
             out[taguchi.mean_name(view, r)] = view[taguchi.mean_name(view, r)]
             if taguchi.sn_name(r) in analysed:
                 out[taguchi.sn_name(r)] = view[taguchi.sn_name(r)]
-    out = out.assign(counts).merge(robust_statistics(ds, names))
+    out = with_violation_maps(out.assign(counts).merge(robust_statistics(ds, names)), ds)
     out.attrs = attrs | {
         "analysed": json.dumps(analysed),
         "operating_factors": json.dumps(operating),

@@ -68,7 +68,7 @@ def robust_statistics(ds: xr.Dataset, responses: Sequence[str]) -> xr.Dataset:
         finite = np.isfinite(y)
         n = finite.sum(axis=1)
         n_ok[i] = n
-        _moments(out, i, y, finite, n)
+        moments(out, i, y, finite, n)
         for j, p in enumerate(QUANTILES):
             q, low, high = quantile_interval(y, p)
             quantile[""][i, :, j], quantile["_low"][i, :, j], quantile["_high"][i, :, j] = (
@@ -123,7 +123,7 @@ def _robust_run(y: xr.DataArray, i: int, out: dict[str, np.ndarray], quantile: n
     return int(order[0]) if np.isfinite(key_q[order[0]]) or np.isfinite(key_p[order[0]]) else -1
 
 
-def _moments(
+def moments(
     out: dict[str, np.ndarray], i: int, y: np.ndarray, finite: np.ndarray, n: np.ndarray
 ) -> None:
     """Mean and sd with their intervals into row ``i`` of ``out`` (NaN where n < 2)."""

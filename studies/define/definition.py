@@ -70,7 +70,7 @@ TOP_LEVEL_KEYS = {
     "name", "scene", "description", "responses", "curves", "design", "settings", "parameters",
     "factors", "sense", "none_means", "noise", "limits",
 }  # fmt: skip
-DESIGN_KEYS = {"type", "error_columns", "interactions", "pool", "samples", "seed"}
+DESIGN_KEYS = {"type", "error_columns", "interactions", "pool", "samples", "seed", "second_order"}
 NAME_PATTERN = re.compile(r"[A-Za-z0-9_-]+")  # whole names only: used with fullmatch
 MAX_NAME_LENGTH = 64  # the name is a folder name; file systems allow 255 bytes
 MAX_NESTING = 10  # arrays/tables inside each other; a study needs 4 (factors.x.levels = [...])
@@ -112,6 +112,7 @@ class StudyDefinition:
     limits: dict[str, dict[str, float]] = field(default_factory=dict)  # [limits]
     samples: int = 0  # a sampling design's base sample (studies.define.sampling)
     seed: int = 1
+    second_order: bool = False  # a saltelli design's second-order indices
 
     def input_files(self) -> tuple[Path, ...]:
         """The files the study reads (its text parameters, e.g. ``lift_table``), in order."""
@@ -238,7 +239,7 @@ class _Parser(ValueParser):
         settings = self._settings(scene, settings_raw)
         noise = parse_noise(d.get("noise"), scene, factors, self.problems)
         limits = parse_limits(d.get("limits"), responses, scene, self.problems)
-        samples, seed = parse_sampling(d.get("design"), design, self.problems)
+        samples, seed, second_order = parse_sampling(d.get("design"), design, self.problems)
         interactions = self._interactions([f.name for f in factors], design)
         pool = self._pool([f.name for f in factors], design)
         if not factors and not self.problems:
@@ -264,6 +265,7 @@ class _Parser(ValueParser):
             limits=limits,
             samples=samples,
             seed=seed,
+            second_order=second_order,
         )
         return definition, self.problems
 

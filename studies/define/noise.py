@@ -42,18 +42,17 @@ import numpy as np
 
 from studies.define.designs import orthogonal
 from studies.define.designs.assignment import DesignError, array_info
+from studies.define.distributions import DISTRIBUTIONS, NORMAL_REACH, deviation
 from studies.define.values import Factor, duplicates, suggest
 from studies.scenes import Scene
 from studies.scenes.base import Parameter, is_finite_number, short
 
 NOISE_KEYS = ("type", "samples", "seed")
 NOISE_FACTOR_KEYS = {"distribution", "sd", "half_width", "relative", "levels"}
-DISTRIBUTIONS = ("normal", "uniform", "triangular")
 SAMPLINGS = ("sobol", "lhs", "random")
 LIMIT_KEYS = ("min", "max")
 DEFAULT_SEED = 1
 MAX_SAMPLES = 1 << 20  # noise cases per design point
-NORMAL_REACH = 6.0  # standard deviations of a normal distribution that must stay in range
 SIGMA_PER_HALF_WIDTH = {"uniform": 1.0 / math.sqrt(3.0), "triangular": 1.0 / math.sqrt(6.0)}
 TAGUCHI_LEVELS = {2: (-1.0, 1.0), 3: (-math.sqrt(1.5), 0.0, math.sqrt(1.5))}  # in σ
 
@@ -294,7 +293,6 @@ def _array_levels(name: str) -> int:
 
 def _sampled(noise: Noise) -> dict[str, np.ndarray]:
     # scipy on use: reading a study (and every light command) must not import it
-    from scipy import stats  # noqa: PLC0415
     from scipy.stats import qmc  # noqa: PLC0415
 
     d, n = len(noise.factors), noise.samples
@@ -310,12 +308,8 @@ def _sampled(noise: Noise) -> dict[str, np.ndarray]:
         if f.levels:
             picks = np.minimum((u[:, j] * len(f.levels)).astype(np.int64), len(f.levels) - 1)
             out[f.name] = np.asarray(f.levels)[picks]
-        elif f.distribution == "normal":
-            out[f.name] = stats.norm.ppf(u[:, j]) * f.spread
-        elif f.distribution == "uniform":
-            out[f.name] = (2.0 * u[:, j] - 1.0) * f.spread
         else:
-            out[f.name] = stats.triang.ppf(u[:, j], 0.5, loc=-f.spread, scale=2.0 * f.spread)
+            out[f.name] = deviation(f.distribution, f.spread, u[:, j])
     return out
 
 

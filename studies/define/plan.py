@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 import os
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -310,14 +311,22 @@ def _points(
 
 def _sampled(d: StudyDefinition) -> tuple[StudyDefinition, designs.Design]:
     """A sampling design: each factor's sampled values become its levels (the study's
-    ``range`` gives way to them) and each run's level code indexes them."""
-    ranges = [(float(f.levels[0]), float(f.levels[1])) for f in d.factors]
-    levels, codes = sampled_levels(ranges, d.samples, d.seed)
+    ``range`` or distribution gives way to them) and each run's level code indexes them."""
+    columns = [
+        f.distribution.values if f.distribution else _linear(float(f.levels[0]), float(f.levels[1]))
+        for f in d.factors
+    ]
+    levels, codes = sampled_levels(d.design, columns, d.samples, d.seed, d.second_order)
     factors = tuple(
         replace(f, levels=tuple(v.tolist())) for f, v in zip(d.factors, levels, strict=True)
     )
     named = {f.name: c for f, c in zip(d.factors, codes, strict=True)}
     return replace(d, factors=factors), designs.Design(d.design, tuple(named), named)
+
+
+def _linear(lo: float, hi: float) -> Callable[[np.ndarray], np.ndarray]:
+    """The uniform range [lo, hi] at unit-cube points."""
+    return lambda u: lo + (hi - lo) * u
 
 
 def _noisy_points(

@@ -10,11 +10,12 @@ from difflib import get_close_matches
 from typing import Any
 
 from studies.common.units import UNITS, canonical, compatible_units
+from studies.define.distributions import DISTRIBUTION_KEYS, Spread, factor_distribution
+from studies.define.sampling import SAMPLING_DESIGNS as SAMPLED  # factors give range = [lo, hi]
 from studies.scenes import Scene
 from studies.scenes.base import is_finite_number, short
 
-FACTOR_KEYS = {"levels", "units", "column", "base", "role", "range"}
-SAMPLED = ("saltelli",)  # designs whose factors give a range = [lo, hi], not levels
+FACTOR_KEYS = {"levels", "units", "column", "base", "role", "range", *DISTRIBUTION_KEYS}
 SHOWN_LEVEL_PROBLEMS = 3  # refused levels listed per factor; the rest are counted
 ROLES = ("control", "operating", "model")
 """A control factor is a design choice (its best level is chosen); an operating factor is a
@@ -34,6 +35,7 @@ class Factor:
     column: int | None = None
     base: Any = None
     role: str = "control"
+    distribution: Spread | None = None  # a sampling design's factor: instead of a range
 
 
 class ValueParser:
@@ -113,17 +115,33 @@ class ValueParser:
                 continue
             units = spec.get("units", param.units)
             levels = spec.get("levels")
-            if (design in SAMPLED) != ("range" in spec) or (design in SAMPLED and "levels" in spec):
+            given = [k for k in ("range", "distribution") if k in spec]
+            if (design in SAMPLED) != bool(given) or (design in SAMPLED and "levels" in spec):
                 self.problem(
                     f"factor {name}: a {design} design needs "
                     + (
-                        "range = [lo, hi] (no levels)"
+                        "range = [lo, hi] or a distribution (no levels)"
                         if design in SAMPLED
-                        else "levels, not a range"
+                        else "levels, not a range or a distribution"
                     )
                 )
                 continue
-            if design in SAMPLED:
+            stray = sorted(set(spec) & set(DISTRIBUTION_KEYS) - {"distribution"})
+            if len(given) > 1:
+                self.problem(f"factor {name}: give a range or a distribution, not both")
+                continue
+            if stray and "distribution" not in spec:
+                self.problem(f"factor {name}: {stray[0]} applies only with a distribution")
+                continue
+            spread = None
+            if "distribution" in spec:
+                if not self._units_ok(f"factor {name}", param, units):
+                    continue
+                spread = factor_distribution(f"factor {name}", spec, param, units, self.problems)
+                if spread is None:
+                    continue
+                levels = [spread.nominal]
+            elif design in SAMPLED:
                 levels = spec["range"]
                 if not (
                     isinstance(levels, list)
@@ -179,7 +197,9 @@ class ValueParser:
                     "engine speed that the design must meet at every level, or a model rung)"
                 )
                 role = "control"
-            factors.append(Factor(name, tuple(levels), canonical(str(units)), column, base, role))
+            factors.append(
+                Factor(name, tuple(levels), canonical(str(units)), column, base, role, spread)
+            )
         return factors
 
     def _settings(self, scene: Scene, raw: dict[str, Any]) -> dict[str, Any]:

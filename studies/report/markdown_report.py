@@ -45,6 +45,7 @@ from studies.report.markdown_response import constant_section, response_section
 from studies.report.markdown_terms import computed, optimum_levels
 from studies.report.markdown_tradeoff import tradeoff_section
 from studies.report.robust import robust_markdown
+from studies.report.sample_report import sample_markdown
 from studies.report.sensitivity_report import sobol_markdown
 from studies.report.text import status_line
 
@@ -107,7 +108,8 @@ def _report(
         lines += other_figures(lines, figures)
         return "\n".join(lines).rstrip() + "\n", ""
     if ds.attrs.get("design") in SAMPLING_DESIGNS:
-        lines += sobol_markdown(an, figures)
+        saltelli = ds.attrs.get("design") == "saltelli"
+        lines += sobol_markdown(an, figures) if saltelli else sample_markdown(an, figures)
         lines += other_figures(lines, figures)
         return "\n".join(lines).rstrip() + "\n", ""
     view = ds.assign({n: an[n] for n in an.data_vars if "run" in an[n].dims})

@@ -1,7 +1,8 @@
 """Renderers of the statistics under noise (:mod:`studies.analysis.robust`): per response a
 table of every design point's mean, sd, quantiles and probability of violating its limit, and
 the robust choice — the most robust computed design point and the control levels that the S/N
-ratio over the noise prefers. Text for ``analysis.txt``, Markdown for ``report.md`` (and so
+ratio over the noise prefers, and the map of the probability of violation over the two
+strongest control factors (:mod:`studies.report.violation_map`). Text for ``analysis.txt``, Markdown for ``report.md`` (and so
 ``report.html``). Every number comes from the results or the analysis Dataset."""
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from matplotlib.figure import Figure
 from studies.analysis.robust import DIM
 from studies.common.figure_style import axis_label
 from studies.common.text_safety import Markup, md_escape
+from studies.report import violation_map
 from studies.report.markdown_format import figure, label, levels_of, num, table
 from studies.run.results import NOISE
 
@@ -132,6 +134,9 @@ def robust_text(ds: xr.Dataset, an: xr.Dataset) -> str:
         out.append("  ".join(h.rjust(w) for h, w in zip(header, widths, strict=True)))
         out += ["  ".join(c.rjust(w) for c, w in zip(r, widths, strict=True)) for r in rows]
         out += _choice(ds, an, str(name))
+        if str(name) in violation_map.mapped(an):
+            out += [violation_map.sentence(an, str(name), _limit_words(an, str(name)))]
+            out += violation_map.map_lines(an, str(name))
     return "\n".join(out)
 
 
@@ -178,7 +183,8 @@ def save_noise_figures(ds: xr.Dataset, an: xr.Dataset, folder: Path) -> list[Pat
         path = folder / figure_name(str(name))
         fig.savefig(path, dpi=100)
         paths.append(path)
-    return paths
+    words = {n: _limit_words(an, n) for n in violation_map.mapped(an)}
+    return paths + violation_map.save_violation_maps(an, folder, words)
 
 
 def robust_markdown(ds: xr.Dataset, an: xr.Dataset, figures: set[str]) -> list[str]:
@@ -203,4 +209,9 @@ def robust_markdown(ds: xr.Dataset, an: xr.Dataset, figures: set[str]) -> list[s
         for sentence in _choice(ds, an, str(name)):
             lines += [Markup(md_escape(sentence)), ""]
         lines += figure(figure_name(str(name)), f"{name} under noise", figures)
+        if str(name) in violation_map.mapped(an):
+            words = _limit_words(an, str(name))
+            lines += [md_escape(violation_map.sentence(an, str(name), words) + "."), ""]
+            caption = f"P({words}) over the two strongest control factors"
+            lines += figure(violation_map.figure_name(str(name)), caption, figures)
     return lines

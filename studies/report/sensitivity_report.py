@@ -1,5 +1,6 @@
 """Renderers of a Saltelli design's Sobol' indices (:mod:`studies.analysis.sobol_indices`): a
-table per response (text and Markdown) and a tornado figure of S1 and ST with their bootstrap
+table per response (text and Markdown), with a table of the second-order indices where the
+study asked for them, and a tornado figure of S1 and ST with their bootstrap
 intervals. Every number comes from the analysis Dataset."""
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from studies.common.text_safety import md_escape
 from studies.report.markdown_format import figure, num, table
 
 HEADER = ["factor", "S1", "± S1_conf", "ST", "± ST_conf"]
+PAIR_HEADER = ["factors", "S2", "± S2_conf"]
 
 
 def _rows(an: xr.Dataset, response: str) -> list[list[str]]:
@@ -24,6 +26,34 @@ def _rows(an: xr.Dataset, response: str) -> list[list[str]]:
         + [num(float(r[k].values[i]), 3) for k in ("S1", "S1_conf", "ST", "ST_conf")]
         for i in order
     ]
+
+
+def _pairs(an: xr.Dataset, response: str) -> list[list[str]]:
+    """The second-order indices (asked with ``second_order``), largest first ([] if none)."""
+    if "S2" not in an:
+        return []
+    r = an.sel(response=response)
+    s2, conf = r["S2"].values, r["S2_conf"].values
+    i, j = np.triu_indices(s2.shape[0], k=1)
+    order = np.argsort(-np.nan_to_num(s2[i, j], nan=-np.inf), kind="stable")
+    names = [str(f) for f in r["factor"].values]
+    return [
+        [
+            f"{names[i[k]]} × {names[j[k]]}",
+            num(float(s2[i[k], j[k]]), 3),
+            num(float(conf[i[k], j[k]]), 3),
+        ]
+        for k in order
+    ]
+
+
+PAIR_INTRO = "Second-order indices (Saltelli 2002) of each factor pair, largest first"
+
+
+def _aligned(header: list[str], rows: list[list[str]]) -> list[str]:
+    widths = [max(len(h), *(len(r[j]) for r in rows)) for j, h in enumerate(header)]
+    lines = ["  ".join(h.rjust(w) for h, w in zip(header, widths, strict=True))]
+    return lines + ["  ".join(c.rjust(w) for c, w in zip(r, widths, strict=True)) for r in rows]
 
 
 def _intro(an: xr.Dataset, response: str) -> str:
@@ -39,11 +69,10 @@ def sobol_text(an: xr.Dataset) -> list[str]:
     """One block of text per response (``analysis.txt``)."""
     out = []
     for response in an["response"].values:
-        rows = _rows(an, str(response))
-        widths = [max(len(h), *(len(r[j]) for r in rows)) for j, h in enumerate(HEADER)]
-        lines = [_intro(an, str(response))]
-        lines.append("  ".join(h.rjust(w) for h, w in zip(HEADER, widths, strict=True)))
-        lines += ["  ".join(c.rjust(w) for c, w in zip(r, widths, strict=True)) for r in rows]
+        lines = [_intro(an, str(response)), *_aligned(HEADER, _rows(an, str(response)))]
+        pairs = _pairs(an, str(response))
+        if pairs:
+            lines += [PAIR_INTRO, *_aligned(PAIR_HEADER, pairs)]
         out.append("\n".join(lines))
     return out
 
@@ -55,6 +84,9 @@ def sobol_markdown(an: xr.Dataset, figures: set[str]) -> list[str]:
         name = str(response)
         lines += [f"## {md_escape(name)}: Sobol' indices", "", md_escape(_intro(an, name)), ""]
         lines += [table(HEADER, _rows(an, name)), ""]
+        pairs = _pairs(an, name)
+        if pairs:
+            lines += [md_escape(PAIR_INTRO), "", table(PAIR_HEADER, pairs), ""]
         lines += figure(f"tornado_{name}.png", f"S1 and ST of {name}", figures)
     return lines
 

@@ -4,7 +4,8 @@ The analysis is computed once (:func:`studies.analysis.analyze.analyze`, saved a
 everything else renders it. Orthogonal-array and full-factorial runs get range analysis and
 ANOVA per response (interaction columns as terms), main-effect, S/N and interaction plots, and
 for full factorials the variance decomposition and a map over the strongest factor pair;
-sweeps get a table and a response-vs-factor plot per swept factor. ``report.md``
+Saltelli designs their Sobol' indices, Sobol' and Latin-hypercube samples moments, quantiles
+and correlations; sweeps get a table and a response-vs-factor plot per swept factor. ``report.md``
 (:mod:`studies.report.markdown_report`) adds S/N ratios, the optimum and the confirmation (arrays) or
 refinement (full factorials) study;
 ``report.html`` (:mod:`studies.report.html`) is the same report as one self-contained page.
@@ -24,7 +25,7 @@ from studies.common.errors import StudyError
 from studies.common.figure_layout import save_figures
 from studies.define.sampling import SAMPLING_DESIGNS
 from studies.report import html as html_report
-from studies.report import markdown_report, plots, sensitivity_report
+from studies.report import markdown_report, plots, sample_report, sensitivity_report
 from studies.report import robust as robust_report
 from studies.report import text as analysis_text
 from studies.run.results import NOISE
@@ -60,9 +61,12 @@ def write_analysis(
     if ds.attrs.get("design") == "sweep":
         body = [analysis_text.format_sweep(ds, analysed)]
         figures = plots.save_sweep_plots(ds, analysed, folder)
-    elif ds.attrs.get("design") in SAMPLING_DESIGNS:
+    elif ds.attrs.get("design") == "saltelli":
         body = sensitivity_report.sobol_text(an)
         figures = sensitivity_report.save_tornado(an, folder)
+    elif ds.attrs.get("design") in SAMPLING_DESIGNS:
+        body = sample_report.sample_text(an)
+        figures = sample_report.save_correlations(an, folder)
     else:
         body = [robust_report.robust_text(ds, an)] if robust_report.has_noise(an) else []
         body += [analysis_text.format_tables(an, means[r]) for r in analysed]

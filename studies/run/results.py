@@ -149,7 +149,11 @@ def layout(plan: Plan, attrs: dict[str, Any]) -> xr.Dataset:
         "noise_factors": json.dumps([f.name for f in d.noise.factors] if d.noise else []),
         "noise_design": noise_label(d),
         "limits": json.dumps(d.limits),
-        **({"samples": d.samples, "seed": d.seed} if d.samples else {}),
+        **(
+            {"samples": d.samples, "seed": d.seed, "second_order": int(d.second_order)}
+            if d.samples
+            else {}
+        ),
         "settings": json.dumps(d.settings),
         "study_toml": d.text,
         "Conventions": "CF-1.10",

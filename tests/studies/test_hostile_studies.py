@@ -152,3 +152,102 @@ def test_an_integer_setting_must_be_a_whole_number(
     name, value = setting.split(" = ")
     assert problem.startswith(f"setting {name} = {value} is not a whole number (expected a whole ")
     assert expected in problem
+
+
+SAMPLED = (
+    'name = "sampled"\nscene = "crank"\nresponses = ["mean_piston_speed"]\n[design]\n'
+    'type = "{kind}"\nsamples = {samples}\n{extra}[factors.stroke]\n{factor}\n'
+)
+
+
+@pytest.mark.parametrize("command", ["check", "run"])
+@pytest.mark.parametrize(
+    ("kind", "samples", "extra", "factor", "expected"),
+    [
+        (
+            "sobol",
+            100,
+            "",
+            "range = [150.0, 170.0]",
+            (
+                "[design] samples = 100 must be a power of two in [2, 1048576] (a Sobol' "
+                "sequence is balanced at 2^m points), e.g. 256"
+            ),
+        ),
+        (
+            "lhs",
+            50,
+            "",
+            "range = [170.0, 150.0]",
+            "factor stroke: range = [170.0, 150.0] must be [lo, hi], lo < hi",
+        ),
+        (
+            "sobol",
+            64,
+            "",
+            "levels = [150.0, 170.0]",
+            "factor stroke: a sobol design needs range = [lo, hi] or a distribution (no levels)",
+        ),
+        (
+            "lhs",
+            1,
+            "",
+            "range = [150.0, 170.0]",
+            "[design] samples = 1 must be a whole number of points in [2, 1048576]",
+        ),
+        (
+            "lhs",
+            50,
+            "second_order = true\n",
+            "range = [150.0, 170.0]",
+            "[design] second_order applies to type = \"saltelli\", not 'lhs'",
+        ),
+        (
+            "lhs",
+            50,
+            "",
+            'distribution = "normal"\nnominal = 160.0\nsd = 30',
+            (
+                "factor stroke: normal sd = 30 mm about 160 mm reaches -20 mm ± 6 sd, outside "
+                "the valid range: stroke allows a number in (0, 5000] mm (refused, never "
+                "truncated: use a smaller spread)"
+            ),
+        ),
+        (
+            "lhs",
+            50,
+            "",
+            'range = [150.0, 170.0]\ndistribution = "uniform"\nhalf_width = 5',
+            "factor stroke: give a range or a distribution, not both",
+        ),
+        (
+            "sobol",
+            64,
+            "",
+            'distribution = "normal"\nhalf_width = 5',
+            "factor stroke: a normal distribution takes sd, not half_width",
+        ),
+    ],
+    ids=[
+        "sobol-not-power-of-two",
+        "range-reversed",
+        "levels-with-sobol",
+        "lhs-one",
+        "lhs-S2",
+        "normal-leaves-range",
+        "range-and-distribution",
+        "normal-half-width",
+    ],
+)
+def test_a_sampling_design_is_refused_with_one_message(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    command: str,
+    kind: str,
+    samples: int,
+    extra: str,
+    factor: str,
+    expected: str,
+) -> None:
+    text = SAMPLED.format(kind=kind, samples=samples, extra=extra, factor=factor)
+    assert refusal(tmp_path, capsys, text, command) == expected

@@ -68,16 +68,17 @@ def ishigami(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
     get_scene.cache_clear()
 
 
-def study(samples: int, seed: int = 1) -> str:
+def study(samples: int, seed: int = 1, second_order: bool = False) -> str:
     ranges = "\n".join(f"[factors.x{i}]\nrange = [{-PI!r}, {PI!r}]" for i in (1, 2, 3))
     return (
         f'name = "ishigami"\nscene = "ishigami"\nresponses = ["f"]\n[design]\n'
-        f'type = "saltelli"\nsamples = {samples}\nseed = {seed}\n{ranges}\n'
+        f'type = "saltelli"\nsamples = {samples}\nseed = {seed}\n'
+        f"second_order = {str(second_order).lower()}\n{ranges}\n"
     )
 
 
-def indices(samples: int) -> tuple[xr.Dataset, xr.Dataset]:
-    plan = plan_text(study(samples))
+def indices(samples: int, second_order: bool = False) -> tuple[xr.Dataset, xr.Dataset]:
+    plan = plan_text(study(samples, second_order=second_order))
     ds = build_dataset(plan, evaluate(plan, progress=False), {})
     return ds, analyze(ds)
 
@@ -133,3 +134,59 @@ def test_the_outputs_of_a_saltelli_run_render_the_indices(tmp_path: Path) -> Non
     report = (tmp_path / "report.md").read_text(encoding="utf-8")
     assert "## f: Sobol' indices" in report
     assert "![S1 and ST of f](tornado_f.png)" in report
+
+
+S13_EXACT = V13 / V  # the only interaction of the Ishigami function (module docstring)
+PROBLEM = {"num_vars": 3, "names": ["x1", "x2", "x3"], "bounds": [[-PI, PI]] * 3}
+
+
+def test_a_second_order_design_is_salibs_sample_in_salibs_order() -> None:
+    from SALib.sample import sobol as sobol_sample
+
+    plan = plan_text(study(2**6, seed=4, second_order=True))
+    assert plan.runs == 2**6 * (2 * 3 + 2)  # N (2D + 2): A, AB_1..AB_3, BA_1..BA_3, B per row
+    reference = sobol_sample.sample(
+        PROBLEM, 2**6, calc_second_order=True, seed=np.random.default_rng(4)
+    )
+    points = np.column_stack([plan.points[f"x{i}"] for i in (1, 2, 3)])
+    assert points == pytest.approx(reference, abs=1e-12)
+
+
+def test_second_order_indices_agree_with_salib_on_the_same_outputs() -> None:
+    from SALib.analyze import sobol
+
+    ds, an = indices(2**9, second_order=True)
+    reference = sobol.analyze(PROBLEM, ds["f"].values, calc_second_order=True, seed=1)
+    row = an.sel(response="f")
+    for key in ("S1", "S1_conf", "ST", "ST_conf"):  # the same resamples: the same intervals
+        assert row[key].values == pytest.approx(reference[key], abs=1e-12), key
+    upper = np.triu_indices(3, k=1)
+    for key in ("S2", "S2_conf"):
+        assert row[key].values[upper] == pytest.approx(reference[key][upper], abs=1e-12), key
+        assert np.isnan(row[key].values[np.tril_indices(3)]).all()  # i < j only, as SALib
+
+
+def test_second_order_indices_of_ishigami_match_the_closed_form_within_their_intervals() -> None:
+    assert pytest.approx(0.2437, abs=1e-4) == S13_EXACT  # the issue's value
+    _, an = indices(2**12, second_order=True)
+    row = an.sel(response="f")
+    s2, conf = row["S2"].values, row["S2_conf"].values
+    for (i, j), exact in {(0, 1): 0.0, (0, 2): S13_EXACT, (1, 2): 0.0}.items():
+        assert abs(s2[i, j] - exact) <= conf[i, j], (i, j, s2[i, j], conf[i, j])
+    assert np.all(np.abs(row["S1"].values - S1_EXACT) <= row["S1_conf"].values)
+    assert np.all(np.abs(row["ST"].values - ST_EXACT) <= row["ST_conf"].values)
+
+
+def test_the_report_of_a_second_order_design_has_the_table_of_s2(tmp_path: Path) -> None:
+    from studies.report.write import write_analysis
+
+    ds, an = indices(2**6, second_order=True)
+    write_analysis(ds, tmp_path)
+    s13 = an["S2"].sel(response="f", factor="x1", factor_b="x3").item()
+    for name in ("analysis.txt", "report.md"):
+        text = (tmp_path / name).read_text(encoding="utf-8")
+        assert "Second-order indices (Saltelli 2002)" in text
+        assert "x1 × x3" in text
+        assert f"{s13:.3g}" in text
+    _, first = indices(2**6)
+    assert "S2" not in first  # only where asked

@@ -1,0 +1,194 @@
+"""Sobol' and Latin-hypercube designs of the control factors (issue 27, item 4): the moments,
+quantiles and correlations of a linear test response against their closed forms, within the
+intervals the analysis reports, and against scipy on the same samples.
+
+Y = Σ a_i X_i with independent X_i uniform on [lo_i, hi_i] (σ_i = (hi_i − lo_i)/√12): its mean is
+Σ a_i (lo_i + hi_i)/2, its sd σ_Y = √(Σ a_i² σ_i²) and the Pearson correlation of X_i with Y is
+r_i = a_i σ_i / σ_Y (cov(X_i, Y) = a_i σ_i²), the closed forms checked here.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+import xarray as xr
+from scipy import stats
+
+from studies.analysis.analyze import analyze
+from studies.define.plan import plan_text
+from studies.run.results import build_dataset
+from studies.run.runner import evaluate
+from studies.scenes import SCENES, Parameter, Response, Scene, SceneOutput, get_scene
+
+COEFFICIENTS = np.array([1.0, 2.0, -3.0])
+RANGES = np.array([[0.0, 1.0], [-1.0, 2.0], [0.5, 1.0]])
+
+
+class LinearScene(Scene):
+    """y = x1 + 2 x2 − 3 x3 (a test scene)."""
+
+    name = "linear"
+    description = "linear response (test scene)"
+    parameters = tuple(Parameter(f"x{i}", "1", 0.0, f"input x{i}", -4.0, 4.0) for i in (1, 2, 3))
+    responses = (Response("y", "1", "linear response", ("response",)),)
+    stage_order = ("response",)
+
+    def stage_response(self, points: dict[str, np.ndarray]) -> np.ndarray:
+        return sum(a * points[f"x{i + 1}"] for i, a in enumerate(COEFFICIENTS))
+
+    def evaluate(
+        self,
+        points: dict[str, np.ndarray],
+        settings: dict[str, Any],
+        responses: list[str],
+        curves: list[str],
+    ) -> SceneOutput:
+        return SceneOutput(scalars={"y": self.stages["response"](points)})
+
+
+@pytest.fixture(autouse=True)
+def linear(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
+    monkeypatch.setattr(SCENES, "_plugins", {**SCENES.plugins(), "linear": LinearScene})
+    get_scene.cache_clear()
+    yield
+    get_scene.cache_clear()
+
+
+def study(kind: str, samples: int, seed: int = 3) -> str:
+    ranges = "\n".join(
+        f"[factors.x{i + 1}]\nrange = [{lo:.17g}, {hi:.17g}]" for i, (lo, hi) in enumerate(RANGES)
+    )
+    return (
+        f'name = "linear"\nscene = "linear"\nresponses = ["y"]\n[design]\n'
+        f'type = "{kind}"\nsamples = {samples}\nseed = {seed}\n{ranges}\n'
+    )
+
+
+def analysed(kind: str, samples: int) -> tuple[xr.Dataset, xr.Dataset]:
+    plan = plan_text(study(kind, samples))
+    ds = build_dataset(plan, evaluate(plan, progress=False), {})
+    return ds, analyze(ds)
+
+
+SIGMA = (RANGES[:, 1] - RANGES[:, 0]) / math.sqrt(12.0)
+SD_Y = math.sqrt(float(np.sum((COEFFICIENTS * SIGMA) ** 2)))
+MEAN_Y = float(COEFFICIENTS @ RANGES.mean(axis=1))
+PEARSON = COEFFICIENTS * SIGMA / SD_Y
+
+
+@pytest.mark.parametrize(("kind", "samples"), [("sobol", 256), ("lhs", 200)])
+def test_moments_and_correlations_match_the_closed_forms_within_their_intervals(
+    kind: str, samples: int
+) -> None:
+    ds, an = analysed(kind, samples)
+    assert ds.sizes["run"] == samples
+    row = an.sel(response="y")
+    assert float(row.sample_mean_low) <= MEAN_Y <= float(row.sample_mean_high)
+    assert float(row.sample_sd_low) <= SD_Y <= float(row.sample_sd_high)
+    assert np.all(row.pearson_low.values <= PEARSON), (row.pearson_low.values, PEARSON)
+    assert np.all(row.pearson_high.values >= PEARSON), (row.pearson_high.values, PEARSON)
+    assert np.all(row.pearson_high.values - row.pearson_low.values < 0.3)  # an informative one
+    # the rank correlation of a monotone response keeps the signs and the order of strength
+    assert np.array_equal(np.sign(row.spearman.values), np.sign(COEFFICIENTS))
+    assert np.array_equal(np.argsort(np.abs(row.spearman.values)), np.argsort(np.abs(PEARSON)))
+
+
+def test_correlations_agree_with_scipy_on_the_same_samples() -> None:
+    ds, an = analysed("lhs", 64)
+    y = ds["y"].values
+    for name in ("x1", "x2", "x3"):
+        x = ds[name].values
+        found = an.sel(response="y", factor=name)
+        pearson = stats.pearsonr(x, y)
+        ci = pearson.confidence_interval(0.95)  # Fisher's z, scipy's own implementation
+        assert float(found.pearson) == pytest.approx(pearson.statistic, abs=1e-12)
+        assert float(found.pearson_low) == pytest.approx(ci.low, abs=1e-12)
+        assert float(found.pearson_high) == pytest.approx(ci.high, abs=1e-12)
+        rho = stats.spearmanr(x, y).statistic
+        assert float(found.spearman) == pytest.approx(rho, abs=1e-12)
+        # Fisher z with variance 1.06/(n − 3) (Fieller, Hartley & Pearson 1957), by hand
+        half = 1.959963984540054 * math.sqrt(1.06 / (64 - 3))
+        expected = (math.tanh(math.atanh(rho) - half), math.tanh(math.atanh(rho) + half))
+        assert (float(found.spearman_low), float(found.spearman_high)) == pytest.approx(
+            expected, abs=1e-12
+        )
+    row = an.sel(response="y")
+    assert float(row.sample_mean) == pytest.approx(np.mean(y), abs=1e-12)
+    assert float(row.sample_sd) == pytest.approx(np.std(y, ddof=1), abs=1e-12)
+    assert row.sample_quantile.values == pytest.approx(np.quantile(y, [0.05, 0.5, 0.95]), 1e-12)
+
+
+def test_a_sobol_sample_is_the_scrambled_sobol_sequence_over_the_ranges() -> None:
+    from scipy.stats import qmc
+
+    plan = plan_text(study("sobol", 32, seed=5))
+    unit = qmc.Sobol(3, scramble=True, rng=np.random.default_rng(5)).random(32)
+    for j in range(3):
+        lo, hi = RANGES[j]
+        assert plan.points[f"x{j + 1}"] == pytest.approx(lo + (hi - lo) * unit[:, j], abs=1e-15)
+    lhs = plan_text(study("lhs", 10))
+    for j in range(3):  # a Latin hypercube: one point in each of the 10 strata of every factor
+        lo, hi = RANGES[j]
+        strata = np.floor((lhs.points[f"x{j + 1}"] - lo) / (hi - lo) * 10).astype(int)
+        assert sorted(strata) == list(range(10))
+
+
+def test_the_outputs_of_a_sample_render_its_statistics(tmp_path: Path) -> None:
+    from studies.report.write import write_analysis
+
+    ds, an = analysed("sobol", 64)
+    names = {p.name for p in write_analysis(ds, tmp_path)}
+    assert {"analysis.txt", "report.md", "correlation_y.png", "analysis.nc"} <= names
+    text = (tmp_path / "analysis.txt").read_text(encoding="utf-8")
+    rho = an["spearman"].sel(response="y", factor="x3").item()
+    assert f"{rho:.3g}" in text  # the table shows the analysis' value
+    assert f"y over 64 sampled points: mean {an['sample_mean'].item():.4g}" in text
+    report = (tmp_path / "report.md").read_text(encoding="utf-8")
+    assert "## y: distribution and correlations" in report
+    assert "![correlations with y](correlation_y.png)" in report
+    saved = xr.open_dataset(tmp_path / "analysis.nc")
+    assert saved["spearman"].dims == ("response", "factor")
+
+
+DISTRIBUTED = """
+[factors.x1]
+distribution = "normal"
+nominal = 0.5
+sd = 0.1
+[factors.x2]
+range = [-1.0, 2.0]
+[factors.x3]
+distribution = "triangular"
+nominal = 1.0
+half_width = 20
+relative = true
+"""
+# σ of a normal: sd; of a uniform on [lo, hi]: (hi − lo)/√12; of a symmetric triangular of
+# half width a: a/√6 (here a = 20 % of 1.0)
+SIGMA_D = np.array([0.1, 3.0 / math.sqrt(12.0), 0.2 / math.sqrt(6.0)])
+MEAN_D = float(COEFFICIENTS @ [0.5, 0.5, 1.0])
+SD_D = math.sqrt(float(np.sum((COEFFICIENTS * SIGMA_D) ** 2)))
+
+
+def test_factors_may_give_a_distribution_drawn_by_its_inverse_cdf() -> None:
+    from scipy.stats import qmc
+
+    head = study("sobol", 512, seed=2).split("[factors.x1]")[0]
+    plan = plan_text(head + DISTRIBUTED)
+    unit = qmc.Sobol(3, scramble=True, rng=np.random.default_rng(2)).random(512)
+    # scipy's own inverse CDFs of the declared distributions at the same Sobol' points
+    assert plan.points["x1"] == pytest.approx(stats.norm.ppf(unit[:, 0], 0.5, 0.1), abs=1e-12)
+    assert plan.points["x2"] == pytest.approx(-1.0 + 3.0 * unit[:, 1], abs=1e-12)
+    triangle = stats.triang.ppf(unit[:, 2], 0.5, loc=0.8, scale=0.4)
+    assert plan.points["x3"] == pytest.approx(triangle, abs=1e-12)
+    ds = build_dataset(plan, evaluate(plan, progress=False), {})
+    row = analyze(ds).sel(response="y")
+    assert float(row.sample_mean_low) <= MEAN_D <= float(row.sample_mean_high)
+    assert float(row.sample_sd_low) <= SD_D <= float(row.sample_sd_high)
+    exact = COEFFICIENTS * SIGMA_D / SD_D  # r_i = a_i σ_i / σ_Y (module docstring)
+    assert np.all((row.pearson_low.values <= exact) & (exact <= row.pearson_high.values))
