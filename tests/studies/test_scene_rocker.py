@@ -148,9 +148,7 @@ def test_a_chunk_with_more_linkages_than_the_cache_makes_each_tappet_law_once(
 
     monkeypatch.setattr(rocker_tappet.cb, "cam_kinematics_batch", counting)
     lashes = np.round(np.linspace(0.05, 0.15, rocker_scene.CACHE_SIZE + 6), 6)
-    plan = plan_text(
-        study(factors=f"[factors.lash]\nlevels = {lashes.tolist()}\nunits = \"mm\"")
-    )
+    plan = plan_text(study(factors=f'[factors.lash]\nlevels = {lashes.tolist()}\nunits = "mm"'))
     assert plan.stages == ("tappet", "rocker")
     RockerScene().evaluate(plan.points, plan.settings, ["max_valve_lift"], [])
     assert len(counted) == lashes.size
