@@ -13,17 +13,23 @@ the interval machinery of the statistics under noise (:mod:`studies.analysis.rob
 
 Per (response, factor):
 
-* ``pearson``: the linear correlation r of the factor with the response (scipy.stats.pearsonr)
-  and its Fisher-z interval ``pearson_low`` … ``_high`` (tanh(atanh r ± z/√(n − 3)));
+* ``pearson``: the linear correlation r of the factor with the response (scipy.stats.pearsonr);
 * ``spearman``: the rank correlation ρ (scipy.stats.spearmanr), for monotone but non-linear
-  effects, and its Fisher-z interval with the variance 1.06/(n − 3) of Fieller, Hartley &
-  Pearson (1957, Biometrika 44, 470).
+  effects;
+* each with a 95 % interval (``_low`` … ``_high``) on Fisher's z scale whose variance comes from
+  the data, not from a bivariate normal: the variance of the influence function of r,
+  ψ = x̃ỹ − r (x̃² + ỹ²)/2 on the standardised values (on the ranks for ρ), over n − 3
+  (:func:`correlation_interval`; it is Fisher's 1/(n − 3) for normal data). Fisher's own
+  interval, and Fieller's 1.06/(n − 3) for ρ, assume a bivariate normal; on a response that
+  depends on a factor without being correlated with it (the Ishigami function's x3) they
+  covered the true r in only 86–90 % of 300 Latin-hypercube samples. Measured coverage of
+  these intervals (300 samples each of 64 and 1024 points of a linear, the Ishigami and an
+  exponential response): 100 % for scrambled Sobol' samples, 92–100 % for Latin hypercubes
+  (the 92 % at 64 points); asymptotic intervals, so small samples may fall short of 95 %.
 
 For a linear response Y = Σ a_i X_i of independent X_i, r_i = a_i σ_i / σ_Y and Σ r_i² = 1:
-r² is then the share of the variance the factor explains (= S1). The intervals assume
-independent random points; for a scrambled Sobol' or a Latin-hypercube sample they are
-conservative (those samples cover the space more evenly than random points). O(N log N) per
-response and factor (the ranks).
+r² is then the share of the variance the factor explains (= S1). O(N log N) per response and
+factor (the ranks).
 """
 
 from __future__ import annotations
@@ -45,20 +51,28 @@ from studies.analysis.robust import (
     wilson,
 )
 
-SPEARMAN_VARIANCE = 1.06  # × 1/(n − 3): Fieller, Hartley & Pearson 1957
 MOMENTS = ("mean", "mean_low", "mean_high", "sd", "sd_low", "sd_high")
 VIOLATION = ("violation_probability", "violation_low", "violation_high")
 CORRELATIONS = ("pearson", "pearson_low", "pearson_high", "spearman", "spearman_low")
 
 
-def fisher_interval(r: float, n: int, variance: float = 1.0) -> tuple[float, float]:
-    """tanh(atanh r ∓ z √(variance/(n − 3))) at ``CONFIDENCE`` (NaN when n ≤ 3)."""
+def correlation_interval(x: np.ndarray, y: np.ndarray, r: float) -> tuple[float, float]:
+    """The 95 % interval of the correlation ``r`` of ``x`` with ``y`` on Fisher's z scale,
+    tanh(atanh r ∓ z σ_ψ / ((1 − r²) √(n − 3))), with σ_ψ² the mean square of the influence
+    function ψ = x̃ỹ − r (x̃² + ỹ²)/2 of the standardised x̃, ỹ (distribution-free; equal to
+    Fisher's (1 − r²)² for a bivariate normal). NaN when n ≤ 3; [r, r] when |r| = 1."""
+    n = x.size
     if n <= 3 or not np.isfinite(r):
         return np.nan, np.nan
-    half = stats.norm.ppf(0.5 + CONFIDENCE / 2) * np.sqrt(variance / (n - 3))
-    with np.errstate(divide="ignore"):  # |r| = 1 (an exact monotone relation): [r, r]
+    xs, ys = (x - x.mean()) / x.std(), (y - y.mean()) / y.std()
+    psi = xs * ys - 0.5 * r * (xs * xs + ys * ys)
+    half = stats.norm.ppf(0.5 + CONFIDENCE / 2) * np.sqrt(np.mean(psi * psi) / (n - 3))
+    with np.errstate(divide="ignore", invalid="ignore"):  # |r| = 1: an exact relation
         centre = np.arctanh(np.clip(r, -1.0, 1.0))
-    return float(np.tanh(centre - half)), float(np.tanh(centre + half))
+        spread = half / (1.0 - r * r)
+    if not np.isfinite(centre):
+        return float(r), float(r)
+    return float(np.tanh(centre - spread)), float(np.tanh(centre + spread))
 
 
 def correlations(x: np.ndarray, y: np.ndarray) -> dict[str, float]:
@@ -67,16 +81,13 @@ def correlations(x: np.ndarray, y: np.ndarray) -> dict[str, float]:
     out = dict.fromkeys((*CORRELATIONS, "spearman_high"), np.nan)
     if x.size < 4 or np.ptp(x) == 0 or np.ptp(y) == 0:
         return out
-    found = stats.pearsonr(x, y)
-    ci = found.confidence_interval(CONFIDENCE)
-    out["pearson"], out["pearson_low"], out["pearson_high"] = (
-        float(found.statistic),
-        ci.low,
-        ci.high,
-    )
+    r = float(stats.pearsonr(x, y).statistic)
+    out["pearson"] = r
+    out["pearson_low"], out["pearson_high"] = correlation_interval(x, y, r)
+    rx, ry = stats.rankdata(x), stats.rankdata(y)
     rho = float(stats.spearmanr(x, y).statistic)
     out["spearman"] = rho
-    out["spearman_low"], out["spearman_high"] = fisher_interval(rho, x.size, SPEARMAN_VARIANCE)
+    out["spearman_low"], out["spearman_high"] = correlation_interval(rx, ry, rho)
     return out
 
 
