@@ -6,8 +6,12 @@ and per response with values on ``run × noise``, per design point (dimension ``
 * ``noise_n``: the noise cases with a finite value (the others are left out of the moments);
 * ``noise_mean`` with its 95 % t interval ``noise_mean_low`` … ``noise_mean_high``
   (x̄ ± t_{0.975, n-1} s/√n);
-* ``noise_sd`` (divisor n − 1) with its χ² interval ``noise_sd_low`` … ``noise_sd_high``
-  (s √((n−1)/χ²_{0.975, n-1}) … s √((n−1)/χ²_{0.025, n-1}));
+* ``noise_sd`` (divisor n − 1) with Bonett's (2006, Comput. Stat. Data Anal. 50, 775)
+  kurtosis-adjusted interval ``noise_sd_low`` … ``noise_sd_high`` (:func:`sd_interval`; NaN
+  below 5 cases). The χ² interval assumes a normal response: on a log-normal one (σ = 1) it
+  covered the true sd in 49–64 % of 400 scrambled Sobol' samples of 32 and 256 cases, Bonett's
+  in 99.5–99.8 %; on random samples Bonett's covered 74–96 % over five responses (the 74 % for
+  that log-normal at 32 cases), the χ² interval 32–98 % over three of them;
 * ``noise_quantile`` at ``QUANTILES`` (linear interpolation, numpy's default) with the
   distribution-free order-statistic interval ``noise_quantile_low`` … ``_high``: the ranks
   l = F⁻¹(α/2), u = F⁻¹(1 − α/2) + 1 of the binomial(n, p) (Hahn & Meeker 1991, §5.2);
@@ -134,15 +138,38 @@ def moments(
         dof = np.maximum(n - 1, 1)
         t = stats.t.ppf(0.5 + CONFIDENCE / 2, dof)
         half = t * sd / np.sqrt(n)
-        chi_low = stats.chi2.ppf(0.5 + CONFIDENCE / 2, dof)
-        chi_high = stats.chi2.ppf(0.5 - CONFIDENCE / 2, dof)
         two = n >= 2
         out["noise_mean"][i] = np.where(n >= 1, mean, np.nan)
         out["noise_mean_low"][i] = np.where(two, mean - half, np.nan)
         out["noise_mean_high"][i] = np.where(two, mean + half, np.nan)
         out["noise_sd"][i] = np.where(two, sd, np.nan)
-        out["noise_sd_low"][i] = np.where(two, sd * np.sqrt((n - 1) / chi_low), np.nan)
-        out["noise_sd_high"][i] = np.where(two, sd * np.sqrt((n - 1) / chi_high), np.nan)
+        out["noise_sd_low"][i], out["noise_sd_high"][i] = sd_interval(y, finite, n, var)
+
+
+def sd_interval(
+    y: np.ndarray, finite: np.ndarray, n: np.ndarray, var: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Bonett's (2006) 95 % interval of the sd of each row of ``y`` (its ``finite`` values,
+    ``n`` of them, sample variance ``var``): ln(c s²) ∓ z c √((γ₄ − (n − 3)/n)/(n − 1)) with
+    c = n/(n − z) and the kurtosis γ₄ = n Σ(y − m)⁴ / (Σ(y − ȳ)²)² about the mean m trimmed by
+    1/(2√(n − 4)) at each end (as ``scipy.stats.trim_mean`` cuts). NaN where n < 5."""
+    z = stats.norm.ppf(0.5 + CONFIDENCE / 2)
+    count = n.astype(np.int64)
+    ordered = np.sort(np.where(finite, y, np.inf), axis=1)  # the values first, then the rest
+    sums = np.zeros((y.shape[0], y.shape[1] + 1))
+    np.cumsum(np.where(np.isfinite(ordered), ordered, 0.0), axis=1, out=sums[:, 1:])
+    rows = np.arange(y.shape[0])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cut = np.floor(np.where(count > 4, 0.5 / np.sqrt(count - 4.0), 0.0) * count)
+        cut = cut.astype(np.int64)
+        m = (sums[rows, count - cut] - sums[rows, cut]) / (count - 2 * cut)
+        fourth = np.where(finite, (y - m[:, None]) ** 4, 0.0).sum(axis=1)
+        kurtosis = n * fourth / ((n - 1) * var) ** 2
+        c = n / (n - z)
+        se = c * np.sqrt(np.maximum(kurtosis - (n - 3) / n, 0.0) / (n - 1))
+        low, high = np.sqrt(c * var * np.exp(-z * se)), np.sqrt(c * var * np.exp(z * se))
+    enough = count >= 5
+    return np.where(enough, low, np.nan), np.where(enough, high, np.nan)
 
 
 def quantile_interval(y: np.ndarray, p: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -6,8 +6,9 @@ Per response (dimension ``response``), over the runs with a finite value (``samp
 the interval machinery of the statistics under noise (:mod:`studies.analysis.robust`):
 
 * ``sample_mean`` with its t interval ``sample_mean_low`` … ``_high``; ``sample_sd`` (divisor
-  n − 1) with its χ² interval; ``sample_quantile`` at ``QUANTILES`` with the distribution-free
-  order-statistic interval ``sample_quantile_low`` … ``_high``;
+  n − 1) with Bonett's interval (:func:`studies.analysis.robust.sd_interval`);
+  ``sample_quantile`` at ``QUANTILES`` with the distribution-free order-statistic interval
+  ``sample_quantile_low`` … ``_high``;
 * where the study gives a ``[limits]`` entry: ``sample_violations``, ``sample_violation_n`` and
   ``sample_violation_probability`` with its Wilson interval ``sample_violation_low`` … ``_high``.
 
