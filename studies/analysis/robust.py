@@ -27,7 +27,7 @@ and per response with values on ``run × noise``, per design point (dimension ``
 The intervals describe sampling error of random, Latin-hypercube or scrambled Sobol' noise
 samples (the last two spread more evenly than random points and were covered more often: the
 t interval of the mean covered 100 % of 400 Sobol' and Latin-hypercube samples of 32 and 256
-cases of a normal, a uniform-sum, a two-valued and a log-normal response, and 84–95 % of random
+cases of a uniform-sum, a two-valued and a log-normal response, and 84–95 % of random
 ones, short of 95 % for the skewed and two-valued responses at 32 cases); for an outer
 orthogonal array the cases are not a sample and the intervals are indicative.
 Everything is O(runs × cases): sorts and sums along the noise axis.
