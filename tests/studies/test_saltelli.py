@@ -14,18 +14,17 @@ import itertools
 import math
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pytest
 import xarray as xr
+from function_scenes import function_scene, registered
 
 from studies.analysis.analyze import analyze
 from studies.common.errors import StudyError
 from studies.define.plan import plan_text
 from studies.run.results import build_dataset
 from studies.run.runner import evaluate
-from studies.scenes import SCENES, Parameter, Response, Scene, SceneOutput, get_scene
 
 A, B = 7.0, 0.1
 PI = math.pi
@@ -37,35 +36,18 @@ S1_EXACT = np.array([V1 / V, V2 / V, 0.0])
 ST_EXACT = np.array([(V1 + V13) / V, V2 / V, V13 / V])
 
 
-class IshigamiScene(Scene):
-    """f = sin x1 + 7 sin² x2 + 0.1 x3⁴ sin x1 (a test scene)."""
-
-    name = "ishigami"
-    description = "Ishigami function (test scene)"
-    parameters = tuple(Parameter(f"x{i}", "1", 0.0, f"input x{i}", -4.0, 4.0) for i in (1, 2, 3))
-    responses = (Response("f", "1", "Ishigami function", ("response",)),)
-    stage_order = ("response",)
-
-    def stage_response(self, points: dict[str, np.ndarray]) -> np.ndarray:
-        x1, x2, x3 = points["x1"], points["x2"], points["x3"]
-        return np.sin(x1) + A * np.sin(x2) ** 2 + B * x3**4 * np.sin(x1)
-
-    def evaluate(
-        self,
-        points: dict[str, np.ndarray],
-        settings: dict[str, Any],
-        responses: list[str],
-        curves: list[str],
-    ) -> SceneOutput:
-        return SceneOutput(scalars={"f": self.stages["response"](points)})
+IshigamiScene = function_scene(
+    "ishigami",
+    "f",
+    lambda x1, x2, x3: np.sin(x1) + A * np.sin(x2) ** 2 + B * x3**4 * np.sin(x1),
+    "Ishigami function",
+)
 
 
 @pytest.fixture(autouse=True)
 def ishigami(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
-    monkeypatch.setattr(SCENES, "_plugins", {**SCENES.plugins(), "ishigami": IshigamiScene})
-    get_scene.cache_clear()
-    yield
-    get_scene.cache_clear()
+    with registered(monkeypatch, IshigamiScene):
+        yield
 
 
 def study(samples: int, seed: int = 1, second_order: bool = False) -> str:

@@ -12,51 +12,34 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pytest
 import xarray as xr
+from function_scenes import function_scene, registered
 from scipy import stats
 
 from studies.analysis.analyze import analyze
 from studies.define.plan import plan_text
 from studies.run.results import build_dataset
 from studies.run.runner import evaluate
-from studies.scenes import SCENES, Parameter, Response, Scene, SceneOutput, get_scene
 
 COEFFICIENTS = np.array([1.0, 2.0, -3.0])
 RANGES = np.array([[0.0, 1.0], [-1.0, 2.0], [0.5, 1.0]])
 
 
-class LinearScene(Scene):
-    """y = x1 + 2 x2 − 3 x3 (a test scene)."""
-
-    name = "linear"
-    description = "linear response (test scene)"
-    parameters = tuple(Parameter(f"x{i}", "1", 0.0, f"input x{i}", -4.0, 4.0) for i in (1, 2, 3))
-    responses = (Response("y", "1", "linear response", ("response",)),)
-    stage_order = ("response",)
-
-    def stage_response(self, points: dict[str, np.ndarray]) -> np.ndarray:
-        return sum(a * points[f"x{i + 1}"] for i, a in enumerate(COEFFICIENTS))
-
-    def evaluate(
-        self,
-        points: dict[str, np.ndarray],
-        settings: dict[str, Any],
-        responses: list[str],
-        curves: list[str],
-    ) -> SceneOutput:
-        return SceneOutput(scalars={"y": self.stages["response"](points)})
+LinearScene = function_scene(
+    "linear",
+    "y",
+    lambda x1, x2, x3: COEFFICIENTS[0] * x1 + COEFFICIENTS[1] * x2 + COEFFICIENTS[2] * x3,
+    "linear response y = x1 + 2 x2 - 3 x3",
+)
 
 
 @pytest.fixture(autouse=True)
 def linear(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
-    monkeypatch.setattr(SCENES, "_plugins", {**SCENES.plugins(), "linear": LinearScene})
-    get_scene.cache_clear()
-    yield
-    get_scene.cache_clear()
+    with registered(monkeypatch, LinearScene):
+        yield
 
 
 def study(kind: str, samples: int, seed: int = 3) -> str:
