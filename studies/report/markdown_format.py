@@ -46,6 +46,13 @@ def table(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:
     return "\n".join(lines)
 
 
+def aligned(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
+    """A plain-text table (``analysis.txt``): the header and each row, columns right-aligned
+    to their widest cell, two spaces apart."""
+    widths = [max([len(h), *(len(r[j]) for r in rows)]) for j, h in enumerate(header)]
+    return ["  ".join(c.rjust(w) for c, w in zip(r, widths, strict=True)) for r in [header, *rows]]
+
+
 def label(name: str, units: str) -> Markup:
     """``name [units]``; dimensionless ("1") and unknown units are left out (Markdown: both
     escaped, the brackets not)."""

@@ -18,7 +18,7 @@ from studies.analysis.robust import DIM
 from studies.common.figure_style import axis_label
 from studies.common.text_safety import Markup, md_escape
 from studies.report import violation_map
-from studies.report.markdown_format import figure, label, levels_of, num, table
+from studies.report.markdown_format import aligned, figure, label, levels_of, num, table
 from studies.run.results import NOISE
 
 MAX_ROWS = 100  # design points listed; larger designs point to analysis.nc
@@ -129,10 +129,8 @@ def robust_text(ds: xr.Dataset, an: xr.Dataset) -> str:
     out = [f"Under noise: {ds.sizes[NOISE]} cases per design point ({ds.attrs['noise_design']})"]
     for name in an[DIM].values:
         header, rows = _rows(ds, an, str(name))
-        widths = [max(len(h), *(len(r[j]) for r in rows)) for j, h in enumerate(header)]
         out += ["", f"{name} [{an.sel({DIM: name})['noise_units'].values}] over the noise cases"]
-        out.append("  ".join(h.rjust(w) for h, w in zip(header, widths, strict=True)))
-        out += ["  ".join(c.rjust(w) for c, w in zip(r, widths, strict=True)) for r in rows]
+        out += aligned(header, rows)
         out += _choice(ds, an, str(name))
         if str(name) in violation_map.mapped(an):
             out += [violation_map.sentence(an, str(name), _limit_words(an, str(name)))]

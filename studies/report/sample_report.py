@@ -13,7 +13,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from studies.common.text_safety import md_escape
-from studies.report.markdown_format import figure, num, table
+from studies.report.markdown_format import aligned, figure, num, table
 
 HEADER = ["factor", "Spearman ρ", "95 % interval", "Pearson r", "95 % interval"]
 
@@ -84,10 +84,7 @@ def sample_text(an: xr.Dataset) -> list[str]:
     out = []
     for response in an["response"].values:
         rows = _rows(an, str(response))
-        widths = [max(len(h), *(len(r[j]) for r in rows)) for j, h in enumerate(HEADER)]
-        lines = summary(an, str(response))
-        lines.append("  ".join(h.rjust(w) for h, w in zip(HEADER, widths, strict=True)))
-        lines += ["  ".join(c.rjust(w) for c, w in zip(r, widths, strict=True)) for r in rows]
+        lines = [*summary(an, str(response)), *aligned(HEADER, rows)]
         out.append("\n".join(lines))
     return out
 

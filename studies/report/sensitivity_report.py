@@ -12,7 +12,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from studies.common.text_safety import md_escape
-from studies.report.markdown_format import figure, num, table
+from studies.report.markdown_format import aligned, figure, num, table
 
 HEADER = ["factor", "S1", "± S1_conf", "ST", "± ST_conf"]
 PAIR_HEADER = ["factors", "S2", "± S2_conf"]
@@ -50,12 +50,6 @@ def _pairs(an: xr.Dataset, response: str) -> list[list[str]]:
 PAIR_INTRO = "Second-order indices (Saltelli 2002) of each factor pair, largest first"
 
 
-def _aligned(header: list[str], rows: list[list[str]]) -> list[str]:
-    widths = [max(len(h), *(len(r[j]) for r in rows)) for j, h in enumerate(header)]
-    lines = ["  ".join(h.rjust(w) for h, w in zip(header, widths, strict=True))]
-    return lines + ["  ".join(c.rjust(w) for c, w in zip(r, widths, strict=True)) for r in rows]
-
-
 def _intro(an: xr.Dataset, response: str) -> str:
     rows = int(an["rows_used"].sel(response=response))
     return (
@@ -69,10 +63,10 @@ def sobol_text(an: xr.Dataset) -> list[str]:
     """One block of text per response (``analysis.txt``)."""
     out = []
     for response in an["response"].values:
-        lines = [_intro(an, str(response)), *_aligned(HEADER, _rows(an, str(response)))]
+        lines = [_intro(an, str(response)), *aligned(HEADER, _rows(an, str(response)))]
         pairs = _pairs(an, str(response))
         if pairs:
-            lines += [PAIR_INTRO, *_aligned(PAIR_HEADER, pairs)]
+            lines += [PAIR_INTRO, *aligned(PAIR_HEADER, pairs)]
         out.append("\n".join(lines))
     return out
 

@@ -13,7 +13,7 @@ from matplotlib.figure import Figure
 
 from studies.analysis.robust import DIM
 from studies.common.figure_style import axis_label
-from studies.report.markdown_format import levels_of, num
+from studies.report.markdown_format import aligned, levels_of, num
 
 
 def mapped(an: xr.Dataset) -> list[str]:
@@ -58,8 +58,7 @@ def map_lines(an: xr.Dataset, name: str) -> list[str]:
     grid = row["violation_map"].values
     head = [f"{x} \\ {y}", *(_shown(v) for v in ly.values())]
     rows = [[_shown(v), *(num(float(grid[i, j]), 3) for j in ly)] for i, v in lx.items()]
-    widths = [max(len(r[k]) for r in [head, *rows]) for k in range(len(head))]
-    return ["  ".join(c.rjust(w) for c, w in zip(r, widths, strict=True)) for r in [head, *rows]]
+    return aligned(head, rows)
 
 
 def _shown(value: object) -> str:
