@@ -110,15 +110,21 @@ def test_kinematic_responses_run_only_the_needed_stages() -> None:
     assert set(calls) == {"tappet"}
 
 
-def test_points_sharing_a_chain_compute_it_once(monkeypatch: pytest.MonkeyPatch) -> None:
-    counted: list[int] = []
+@pytest.fixture
+def counted(monkeypatch: pytest.MonkeyPatch) -> list[int]:
+    """One entry per call of the cam kinematics kernel that makes a tappet law."""
+    calls: list[int] = []
     kernel = rocker_tappet.cb.cam_kinematics_batch
 
     def counting(*args):
-        counted.append(1)
+        calls.append(1)
         return kernel(*args)
 
     monkeypatch.setattr(rocker_tappet.cb, "cam_kinematics_batch", counting)
+    return calls
+
+
+def test_points_sharing_a_chain_compute_it_once(counted: list[int]) -> None:
     plan = plan_text(
         study(
             '["max_valve_lift"]',
@@ -134,19 +140,11 @@ def test_points_sharing_a_chain_compute_it_once(monkeypatch: pytest.MonkeyPatch)
 
 
 def test_a_chunk_with_more_linkages_than_the_cache_makes_each_tappet_law_once(
-    monkeypatch: pytest.MonkeyPatch,
+    counted: list[int],
 ) -> None:
     """The cross-chunk cache holds CACHE_SIZE laws; a chunk of more linkages used to make each
     again in the rocker stage after the tappet stage had evicted it (a noise study over the lash
     made every law three times). Counted: one cam kinematics call per distinct linkage."""
-    counted: list[int] = []
-    kernel = rocker_tappet.cb.cam_kinematics_batch
-
-    def counting(*args):
-        counted.append(1)
-        return kernel(*args)
-
-    monkeypatch.setattr(rocker_tappet.cb, "cam_kinematics_batch", counting)
     lashes = np.round(np.linspace(0.05, 0.15, rocker_scene.CACHE_SIZE + 6), 6)
     plan = plan_text(study(factors=f'[factors.lash]\nlevels = {lashes.tolist()}\nunits = "mm"'))
     assert plan.stages == ("tappet", "rocker")
