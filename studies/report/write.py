@@ -14,6 +14,9 @@ refinement (full factorials) study;
 from __future__ import annotations
 
 import json
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import xarray as xr
@@ -37,13 +40,17 @@ def write_analysis(
     folder: Path,
     responses: list[str] | None = None,
     pool: list[str] | None = None,
+    timings: dict[str, float] | None = None,
 ) -> list[Path]:
-    """Analyse once (``analysis.nc``), then render ``analysis.txt``, ``report.md`` and the PNG
-    figures into ``folder``; return the paths (text first).
+    """Analyse once and save ``analysis.nc`` first (the numbers are on disk before anything is
+    drawn), then render ``analysis.txt``, ``report.md`` and the PNG figures into ``folder``;
+    return the paths (text first). ``timings`` gets the seconds of each phase:
+    ``analysis_s``, ``figures_s`` and ``report_s`` (the texts).
 
     A response that is NaN in every run (e.g. ``jump_start`` when no design point separates)
     gets a line saying so instead of tables and figures.
     """
+    clock = Phases(timings if timings is not None else {})
     names = responses or json.loads(ds.attrs.get("responses", "[]")) or list(ds.data_vars)
     scalar = [r for r in names if r in ds and ds[r].dims in (("run",), ("run", NOISE))]
     missing = [r for r in names if r not in ds]
@@ -53,31 +60,14 @@ def write_analysis(
             f"(available: {', '.join(map(str, ds.data_vars))})"
         )
     folder.mkdir(parents=True, exist_ok=True)
-    an = analysis.analyze(ds, scalar, pool)
+    with clock("analysis_s"):
+        an = analysis.analyze(ds, scalar, pool)
+        nc = analysis.write_analysis_nc(an, folder)
     done = json.loads(an.attrs["analysed"])
     means = {r: taguchi.mean_name(ds, r) for r in scalar}  # under noise: <r>_mean per run
     analysed = [r for r in scalar if means[r] in done]
     header = _header(ds) + not_run_line(an, "\n")
-    if ds.attrs.get("design") == "sweep":
-        body = [analysis_text.format_sweep(ds, analysed)]
-        figures = plots.save_sweep_plots(ds, analysed, folder)
-    elif ds.attrs.get("design") == "saltelli":
-        body = sensitivity_report.sobol_text(an)
-        figures = sensitivity_report.save_tornado(an, folder)
-    elif ds.attrs.get("design") in SAMPLING_DESIGNS:
-        body = sample_report.sample_text(an)
-        figures = sample_report.save_correlations(an, folder)
-    else:
-        body = [robust_report.robust_text(ds, an)] if robust_report.has_noise(an) else []
-        body += [analysis_text.format_tables(an, means[r]) for r in analysed]
-        varying = [means[r] for r in analysed if int(an["varies"].sel(response=means[r]))]
-        figures = plots.save_main_effects(an, varying, folder)
-        if robust_report.has_noise(an):
-            figures += robust_report.save_noise_figures(ds, an, folder)
-        sn = [r for r in analysed if f"{r}_sn" in an["response"].values]
-        figures += plots.save_sn_plots(an, sn, folder)
-        figures += plots.save_interaction_plots(an, [means[r] for r in analysed], folder)
-        figures += plots.save_maps(an, varying, folder)
+    body, figures = _design_outputs(ds, an, analysed, means, folder, clock)
     status = json.loads(an.attrs.get("status_responses", "[]"))
     body += [analysis_text.wrap(analysis_text.status_line(an, r)) for r in status]
     body += [
@@ -91,13 +81,66 @@ def write_analysis(
     elif scene_name in SCENES:  # a plugin scene that is not installed here: generic outputs only
         scene = get_scene(scene_name)
         body += scene.summaries(ds)
-        figures += save_figures(ds, folder, scene.figures())
-    text_path = folder / "analysis.txt"
-    text_path.write_text("\n\n".join([header, *body]) + "\n", encoding="utf-8")
-    reports = markdown_report.write_report(ds, an, folder, scalar, figures)
-    page = html_report.write_html(reports[0], figures)
-    nc = analysis.write_analysis_nc(an, folder)
+        with clock("figures_s"):
+            figures += save_figures(ds, folder, scene.figures())
+    with clock("report_s"):
+        text_path = folder / "analysis.txt"
+        text_path.write_text("\n\n".join([header, *body]) + "\n", encoding="utf-8")
+        reports = markdown_report.write_report(ds, an, folder, scalar, figures)
+        page = html_report.write_html(reports[0], figures)
     return [text_path, *reports, page, nc, *figures]
+
+
+class Phases:
+    """Seconds spent per phase, added up into ``timings`` (``with clock("figures_s"): …``)."""
+
+    def __init__(self, timings: dict[str, float]) -> None:
+        self.timings = timings
+
+    @contextmanager
+    def __call__(self, phase: str) -> Iterator[None]:
+        start = time.perf_counter()
+        try:
+            yield
+        finally:
+            spent = time.perf_counter() - start
+            self.timings[phase] = self.timings.get(phase, 0.0) + spent
+
+
+def _design_outputs(
+    ds: xr.Dataset,
+    an: xr.Dataset,
+    analysed: list[str],
+    means: dict[str, str],
+    folder: Path,
+    clock: Phases,
+) -> tuple[list[str], list[Path]]:
+    """The design's own text blocks and figures (sweep, Saltelli, sample or array/factorial)."""
+    design = ds.attrs.get("design")
+    if design == "sweep":
+        with clock("figures_s"):
+            figures = plots.save_sweep_plots(ds, analysed, folder)
+        return [analysis_text.format_sweep(ds, analysed)], figures
+    if design == "saltelli":
+        with clock("figures_s"):
+            figures = sensitivity_report.save_tornado(an, folder)
+        return sensitivity_report.sobol_text(an), figures
+    if design in SAMPLING_DESIGNS:
+        with clock("figures_s"):
+            figures = sample_report.save_correlations(an, folder)
+        return sample_report.sample_text(an), figures
+    body = [robust_report.robust_text(ds, an)] if robust_report.has_noise(an) else []
+    body += [analysis_text.format_tables(an, means[r]) for r in analysed]
+    varying = [means[r] for r in analysed if int(an["varies"].sel(response=means[r]))]
+    with clock("figures_s"):
+        figures = plots.save_main_effects(an, varying, folder)
+        if robust_report.has_noise(an):
+            figures += robust_report.save_noise_figures(ds, an, folder)
+        sn = [r for r in analysed if f"{r}_sn" in an["response"].values]
+        figures += plots.save_sn_plots(an, sn, folder)
+        figures += plots.save_interaction_plots(an, [means[r] for r in analysed], folder)
+        figures += plots.save_maps(an, varying, folder)
+    return body, figures
 
 
 NOISE_SUMMARIES = (

@@ -276,3 +276,27 @@ def test_response_nan_in_every_run_is_reported_not_fatal(design: str, tmp_path: 
     assert not any("jump_start" in f.name for f in files)
     report = (tmp_path / "report.md").read_text(encoding="utf-8")
     assert "NaN in every design point: not analysed" in report
+
+
+def test_the_numbers_are_on_disk_before_any_figure_and_each_phase_is_timed(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """analysis.nc is written before the figures (a figure that fails loses no number), and the
+    seconds of the analysis, the figures and the texts are reported apart."""
+    from studies.report import plots
+
+    ds = study_dataset(CATALOG / "isac_l9.toml")
+    timings: dict[str, float] = {}
+    write_analysis(ds, tmp_path / "ok", timings=timings)
+    assert set(timings) == {"analysis_s", "figures_s", "report_s"}
+    assert all(t > 0 for t in timings.values())
+
+    def broken(*args: object, **kwargs: object) -> list[Path]:
+        raise RuntimeError("a figure failed")
+
+    monkeypatch.setattr(plots, "save_main_effects", broken)
+    with pytest.raises(RuntimeError, match="a figure failed"):
+        write_analysis(ds, tmp_path / "broken")
+    saved = xr.open_dataset(tmp_path / "broken" / "analysis.nc")
+    expected = xr.open_dataset(tmp_path / "ok" / "analysis.nc")
+    xr.testing.assert_identical(saved, expected)
