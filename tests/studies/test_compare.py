@@ -13,8 +13,7 @@ from studies.compare.runs import compare, load_run
 from studies.compare.tolerances import Tolerance
 from studies.define.definition import find_study
 from studies.pipeline import run_study
-from studies.tracking.registry import run_values
-from studies.tracking.store import list_runs
+from studies.tracking.store import RunStore
 
 CAM = """
 name = "cam_grid"
@@ -126,7 +125,7 @@ def test_bad_input_is_one_line_and_exit_2(
         err = capsys.readouterr().err
         assert message in err, (argv, err)
         assert "Traceback" not in err
-    assert len(list_runs(outputs)) == 3
+    assert len(RunStore(outputs).list_runs()) == 3
 
 
 SPELLED = """
@@ -156,11 +155,11 @@ def test_runs_differing_only_in_how_units_are_written_are_identical(
     b = run_text(tmp_path, outputs, "b", in_m)
 
     def indexed(run_id: str) -> list[tuple]:
-        return sorted(tuple(v.values()) for v in run_values(outputs, run_id))
+        return sorted(tuple(v.values()) for v in RunStore(outputs).run_values(run_id))
 
     # the registry: every value the same, in SI (lift 10.8 mm = 0.0108 m)
     assert indexed(a) == indexed(b)
-    lift = [v for v in run_values(outputs, a) if v["name"] == "lift"]
+    lift = [v for v in RunStore(outputs).run_values(a) if v["name"] == "lift"]
     assert [(v["num"], v["units"], v["declared_units"]) for v in lift] == [(0.0108, "m", "mm")]
 
     # compare: nothing differs, and no response moved even with zero tolerance
