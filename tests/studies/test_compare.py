@@ -58,7 +58,7 @@ def test_runs_differing_in_one_setting_name_it_and_the_responses_it_moved(
     outputs = tmp_path / "out"
     a = run_text(tmp_path, outputs, "a", valve_study("1e-10"))
     b = run_text(tmp_path, outputs, "b", valve_study("1e-5"))
-    c = compare([load_run(outputs, a), load_run(outputs, b)])
+    c = compare([load_run(RunStore(outputs), a), load_run(RunStore(outputs), b)])
     assert [(d.kind, d.name, d.values) for d in c.definition] == [
         ("setting", "reference_rtol", ["1e-10", "1e-05"])
     ]
@@ -81,7 +81,7 @@ def test_different_designs_compare_on_their_common_points(
     outputs = tmp_path / "out"
     a = run_text(tmp_path, outputs, "a", CAM.format(base_radius="[16.0, 18.0, 20.0]"))
     b = run_text(tmp_path, outputs, "b", CAM.format(base_radius="[18.0, 20.0, 22.0, 24.0]"))
-    c = compare([load_run(outputs, a), load_run(outputs, b)])
+    c = compare([load_run(RunStore(outputs), a), load_run(RunStore(outputs), b)])
     assert c.matched_on == ["base_radius", "cam_speed"]
     # common points: base radius 18 and 20 at both speeds; same definition there, same values
     assert {ch.points for ch in c.changes} == {4}
@@ -163,7 +163,9 @@ def test_runs_differing_only_in_how_units_are_written_are_identical(
     assert [(v["num"], v["units"], v["declared_units"]) for v in lift] == [(0.0108, "m", "mm")]
 
     # compare: nothing differs, and no response moved even with zero tolerance
-    c = compare([load_run(outputs, a), load_run(outputs, b)], Tolerance(0.0, 0.0))
+    c = compare(
+        [load_run(RunStore(outputs), a), load_run(RunStore(outputs), b)], Tolerance(0.0, 0.0)
+    )
     assert (c.definition, c.code, c.versions) == ([], [], [])
     assert c.moved() == []
     assert {ch.points for ch in c.changes} == {4}

@@ -119,6 +119,33 @@ def test_a_newer_registry_is_refused_with_exit_2(
     assert "upgrade engine-studies" in capsys.readouterr().err
 
 
+def test_a_run_store_brings_its_registry_up_to_date_once_and_closes_each_connection(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # What RunStore's docstring promises: the migration and table check on the first
+    # connection of an object only; every operation's connection closed after it (brute force:
+    # count the calls and close every connection handed out, then look for one still open).
+    checks: list[Path] = []
+    check = registry.bring_up_to_date
+    monkeypatch.setattr(registry, "bring_up_to_date", lambda *a: checks.append(a[1]) or check(*a))
+    opened: list[sqlite3.Connection] = []
+    connect = RunStore.connect
+    monkeypatch.setattr(
+        RunStore, "connect", lambda self: opened.append(connect(self)) or opened[-1]
+    )
+    store = RunStore(tmp_path)
+    assert store.tags_and_notes() == ({}, {})
+    assert store.tagged_run("nothing") is None
+    assert store.run_values("20260101T000000000-abcdef") == []
+    assert checks == [tmp_path / registry.REGISTRY]
+    assert len(opened) == 3
+    for con in opened:
+        with pytest.raises(sqlite3.ProgrammingError, match="closed"):
+            con.execute("SELECT 1")
+    RunStore(tmp_path).tagged_run("nothing")  # a new object checks again
+    assert len(checks) == 2
+
+
 def test_four_processes_registering_removing_restoring_at_once_leave_it_consistent(
     tmp_path: Path,
 ) -> None:
