@@ -91,8 +91,7 @@ def restore_run(store: RunStore, ref: str) -> tuple[trash.Trashed, Path, list[st
     """Bring a run back from the trash of ``store``, bit-identical, and register it; return the
     entry, its folder and the tags it could not take back (they name another run now)."""
     entry = trash.find(store.trash, ref)
-    relative = f"{entry.study}/{entry.run_id}"
-    folder = store.outputs / relative
+    folder = store.outputs / entry.study / entry.run_id
     if folder.exists():
         raise RunStateError(f"{folder} exists: run {entry.run_id} is not restored over it")
     try:
@@ -114,7 +113,7 @@ def restore_run(store: RunStore, ref: str) -> tuple[trash.Trashed, Path, list[st
             ) from None
         try:
             with store.connection() as con:
-                lost = registry.index_folder(con, record, folder, relative)
+                lost = registry.index_folder(con, record, folder, store.relative(folder))
         except BaseException:
             entry.folder.parent.mkdir(parents=True, exist_ok=True)
             folder.rename(entry.folder)

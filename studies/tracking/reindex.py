@@ -77,9 +77,8 @@ def read_record(folder: Path) -> dict[str, Any] | None:
 
 def reconcile(store: RunStore) -> None:
     """Register what the registry of ``store`` missed (see the module's docstring)."""
-    outputs = store.outputs
     exists = store.registry.exists()
-    folders = list(run_folders(outputs))
+    folders = list(run_folders(store.outputs))
     if not exists and not folders:
         return  # nothing recorded here: do not create a registry
     with store.connection() as con:
@@ -97,7 +96,7 @@ def reconcile(store: RunStore) -> None:
         if row is None:
             adopt.append((record, folder))
         elif record["status"] != "running":
-            update.append(registry.row_of(record, _relative(folder, outputs)))
+            update.append(registry.row_of(record, store.relative(folder)))
     gone = [
         run_id
         for run_id, row in rows.items()
@@ -108,7 +107,7 @@ def reconcile(store: RunStore) -> None:
     try:
         with store.connection() as con:
             for record, folder in adopt:
-                registry.index_folder(con, record, folder, _relative(folder, outputs))
+                registry.index_folder(con, record, folder, store.relative(folder))
             for row in update:
                 registry.upsert_run(con, row, store.folder(row))
             with writing(con):
@@ -125,11 +124,6 @@ class Reindexed:
     notes: int = 0
     kept_as: Path | None = None  # the old registry, moved aside
     skipped: list[str] = field(default_factory=list)  # folders without a readable run.json
-
-
-def _relative(folder: Path, outputs: Path) -> str:
-    """How the registry stores a run folder: under the outputs root, ``<study>/<run-id>``."""
-    return folder.relative_to(outputs).as_posix()
 
 
 def rebuild(store: RunStore) -> Reindexed:
@@ -165,7 +159,7 @@ def rebuild(store: RunStore) -> Reindexed:
             if not found.notes:
                 for written, text in old_notes.get(folder.name, []):
                     labels.add_note(folder, written, text)
-            registry.index_folder(con, record, folder, _relative(folder, store.outputs))
+            registry.index_folder(con, record, folder, store.relative(folder))
             done.runs += 1
         with writing(con):
             con.executemany(

@@ -88,6 +88,10 @@ class RunStore:
             return self.outputs / stored
         return self.outputs / str(row["study"]) / str(row["run_id"])
 
+    def relative(self, folder: Path) -> str:
+        """How the registry stores a run folder of this root: ``<study>/<run-id>``."""
+        return folder.relative_to(self.outputs).as_posix()
+
     def run_folder(self, study: str, run_id: str) -> tuple[str, Path]:
         """Create a run's folder; the id gets a suffix ``-1``, ``-2``, … when another run of
         the same definition took it in the same millisecond. Returns the id used and the
