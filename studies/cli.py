@@ -37,7 +37,7 @@ from studies.common.errors import (
 )
 from studies.common.text_safety import TerminalText, printable_dataset
 from studies.define.definition import StudyFileError, catalog_names, read_study
-from studies.tracking.registry_file import RegistryUnusable, unusable
+from studies.tracking.registry_file import REGISTRY, RegistryUnusable, unusable
 from studies.tracking_cli import add_commands, check_mlflow, track_run
 
 if TYPE_CHECKING:
@@ -88,7 +88,7 @@ def _main(argv: list[str] | None) -> int:
         return 0
     except sqlite3.Error as exc:  # the registry, on a path that did not say it more precisely
         outputs = getattr(args, "outputs", None) or _default_outputs()
-        print(f"error: {unusable(exc, outputs)}", file=sys.stderr)
+        print(f"error: {unusable(exc, outputs / REGISTRY)}", file=sys.stderr)
         return EXIT_OUTPUT_ERROR
     except OSError as exc:  # full disk, read-only or unreadable files: one line, how to go on
         what = f"{exc.strerror}: {exc.filename}" if exc.strerror and exc.filename else str(exc)
@@ -263,13 +263,13 @@ def _run_plans(args: argparse.Namespace, plans: list[Plan], executor: Executor |
     from studies.pipeline import run_plan
     from studies.run import provenance
     from studies.run.runner import DEFAULT_CHUNK_SIZE
-    from studies.tracking import store
+    from studies.tracking import records, store
 
-    flagged = 0
+    flagged, runs = 0, store.RunStore(args.outputs)
     for plan in plans:
-        key = store.definition_hash(plan.definition.text, plan.definition.input_files())
+        key = records.definition_hash(plan.definition.text, plan.definition.input_files())
         code = provenance.code_hash(provenance.code(type(plan.scene)))
-        earlier = None if args.force else store.finished_identical(args.outputs, key, code)
+        earlier = None if args.force else runs.finished_identical(key, code)
         if earlier is not None:
             print(
                 f"{plan.definition.name}: identical definition already ran on identical code "
@@ -319,7 +319,7 @@ def _report(result: RunResult) -> None:
 
 def _default_outputs() -> Path:
     """The outputs root (imported on use: ``check``, ``list`` and ``scenes`` need no store)."""
-    from studies.tracking.store import default_outputs
+    from studies.tracking.records import default_outputs
 
     return default_outputs()
 

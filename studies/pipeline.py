@@ -34,9 +34,11 @@ from studies.run.results import open_results
 from studies.run.results_writer import ResultsWriter
 from studies.run.runner import DEFAULT_CHUNK_SIZE, chunk_cases, chunks, evaluate
 from studies.scenes import SceneOutput
-from studies.tracking import registry, store
+from studies.tracking import liveness, records
 from studies.tracking.checkpoints import load_chunk, read_run_record, save_chunk
 from studies.tracking.liveness import FolderLock, Heartbeat, lock_folder
+from studies.tracking.registry_file import RegistryUnusable
+from studies.tracking.store import RunStore
 
 CHECKPOINTS = "chunks"
 RESULTS_NAME = "results.nc"
@@ -46,7 +48,7 @@ RESUME_WAIT_S = 1.0  # a listing may hold a run folder's lock for an instant; a 
 
 @dataclass(frozen=True)
 class RunResult:
-    record: store.RunRecord
+    record: records.RunRecord
     dataset: xr.Dataset
     folder: Path
     files: tuple[Path, ...]
@@ -59,7 +61,7 @@ def run_study(
     progress: bool = True,
 ) -> RunResult:
     """Validate and run a study; write its run folder under ``outputs`` (default:
-    :func:`studies.tracking.store.default_outputs`)."""
+    :func:`studies.tracking.records.default_outputs`)."""
     plan = plan_study(name_or_path)
     return run_plan(plan, outputs, chunk_size, progress)
 
@@ -72,12 +74,12 @@ def run_plan(
     executor: Executor | None = None,
 ) -> RunResult:
     """Run a validated plan in a new run folder under ``outputs`` (chunks on ``executor``)."""
-    outputs = (outputs or store.default_outputs()).resolve()
+    store = RunStore((outputs or records.default_outputs()).resolve())
     chunk_size = chunk_cases(plan, min(chunk_size, plan.max_chunk))  # fine settings: fewer
     d = plan.definition
     commit, dirty = provenance.git_state()
     code = provenance.code(type(plan.scene))
-    run_id, folder = store.run_folder(outputs, d.name, store.new_run_id(d.text))
+    run_id, folder = store.run_folder(d.name, records.new_run_id(d.text))
     lock = lock_folder(folder) or FolderLock(None)  # a new folder: no one else holds it
     try:
         (folder / "study.toml").write_text(d.text, encoding="utf-8")
@@ -87,17 +89,17 @@ def run_plan(
         shutil.rmtree(folder, ignore_errors=True)
         lock.release()
         raise
-    record = store.RunRecord(
+    record = records.RunRecord(
         run_id=run_id,
         study=d.name,
         scene=d.scene,
         design=plan.design.name,
         runs=plan.runs,
         status="running",
-        started=store.now(),
+        started=records.now(),
         git_commit=commit,
         git_dirty=dirty,
-        definition_sha256=store.definition_hash(d.text, d.input_files()),
+        definition_sha256=records.definition_hash(d.text, d.input_files()),
         code=code,
         code_sha256=provenance.code_hash(code),
         folder=str(folder),
@@ -107,17 +109,17 @@ def run_plan(
         chunk_size=chunk_size,
     )
     try:
-        return _execute(plan, outputs, record, progress, {}, executor, fresh=True)
+        return _execute(plan, store, record, progress, {}, executor, fresh=True)
     finally:
         lock.release()
 
 
 def resume_run(run_id: str, outputs: Path | None = None, progress: bool = True) -> RunResult:
     """Finish an interrupted or failed run from its checkpointed chunks."""
-    outputs = (outputs or store.default_outputs()).resolve()
-    row = store.find_run(outputs, run_id)
+    store = RunStore((outputs or records.default_outputs()).resolve())
+    row = store.find_run(run_id)
     if row is None:
-        raise RunNotFound(f"no unique run matches {run_id!r} under {outputs}")
+        raise RunNotFound(f"no unique run matches {run_id!r} under {store.outputs}")
     folder = Path(row["folder"])
     lock = lock_folder(folder, RESUME_WAIT_S)
     if lock is None:
@@ -133,7 +135,7 @@ def resume_run(run_id: str, outputs: Path | None = None, progress: bool = True) 
         record.folder = str(folder)  # where it was found (a copied tree records another)
         if record.status == "finished":
             raise RunStateError(f"run {record.run_id} is already finished: nothing to resume")
-        if store.liveness(asdict(record)) == "running":
+        if liveness.liveness(asdict(record)) == "running":
             msg = (
                 f"run {record.run_id} is still running (process {record.pid} on "
                 f"{record.host.get('node', '?')}, last heartbeat {record.heartbeat}): not resumed"
@@ -168,15 +170,15 @@ def resume_run(run_id: str, outputs: Path | None = None, progress: bool = True) 
         raise
     record.status, record.error = "running", ""
     try:
-        return _execute(plan, outputs, record, progress, done)
+        return _execute(plan, store, record, progress, done)
     finally:
         lock.release()
 
 
 def _execute(
     plan: Plan,
-    outputs: Path,
-    record: store.RunRecord,
+    store: RunStore,
+    record: records.RunRecord,
     progress: bool,
     done: dict[int, Path],
     executor: Executor | None = None,
@@ -186,8 +188,8 @@ def _execute(
     whose folder is removed again if the registry cannot record it)."""
     folder = Path(record.folder)
     record.pid, record.host = os.getpid(), provenance.host()
-    _start(outputs, record, fresh)
-    heartbeat = Heartbeat(record.beat, store.HEARTBEAT_S)
+    _start(store, record, fresh)
+    heartbeat = Heartbeat(record.beat, liveness.HEARTBEAT_S)
     attrs = {
         "run_id": record.run_id,
         "git_commit": record.git_commit,
@@ -228,24 +230,24 @@ def _execute(
         if writer is not None:
             writer.abandon()
         _remove_new_files(folder, before)
-        record.status, record.finished, record.error = "failed", store.now(), repr(exc)
+        record.status, record.finished, record.error = "failed", records.now(), repr(exc)
         try:
             record.write()
-            store.register(outputs, record)
+            store.register(record)
         except (OSError, sqlite3.Error) as unrecorded:  # e.g. the disk is still full
             exc.add_note(f"its run.json still says running ({unrecorded})")
         exc.add_note(
             f"run {record.run_id} kept its finished chunks; resume it with: "
-            f"{store.resume_command(record.run_id, outputs)}"
+            f"{store.resume_command(record.run_id)}"
         )
         raise
     heartbeat.stop()
-    record.status, record.finished, record.timings = "finished", store.now(), ev.timings
+    record.status, record.finished, record.timings = "finished", records.now(), ev.timings
     record.write()  # the one step that finishes the run; the registry follows
     shutil.rmtree(folder / CHECKPOINTS, ignore_errors=True)
     try:
-        store.register(outputs, record)
-    except registry.RegistryUnusable as exc:
+        store.register(record)
+    except RegistryUnusable as exc:
         exc.add_note(
             f"run {record.run_id} finished and its results are in {folder}; the registry "
             "records it the next time runs are listed"
@@ -254,11 +256,11 @@ def _execute(
     return RunResult(record, ds, folder, (folder / "study.toml", folder / "run.json", *files))
 
 
-def _start(outputs: Path, record: store.RunRecord, fresh: bool) -> None:
+def _start(store: RunStore, record: records.RunRecord, fresh: bool) -> None:
     """Write run.json and register the run; a new run the registry refuses leaves nothing."""
     record.beat()
     try:
-        store.register(outputs, record)
+        store.register(record)
     except BaseException as exc:
         if fresh:
             shutil.rmtree(record.folder, ignore_errors=True)
@@ -285,7 +287,7 @@ def _check_unchanged(study: Path, sha256: str) -> None:
     text = study.read_text(encoding="utf-8")
     definition, _ = parse_study(text, str(study))
     inputs = definition.input_files() if definition is not None else ()
-    if store.definition_hash(text, inputs) == sha256:
+    if records.definition_hash(text, inputs) == sha256:
         return
     original = _recorded_text(study.parent)
     if original == text:

@@ -13,9 +13,12 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from studies.common.errors import RunNotFound, RunStateError, StudyError
+
+if TYPE_CHECKING:
+    from studies.tracking.store import RunStore
 
 EXIT_REGRESSED = 1
 
@@ -132,15 +135,22 @@ def _tolerances(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
     return default, per_response
 
 
+def _store(args: argparse.Namespace) -> RunStore:
+    """The run store of ``--outputs`` (imported on use)."""
+    from studies.tracking.store import RunStore
+
+    return RunStore(args.outputs)
+
+
 def _runs(args: argparse.Namespace) -> int:
     from studies.tracking import query
-    from studies.tracking.store import resume_command
 
+    store = _store(args)
     rows = query.find_runs(
-        args.outputs, args.study, args.scene, args.status, args.since, args.where, args.tag
+        store, args.study, args.scene, args.status, args.since, args.where, args.tag
     )
     if args.json or args.csv:
-        rows = query.with_values(args.outputs, rows)
+        rows = query.with_values(store, rows)
         print(query.as_json(rows) if args.json else query.as_csv(rows), end="\n" * args.json)
         return 0
     if not rows:
@@ -148,39 +158,40 @@ def _runs(args: argparse.Namespace) -> int:
         return 0
     columns = [c.strip() for c in (args.columns or "").split(",") if c.strip()]
     if columns:
-        rows = query.with_values(args.outputs, rows)
+        rows = query.with_values(store, rows)
         query.check_columns(rows, columns)
     print(query.as_table(rows, columns))
     for r in rows:
         if r["status"] in ("interrupted", "failed"):
-            print(f"resume {r['run_id']}: {resume_command(r['run_id'], args.outputs)}")
+            print(f"resume {r['run_id']}: {store.resume_command(r['run_id'])}")
     return 0
 
 
 def _show(args: argparse.Namespace) -> int:
-    from studies.tracking import registry
-    from studies.tracking.store import current_status, resolve_run, resume_command
+    from studies.tracking.liveness import current_status
 
-    row = resolve_run(args.outputs, args.run_id)
+    store = _store(args)
+    row = store.resolve_run(args.run_id)
     status, record = current_status(row)
     if record is None:
         raise RunStateError(
             f"run {row['run_id']} is in the registry but its folder {row['folder']} is gone"
         )
     record["status"], record["folder"] = status, row["folder"]  # where it is now
-    tags, notes = registry.tags_and_notes(args.outputs)
+    tags, notes = store.tags_and_notes()
     record["tags"] = tags.get(row["run_id"], [])
     record["notes"] = notes.get(row["run_id"], [])
     print(json.dumps(record, indent=2))
     if status in ("interrupted", "failed"):
-        print(f"resume it with: {resume_command(row['run_id'], args.outputs)}")
+        print(f"resume it with: {store.resume_command(row['run_id'])}")
     return 0
 
 
 def _compare(args: argparse.Namespace) -> int:
     from studies.compare.runs import compare, format_comparison, load_run
 
-    runs = [load_run(args.outputs, ref) for ref in args.run_ids]
+    store = _store(args)
+    runs = [load_run(store, ref) for ref in args.run_ids]
     default, per_response = _tolerances(args)
     comparison = compare(runs, default, per_response)
     print(format_comparison(comparison))
@@ -198,8 +209,9 @@ def _regress(args: argparse.Namespace) -> int:
     from studies.compare.runs import load_results
 
     default, per_response = _tolerances(args)
-    baseline_id, baseline = load_results(args.outputs, args.baseline)
-    run_id, run = load_results(args.outputs, args.run_id)
+    store = _store(args)
+    baseline_id, baseline = load_results(store, args.baseline)
+    run_id, run = load_results(store, args.run_id)
     checks = regress.check_results(run, baseline, per_response, default)
     print(f"{run_id} against baseline {baseline_id}:")
     print(regress.format_checks(checks))
@@ -207,36 +219,32 @@ def _regress(args: argparse.Namespace) -> int:
 
 
 def _tag(args: argparse.Namespace) -> int:
-    from studies.tracking import registry
-    from studies.tracking.store import resolve_run
-
+    store = _store(args)
     if args.remove:
-        if not registry.remove_tag(args.outputs, args.tag):
+        if not store.remove_tag(args.tag):
             raise RunNotFound(f"no tag {args.tag!r} under {args.outputs}")
         print(f"removed tag {args.tag}")
         return 0
-    row = resolve_run(args.outputs, args.run_id)
-    moved = registry.set_tag(args.outputs, row["run_id"], args.tag)
+    row = store.resolve_run(args.run_id)
+    moved = store.set_tag(row["run_id"], args.tag)
     print(f"tagged {row['run_id']} {args.tag}" + (f" (moved from {moved})" if moved else ""))
     return 0
 
 
 def _note(args: argparse.Namespace) -> int:
-    from studies.tracking import registry
-    from studies.tracking.store import now, resolve_run
+    from studies.tracking.records import now
 
-    row = resolve_run(args.outputs, args.run_id)
-    registry.add_note(args.outputs, row["run_id"], now(), args.text)
+    store = _store(args)
+    row = store.resolve_run(args.run_id)
+    store.add_note(row["run_id"], now(), args.text)
     print(f"noted on {row['run_id']}")
     return 0
 
 
 def _rm(args: argparse.Namespace) -> int:
-    from studies.tracking.housekeeping import remove_run
-    from studies.tracking.store import resolve_run
-
-    row = resolve_run(args.outputs, args.run_id)
-    where = remove_run(args.outputs, row, args.force)
+    store = _store(args)
+    row = store.resolve_run(args.run_id)
+    where = store.remove(row, args.force)
     if where is None:
         print(f"removed {row['run_id']} from the registry (its folder was gone already)")
     else:
@@ -246,9 +254,7 @@ def _rm(args: argparse.Namespace) -> int:
 
 
 def _restore(args: argparse.Namespace) -> int:
-    from studies.tracking.housekeeping import restore_run
-
-    entry, folder, lost = restore_run(args.outputs, args.run_id)
+    entry, folder, lost = _store(args).restore(args.run_id)
     print(f"restored {entry.run_id} to {folder}")
     for tag in lost:
         print(f"  tag {tag} names another run now: left there")
@@ -256,9 +262,7 @@ def _restore(args: argparse.Namespace) -> int:
 
 
 def _trash(args: argparse.Namespace) -> int:
-    from studies.tracking.trash import entries
-
-    found = entries(args.outputs)
+    found = _store(args).trash_entries()
     for e in found:
         tags = f" tags: {' '.join(e.tags())}" if e.tags() else ""
         removed = e.removed.isoformat(timespec="seconds")
@@ -268,9 +272,10 @@ def _trash(args: argparse.Namespace) -> int:
 
 
 def _gc(args: argparse.Namespace) -> int:
-    from studies.tracking.housekeeping import collect_garbage, parse_age
+    from studies.tracking.housekeeping import parse_age
 
-    done = collect_garbage(args.outputs, parse_age(args.older_than), args.keep_tagged, args.dry_run)
+    age = parse_age(args.older_than)
+    done = _store(args).collect_garbage(age, args.keep_tagged, args.dry_run)
     move, delete = ("would move", "would delete") if args.dry_run else ("moved", "deleted")
     for row in done.trashed:
         print(f"{move} {row['run_id']} ({row['study']}, started {row['started']}) to the trash")
@@ -281,9 +286,7 @@ def _gc(args: argparse.Namespace) -> int:
 
 
 def _reindex(args: argparse.Namespace) -> int:
-    from studies.tracking.reindex import reindex
-
-    done = reindex(args.outputs)
+    done = _store(args).reindex()
     print(
         f"reindexed {done.runs} run(s), {done.tags} tag(s) and {done.notes} note(s) from the run "
         f"folders under {args.outputs}"
@@ -296,16 +299,16 @@ def _reindex(args: argparse.Namespace) -> int:
 
 
 def _mlflow(args: argparse.Namespace) -> int:
-    from studies.tracking import registry
+    from studies.tracking.liveness import current_status
     from studies.tracking.mlflow_export import check_store, log_run
-    from studies.tracking.store import current_status, resolve_run
 
-    rows = [resolve_run(args.outputs, ref) for ref in args.run_ids]
+    store = _store(args)
+    rows = [store.resolve_run(ref) for ref in args.run_ids]
     unfinished = [r["run_id"] for r in rows if current_status(r)[0] != "finished"]
     if unfinished:
         raise RunStateError(f"only finished runs are logged: {', '.join(unfinished)} is not")
     check_store(args.to)
-    tags, notes = registry.tags_and_notes(args.outputs)
+    tags, notes = store.tags_and_notes()
     for row in rows:
         run_id = row["run_id"]
         mlflow_id, new = log_run(
@@ -317,9 +320,8 @@ def _mlflow(args: argparse.Namespace) -> int:
 
 def _export(args: argparse.Namespace) -> int:
     from studies.tracking.export import export_results
-    from studies.tracking.store import resolve_run
 
-    row = resolve_run(args.outputs, args.run_id)
+    row = _store(args).resolve_run(args.run_id)
     results = Path(row["folder"]) / "results.nc"
     if not results.exists():
         raise RunStateError(f"run {row['run_id']} has no results.nc: nothing to export")
@@ -339,18 +341,18 @@ def check_mlflow(args: argparse.Namespace) -> None:
 
 def track_run(args: argparse.Namespace, folder: Path, run_id: str) -> None:
     """``run --tag/--note/--mlflow``: tag and note the run, then log it to MLflow."""
-    from studies.tracking import registry
-    from studies.tracking.store import now
+    from studies.tracking.records import now
 
+    store = _store(args)
     for tag in args.tag:
-        registry.set_tag(args.outputs, run_id, tag)
+        store.set_tag(run_id, tag)
         print(f"  tagged {tag}")
     if args.note:
-        registry.add_note(args.outputs, run_id, now(), args.note)
+        store.add_note(run_id, now(), args.note)
     if args.mlflow:
         from studies.tracking.mlflow_export import log_run
 
-        tags, notes = registry.tags_and_notes(args.outputs)
+        tags, notes = store.tags_and_notes()
         try:
             mlflow_id, new = log_run(
                 args.mlflow, folder, tags.get(run_id, []), notes.get(run_id, [])

@@ -20,9 +20,9 @@ import contextlib
 import datetime as dt
 from pathlib import Path
 
-from studies.tracking import registry, store, trash
-from studies.tracking.housekeeping import collect_garbage, remove_run, restore_run
+from studies.tracking import records, trash
 from studies.tracking.liveness import lock_folder
+from studies.tracking.store import RunStore
 
 RUNS_EACH = 25
 OLD = "2020-01-01T00:00:00+00:00"
@@ -38,8 +38,8 @@ def register_many(outputs: str, writer: int) -> None:
     for i in range(RUNS_EACH):
         folder = root / "many" / run_id(writer, i)
         folder.mkdir(parents=True)
-        started = OLD if i % 5 == 4 else store.now()
-        record = store.RunRecord(
+        started = OLD if i % 5 == 4 else records.now()
+        record = records.RunRecord(
             run_id=folder.name, study="many", scene="cam", design="sweep", runs=1,
             status="running", started=started, git_commit="c", git_dirty=False,
             definition_sha256="d", folder=str(folder),
@@ -48,21 +48,21 @@ def register_many(outputs: str, writer: int) -> None:
         assert lock is not None, f"{folder} is new: no one else can hold it"
         with lock:  # as a live run holds it
             record.write()
-            store.register(root, record)
+            RunStore(root).register(record)
             record.status = "finished"
             record.write()
-            store.register(root, record)
+            RunStore(root).register(record)
         row = {"run_id": folder.name, "study": "many", "folder": str(folder)}
         if i % 5 in (1, 2):
-            remove_run(root, row)
+            RunStore(root).remove(row)
         if i % 5 == 2:
             with contextlib.suppress(KeyError):  # another writer's purge pass took it first
-                restore_run(root, folder.name)
+                RunStore(root).restore(folder.name)
         if i % 5 == 3:
-            registry.set_tag(root, folder.name, f"w{writer}-{i}")
-            registry.add_note(root, folder.name, store.now(), f"note of w{writer}-{i}")
+            RunStore(root).set_tag(folder.name, f"w{writer}-{i}")
+            RunStore(root).add_note(folder.name, records.now(), f"note of w{writer}-{i}")
         if i % 5 == 0:
-            collect_garbage(root, AGE, keep_tagged=True)
-            for entry in trash.entries(root):
+            RunStore(root).collect_garbage(AGE, keep_tagged=True)
+            for entry in RunStore(root).trash_entries():
                 if int(entry.run_id[12:18]) % 5 in (2, 4):
                     trash.purge(entry)

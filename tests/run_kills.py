@@ -20,7 +20,8 @@ from typing import Any
 
 from studies import pipeline
 from studies.cli import main
-from studies.tracking import registry, store
+from studies.tracking import records, registry
+from studies.tracking.store import RunStore
 
 SLOW_CHUNK_S = 1.5
 
@@ -51,24 +52,24 @@ def after(original: Callable[..., Any], then: Callable[..., Any]) -> Callable:
     return wrapped
 
 
-def register_unless_finished(outputs: Any, record: store.RunRecord) -> None:
+def register_unless_finished(store: RunStore, record: records.RunRecord) -> None:
     if record.status == "finished":
         die()
-    REGISTER(outputs, record)
+    REGISTER(store, record)
 
 
-REGISTER = store.register
+REGISTER = RunStore.register
 
 
 def patch(phase: str) -> None:
     if phase == "before-registration":
-        store.register = on_call(store.register, 1, die)
+        RunStore.register = on_call(RunStore.register, 1, die)
     elif phase == "after-first-chunk":
         pipeline._save_chunk = after(pipeline._save_chunk, die)
     elif phase == "before-analysis":
         pipeline.write_analysis = on_call(pipeline.write_analysis, 1, die)
     elif phase == "after-finished":
-        store.register = register_unless_finished
+        RunStore.register = register_unless_finished
     elif phase == "rm-before-registry":
         registry.delete_run = on_call(registry.delete_run, 1, die)
     elif phase == "slow-chunks":

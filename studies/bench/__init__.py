@@ -1,4 +1,4 @@
 """Benchmarks: throughput figures printed and written as JSON, alternatives measured in the same run and reported as ratios (never asserted in tests).
 
-May import: studies.tracking.store and everything below it.
+May import: studies.tracking (its RunStore and records) and everything below it.
 """

@@ -24,7 +24,7 @@ from studies.define.plan import plan_text
 from studies.run import provenance
 from studies.run.runner import evaluate_chunk
 from studies.scenes import SCENES, BenchKit
-from studies.tracking import store
+from studies.tracking import records
 
 Benchmark = Callable[[int, float, int], dict[str, Any]]
 KIT = BenchKit(plan=plan_text, evaluate=evaluate_chunk)
@@ -69,7 +69,7 @@ def run_benchmark(name: str, cases: int, step: float, repeat: int, outputs: Path
         "cases": cases,
         "step_deg": step,
         "repeat": repeat,
-        "created": store.now(),
+        "created": records.now(),
         "git_commit": commit,
         "git_dirty": dirty,
         "versions": provenance.versions(),
@@ -78,7 +78,7 @@ def run_benchmark(name: str, cases: int, step: float, repeat: int, outputs: Path
     }
     folder = outputs / "bench"
     folder.mkdir(parents=True, exist_ok=True)
-    path = folder / f"{name}-{store.new_run_id(name)}.json"
+    path = folder / f"{name}-{records.new_run_id(name)}.json"
     path.write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")
     title = f"benchmark {name}: {cases} cases, step {step:g} deg, commit {commit[:10]}"
     save_bench_figure(title, figures, path.with_suffix(".png"))

@@ -31,7 +31,7 @@ from studies.compare.differences import (
 )
 from studies.compare.tolerances import DEFAULT, Tolerance, deviations
 from studies.run.results import is_status, open_results
-from studies.tracking import registry, store
+from studies.tracking.store import RunStore
 
 
 @dataclass
@@ -103,9 +103,10 @@ class Comparison:
         return list(dict.fromkeys(c.response for c in self.changes if c.changed))
 
 
-def load_run(outputs: Path, ref: str) -> RecordedRun:
-    """The run named by an id, a unique id prefix or a tag (KeyError if none)."""
-    row = store.resolve_run(outputs, ref)
+def load_run(store: RunStore, ref: str) -> RecordedRun:
+    """The run of ``store`` named by an id, a unique id prefix or a tag (RunNotFound if
+    none)."""
+    row = store.resolve_run(ref)
     folder = Path(row["folder"])
     results = folder / "results.nc"
     if not results.exists():
@@ -113,17 +114,18 @@ def load_run(outputs: Path, ref: str) -> RecordedRun:
         raise RunStateError(msg)
     record = json.loads((folder / "run.json").read_text(encoding="utf-8"))
     definition = tomllib.loads((folder / "study.toml").read_text(encoding="utf-8"))
-    values = registry.run_values(outputs, row["run_id"])
+    values = store.run_values(row["run_id"])
     return RecordedRun(row["run_id"], record, definition, open_results(results).load(), values)
 
 
-def load_results(outputs: Path, ref: str) -> tuple[str, xr.Dataset]:
-    """A results Dataset named by a run reference or by the path of a results ``.nc`` file
-    (a reviewed baseline kept outside any registry): (what to call it, the Dataset)."""
+def load_results(store: RunStore, ref: str) -> tuple[str, xr.Dataset]:
+    """A results Dataset named by a run reference (a run of ``store``) or by the path of a
+    results ``.nc`` file (a reviewed baseline kept outside any registry): (what to call it,
+    the Dataset)."""
     path = Path(ref)
     if path.suffix == ".nc" and path.is_file():
         return str(path), open_results(path).load()
-    run = load_run(outputs, ref)
+    run = load_run(store, ref)
     return f"run {run.run_id}", run.results
 
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from studies.common.errors import OutputsError, RunStateError
 from studies.scenes import SceneOutput
-from studies.tracking.store import RunRecord
+from studies.tracking.records import RunRecord
 
 CHECKPOINT_VERSION = 2  # 1: no meta arrays (before validation)
 REDO = "delete it and resume: its design points are computed again"

@@ -5,7 +5,9 @@ into the trash (:mod:`studies.tracking.trash`, one rename) and deletes the run's
 transaction; if the registry refuses, the folder is moved back. A tagged run needs ``force``.
 ``restore`` moves the folder back and registers it with its tags and notes (from its
 ``labels.json``). ``gc`` moves runs older than an age to the trash and deletes for good what
-has been in the trash longer than that age, plus what killed processes left behind.
+has been in the trash longer than that age, plus what killed processes left behind. These are
+the operations behind :meth:`RunStore.remove`, :meth:`RunStore.restore` and
+:meth:`RunStore.collect_garbage` (:mod:`studies.tracking.store`), which callers use.
 """
 
 from __future__ import annotations
@@ -15,14 +17,17 @@ import re
 import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from studies.common import labels
 from studies.common.errors import RunNotFound, RunStateError, StudyError
-from studies.tracking import registry, store, trash
-from studies.tracking.liveness import is_locked, lock_folder
+from studies.tracking import registry, trash
+from studies.tracking.liveness import current_status, is_locked, liveness, lock_folder
 from studies.tracking.registry_file import writing
 from studies.tracking.reindex import read_record, run_folders
+
+if TYPE_CHECKING:
+    from studies.tracking.store import RunStore
 
 REMOVING = ".removing"  # left by versions that deleted runs at once
 AGE = re.compile(r"^\s*(\d+(?:\.\d+)?)\s*([smhdw])\s*$")
@@ -45,12 +50,12 @@ def parse_age(text: str) -> dt.timedelta:
     return dt.timedelta(seconds=seconds)
 
 
-def remove_run(outputs: Path, row: dict[str, Any], force: bool = False) -> Path | None:
-    """Move a run to the trash and delete its registry rows; return where it went (None when
-    its folder was gone already). ValueError while it runs, or if tagged and not ``force``;
-    KeyError if another process moved it meanwhile."""
+def remove_run(store: RunStore, row: dict[str, Any], force: bool = False) -> Path | None:
+    """Move a run of ``store`` to the trash and delete its registry rows; return where it went
+    (None when its folder was gone already). RunStateError while it runs, or if tagged and not
+    ``force``; RunNotFound if another process moved it meanwhile."""
     run_id = row["run_id"]
-    tags = registry.tags_and_notes(outputs)[0].get(run_id, [])
+    tags = store.tags_and_notes()[0].get(run_id, [])
     if tags and not force:
         msg = (
             f"run {run_id} is tagged ({', '.join(tags)}): not removed; `rm --force` moves it "
@@ -61,7 +66,7 @@ def remove_run(outputs: Path, row: dict[str, Any], force: bool = False) -> Path 
     try:
         lock = lock_folder(folder, LOCK_WAIT_S)
     except FileNotFoundError:
-        with registry.connection(outputs) as con, writing(con):
+        with store.connection() as con, writing(con):
             registry.delete_run(con, run_id)
         return None
     if lock is None:
@@ -70,11 +75,11 @@ def remove_run(outputs: Path, row: dict[str, Any], force: bool = False) -> Path 
         if not lock.holds(folder):
             raise RunNotFound(f"run {run_id} was moved by another process meanwhile: not removed")
         record = read_record(folder)
-        if record is not None and store.liveness(record) == "running":
+        if record is not None and liveness(record) == "running":
             raise RunStateError(f"run {run_id} is still running: not removed")
-        target = trash.move_in(outputs, folder, str(row["study"]))
+        target = trash.move_in(store.trash, folder, str(row["study"]))
         try:
-            with registry.connection(outputs) as con, writing(con):
+            with store.connection() as con, writing(con):
                 registry.delete_run(con, run_id)
         except BaseException:
             target.rename(folder)
@@ -82,11 +87,11 @@ def remove_run(outputs: Path, row: dict[str, Any], force: bool = False) -> Path 
     return target
 
 
-def restore_run(outputs: Path, ref: str) -> tuple[trash.Trashed, Path, list[str]]:
-    """Bring a run back from the trash, bit-identical, and register it; return the entry, its
-    folder and the tags it could not take back (they name another run now)."""
-    entry = trash.find(outputs, ref)
-    folder = outputs / entry.study / entry.run_id
+def restore_run(store: RunStore, ref: str) -> tuple[trash.Trashed, Path, list[str]]:
+    """Bring a run back from the trash of ``store``, bit-identical, and register it; return the
+    entry, its folder and the tags it could not take back (they name another run now)."""
+    entry = trash.find(store.trash, ref)
+    folder = store.outputs / entry.study / entry.run_id
     if folder.exists():
         raise RunStateError(f"{folder} exists: run {entry.run_id} is not restored over it")
     try:
@@ -107,8 +112,8 @@ def restore_run(outputs: Path, ref: str) -> tuple[trash.Trashed, Path, list[str]
                 f"run {entry.run_id} left the trash meanwhile: not restored"
             ) from None
         try:
-            with registry.connection(outputs) as con:
-                lost = registry.index_folder(con, outputs, record, folder)
+            with store.connection() as con:
+                lost = registry.index_folder(con, record, folder, store.relative(folder))
         except BaseException:
             entry.folder.parent.mkdir(parents=True, exist_ok=True)
             folder.rename(entry.folder)
@@ -127,44 +132,45 @@ class Collected:
 
 
 def collect_garbage(
-    outputs: Path, older_than: dt.timedelta, keep_tagged: bool, dry_run: bool = False
+    store: RunStore, older_than: dt.timedelta, keep_tagged: bool, dry_run: bool = False
 ) -> Collected:
-    """Move the runs that started more than ``older_than`` ago to the trash (not running ones;
-    not tagged ones with ``keep_tagged``), delete for good the runs removed more than
-    ``older_than`` ago, and what killed processes left behind."""
+    """Move the runs of ``store`` that started more than ``older_than`` ago to the trash (not
+    running ones; not tagged ones with ``keep_tagged``), delete for good the runs removed more
+    than ``older_than`` ago, and what killed processes left behind."""
     cutoff = dt.datetime.now(dt.UTC) - older_than
-    tags, _ = registry.tags_and_notes(outputs)
+    tags, _ = store.tags_and_notes()
     chosen = []
-    for row in store.list_runs(outputs):
+    for row in store.list_runs():
         started = dt.datetime.fromisoformat(row["started"]) if row["started"] else cutoff
         if started >= cutoff or (keep_tagged and row["run_id"] in tags):
             continue
-        if store.current_status(row)[0] == "running":
+        if current_status(row)[0] == "running":
             continue
         chosen.append(row)
-    expired = [e for e in trash.entries(outputs) if e.removed < cutoff]
+    expired = [e for e in store.trash_entries() if e.removed < cutoff]
     if dry_run:
         return Collected(chosen, expired)
     done = Collected()
     for row in chosen:
         try:
-            remove_run(outputs, row, force=True)
+            remove_run(store, row, force=True)
         except (ValueError, KeyError):
             continue  # started again (a resume), or removed by another process, since listed
         done.trashed.append(row)
     done.purged = [e for e in expired if trash.purge(e)]
-    trash.sweep(outputs)
-    _sweep_leftovers(outputs)
+    trash.sweep(store.trash)
+    _sweep_leftovers(store.outputs)
     return done
 
 
-def _sweep_leftovers(outputs: Path) -> None:
-    """Delete ``.removing`` folders of older versions, and run folders that a start killed
-    before writing ``run.json`` left (unlocked and older than :data:`STILLBORN_S`)."""
-    for leftover in outputs.glob(f"*/*{REMOVING}"):
+def _sweep_leftovers(root: Path) -> None:
+    """Delete ``.removing`` folders of older versions under the outputs root ``root``, and run
+    folders that a start killed before writing ``run.json`` left (unlocked and older than
+    :data:`STILLBORN_S`)."""
+    for leftover in root.glob(f"*/*{REMOVING}"):
         shutil.rmtree(leftover, ignore_errors=True)
     settled = dt.datetime.now(dt.UTC).timestamp() - STILLBORN_S
-    for folder in run_folders(outputs):
+    for folder in run_folders(root):
         if (folder / "run.json").exists() or is_locked(folder):
             continue
         try:

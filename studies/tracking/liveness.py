@@ -9,21 +9,27 @@ from a thread every few seconds while the run lives (compiling, computing chunks
 alike: the kernels release the GIL), so a stale heartbeat means the process is gone.
 
 Locks exist where ``fcntl.flock`` does (Linux, macOS, BSD); elsewhere a lock is always granted
-and liveness falls back to the process id and the heartbeat.
+and liveness falls back to the process id and the heartbeat. :func:`liveness` reads a run's
+status as it is now from all three.
 """
 
 from __future__ import annotations
 
+import datetime as dt
+import json
 import os
+import platform
 import sys
 import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
 from types import TracebackType
-from typing import Self
+from typing import Any, Self
 
 POLL_S = 0.02  # between attempts to take a lock that is held
+HEARTBEAT_S = 5.0  # a live run's heartbeat thread rewrites run.json this often
+STALE_S = 120.0  # a heartbeat older than this marks a run on another host as interrupted
 
 
 class FolderLock:
@@ -125,3 +131,49 @@ class Heartbeat:
         self._stop.set()
         if self._thread.is_alive():
             self._thread.join()
+
+
+def liveness(record: dict[str, Any], folder: Path | None = None) -> str:
+    """The status of a recorded run as it is now: an unfinished run is running while a
+    process holds the lock on its ``folder`` (a resume, from its first instant); otherwise a
+    "running" run is "interrupted" when its process is gone (same host) or its heartbeat is
+    older than ``STALE_S`` (another host)."""
+    status = str(record.get("status", ""))
+    if status in ("running", "failed") and folder is not None and is_locked(folder):
+        return "running"
+    if status != "running":
+        return status
+    same_host = record.get("host", {}).get("node") == platform.node()
+    pid = int(record.get("pid") or 0)
+    if same_host and pid:
+        return "running" if _alive(pid) else "interrupted"
+    beat = record.get("heartbeat") or record.get("started", "")
+    if not beat:
+        return "running"
+    age = (dt.datetime.now(dt.UTC) - dt.datetime.fromisoformat(beat)).total_seconds()
+    return "interrupted" if age > STALE_S else "running"
+
+
+def _alive(pid: int) -> bool:
+    """Whether a process with this id exists on this host (a zombie counts as gone)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text(encoding="ascii")
+    except OSError:
+        return True
+    return stat.rsplit(")", 1)[-1].split()[0] != "Z"
+
+
+def current_status(row: dict[str, Any]) -> tuple[str, dict[str, Any] | None]:
+    """A registry row's status now ("missing" when its folder is gone) and its run.json."""
+    folder = Path(row["folder"])
+    path = folder / "run.json"
+    if not path.exists():
+        return "missing", None
+    record = json.loads(path.read_text(encoding="utf-8"))
+    return liveness(record, folder), record

@@ -19,14 +19,14 @@ import io
 import json
 import re
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 from studies.common.errors import StudyError
 from studies.common.units import UNITS, compatible_units, from_si, to_si
-from studies.tracking import registry, store
+from studies.tracking import registry
 from studies.tracking.housekeeping import parse_age
-from studies.tracking.reindex import reconcile
+from studies.tracking.liveness import current_status
+from studies.tracking.store import RunStore
 
 EXPRESSION = re.compile(r"^\s*([A-Za-z_][\w.]*)\s*(==|=|!=|<=|>=|<|>)\s*([^<>=!\s].*?)\s*$")
 NUMBER = re.compile(r"^([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(\S*)$")
@@ -137,7 +137,7 @@ def since_date(text: str) -> str:
 
 
 def find_runs(
-    outputs: Path,
+    store: RunStore,
     study: str | None = None,
     scene: str | None = None,
     status: str | None = None,
@@ -145,10 +145,10 @@ def find_runs(
     where: list[str] | None = None,
     tag: str | None = None,
 ) -> list[dict[str, Any]]:
-    """Registry rows that satisfy every filter, newest first, each with its current status,
-    tags, notes and folder under ``outputs``."""
-    reconcile(outputs)
-    if not (outputs / registry.REGISTRY).exists():
+    """Registry rows of ``store`` that satisfy every filter, newest first, each with its
+    current status, tags, notes and folder under the outputs root."""
+    store.reconcile()
+    if not store.registry.exists():
         return []
     conditions = [parse_condition(w) for w in where or []]
     current = [c for c in conditions if c.name == STATUS]
@@ -168,7 +168,7 @@ def find_runs(
     if tag:
         clauses.append("runs.run_id IN (SELECT run_id FROM tags WHERE tag = ?)")
         args.append(tag)
-    with registry.connection(outputs) as con:
+    with store.connection() as con:
         known = {
             r["name"]: (r["kind"], r["declared_units"] or "")
             for r in con.execute("SELECT DISTINCT name, kind, declared_units FROM run_values")
@@ -179,11 +179,11 @@ def find_runs(
             args += extra
         query = "SELECT * FROM runs" + (" WHERE " + " AND ".join(clauses) if clauses else "")
         rows = [dict(r) for r in con.execute(query + " ORDER BY started DESC, run_id DESC", args)]
-    tags, notes = registry.tags_and_notes(outputs)
+    tags, notes = store.tags_and_notes()
     out = []
     for row in rows:
-        row["folder"] = str(registry.folder_of(outputs, row))
-        row["status"], _ = store.current_status(row)
+        row["folder"] = str(store.folder(row))
+        row["status"], _ = current_status(row)
         if status and row["status"] != status:
             continue
         if any((row["status"] == str(c.value)) != (c.op != "!=") for c in current):
@@ -194,7 +194,7 @@ def find_runs(
     return out
 
 
-def with_values(outputs: Path, rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+def with_values(store: RunStore, rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Rows with their parameters (fixed, and left at their defaults), settings, factor levels
     and response summaries, in SI; ``units`` maps each name to its SI unit and
     ``declared_units`` to the unit its scene declares."""
@@ -208,7 +208,7 @@ def with_values(outputs: Path, rows: list[dict[str, Any]]) -> list[dict[str, Any
             "units": {},
             "declared_units": {},
         }
-        for v in registry.run_values(outputs, row["run_id"]):
+        for v in store.run_values(row["run_id"]):
             value = v["num"] if v["num"] is not None else v["text"]
             name = v["name"]
             if v["kind"] == "factor":

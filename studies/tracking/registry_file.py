@@ -40,21 +40,17 @@ class RegistryUnusable(OutputsError):
     """The registry cannot be read or written now: damaged, locked, read-only or full."""
 
 
-def reindex_command(outputs: Path) -> str:
-    return f"python -m studies reindex --outputs {outputs}"
-
-
-def damaged(outputs: Path, what: str) -> RegistryUnusable:
-    """The error for a registry that holds no usable index (``what``: how it looks)."""
+def damaged(path: Path, what: str) -> RegistryUnusable:
+    """The error for the registry file ``path`` when it holds no usable index (``what``: how
+    it looks); the way out rebuilds it from the run folders beside it."""
     return RegistryUnusable(
-        f"the registry {outputs / REGISTRY} is damaged ({what}); the run folders are intact: "
-        f"rebuild it from them with: {reindex_command(outputs)}"
+        f"the registry {path} is damaged ({what}); the run folders are intact: rebuild it "
+        f"from them with: python -m studies reindex --outputs {path.parent}"
     )
 
 
-def unusable(exc: sqlite3.Error, outputs: Path) -> RegistryUnusable:
-    """One line for a SQLite error on the registry under ``outputs``: what, and what to do."""
-    path = outputs / REGISTRY
+def unusable(exc: sqlite3.Error, path: Path) -> RegistryUnusable:
+    """One line for a SQLite error on the registry file ``path``: what, and what to do."""
     code = (getattr(exc, "sqlite_errorcode", None) or sqlite3.SQLITE_ERROR) & 0xFF
     detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
     if code in _BUSY:
@@ -73,9 +69,9 @@ def unusable(exc: sqlite3.Error, outputs: Path) -> RegistryUnusable:
             "space and run the command again"
         )
     elif code in _DAMAGED and path.is_dir():
-        return damaged(outputs, "it is a directory, not a file")
+        return damaged(path, "it is a directory, not a file")
     elif code in _DAMAGED:
-        return damaged(outputs, detail)
+        return damaged(path, detail)
     else:
         text = (
             f"the registry {path} could not be written or read ({detail}); nothing was "
@@ -84,19 +80,18 @@ def unusable(exc: sqlite3.Error, outputs: Path) -> RegistryUnusable:
     return RegistryUnusable(text)
 
 
-def open_file(outputs: Path, create: Callable[[sqlite3.Connection], None]) -> sqlite3.Connection:
-    """A connection to the registry under ``outputs`` (in autocommit mode), made whole by
+def open_file(path: Path, create: Callable[[sqlite3.Connection], None]) -> sqlite3.Connection:
+    """A connection to the registry file ``path`` (in autocommit mode), made whole by
     ``create`` first if there is none. Raises :class:`RegistryUnusable`."""
-    path = outputs / REGISTRY
     try:
-        outputs.mkdir(parents=True, exist_ok=True)
+        path.parent.mkdir(parents=True, exist_ok=True)
         if not path.exists():
             _create_whole(path, create)
         if path.is_file() and path.stat().st_size == 0:
-            raise damaged(outputs, "it is empty, 0 bytes: its index of the runs is lost")
+            raise damaged(path, "it is empty, 0 bytes: its index of the runs is lost")
         return _open(path)
     except sqlite3.Error as exc:
-        raise unusable(exc, outputs) from None
+        raise unusable(exc, path) from None
 
 
 def _open(path: Path) -> sqlite3.Connection:

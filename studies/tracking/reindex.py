@@ -3,7 +3,8 @@
 The run folders are the truth (``<study>/<run-id>/`` with ``run.json``, ``study.toml``, the
 results and ``labels.json``); the registry indexes them.
 
-:func:`reconcile` runs whenever runs are listed or looked up, and mends what a killed process
+:func:`reconcile` (:meth:`RunStore.reconcile <studies.tracking.store.RunStore.reconcile>`)
+runs whenever runs are listed or looked up, and mends what a killed process
 left: a folder with ``run.json`` but no registry row and no live process holding it (killed
 between writing ``run.json`` and its first registration) is registered; a row that still says
 "running" although ``run.json`` says otherwise (killed after "finished" and before the registry
@@ -11,7 +12,8 @@ update) is updated; a row whose folder went to the trash (``rm`` killed between 
 folder and deleting the rows) is deleted. When the registry refuses the write (read-only,
 locked) nothing is mended and the listing goes on: statuses are read from ``run.json`` anyway.
 
-:func:`reindex` (``python -m studies reindex``) moves the registry aside, never deleting it,
+:func:`rebuild` (:meth:`RunStore.reindex <studies.tracking.store.RunStore.reindex>`,
+``python -m studies reindex``) moves the registry aside, never deleting it,
 and builds a new one from every run folder: rows, values, tags and notes; tags and notes that
 only the old registry holds, if it can still be read, are carried over into the folders.
 """
@@ -27,21 +29,25 @@ from collections.abc import Iterator
 from contextlib import closing
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from studies.common import labels
 from studies.tracking import registry, trash
 from studies.tracking.liveness import is_locked
 from studies.tracking.registry_file import REGISTRY, RegistryUnusable, writing
 
+if TYPE_CHECKING:
+    from studies.tracking.store import RunStore
+
 RUN_ID = re.compile(r"^\d{8}T\d{9}-[0-9a-f]{6}(-\d+)?$")
 SIDE_FILES = ("-journal", "-wal", "-shm")  # SQLite's companions of a database file
 
 
-def run_folders(outputs: Path) -> Iterator[Path]:
-    """Every ``<study>/<run-id>/`` folder under ``outputs`` (symbolic links not followed)."""
+def run_folders(root: Path) -> Iterator[Path]:
+    """Every ``<study>/<run-id>/`` folder under the outputs root ``root`` (symbolic links not
+    followed)."""
     try:
-        studies = [e for e in os.scandir(outputs) if e.is_dir(follow_symlinks=False)]
+        studies = [e for e in os.scandir(root) if e.is_dir(follow_symlinks=False)]
     except OSError:
         return
     for study in sorted(studies, key=lambda e: e.name):
@@ -69,13 +75,13 @@ def read_record(folder: Path) -> dict[str, Any] | None:
     return record
 
 
-def reconcile(outputs: Path) -> None:
-    """Register what the registry under ``outputs`` missed (see the module's docstring)."""
-    exists = (outputs / REGISTRY).exists()
-    folders = list(run_folders(outputs))
+def reconcile(store: RunStore) -> None:
+    """Register what the registry of ``store`` missed (see the module's docstring)."""
+    exists = store.registry.exists()
+    folders = list(run_folders(store.outputs))
     if not exists and not folders:
         return  # nothing recorded here: do not create a registry
-    with registry.connection(outputs) as con:
+    with store.connection() as con:
         rows = {r["run_id"]: dict(r) for r in con.execute("SELECT * FROM runs")}
     adopt, update = [], []
     for folder in folders:
@@ -90,20 +96,20 @@ def reconcile(outputs: Path) -> None:
         if row is None:
             adopt.append((record, folder))
         elif record["status"] != "running":
-            update.append(registry.row_of(record, folder.relative_to(outputs).as_posix()))
+            update.append(registry.row_of(record, store.relative(folder)))
     gone = [
         run_id
         for run_id, row in rows.items()
-        if not registry.folder_of(outputs, row).exists() and trash.holds(outputs, run_id)
+        if not store.folder(row).exists() and trash.holds(store.trash, run_id)
     ]
     if not (adopt or update or gone):
         return
     try:
-        with registry.connection(outputs) as con:
+        with store.connection() as con:
             for record, folder in adopt:
-                registry.index_folder(con, outputs, record, folder)
+                registry.index_folder(con, record, folder, store.relative(folder))
             for row in update:
-                registry.upsert_run(con, row, outputs)
+                registry.upsert_run(con, row, store.folder(row))
             with writing(con):
                 for run_id in gone:
                     registry.delete_run(con, run_id)
@@ -120,10 +126,10 @@ class Reindexed:
     skipped: list[str] = field(default_factory=list)  # folders without a readable run.json
 
 
-def reindex(outputs: Path) -> Reindexed:
-    """Move the registry under ``outputs`` aside and build a new one from the run folders."""
+def rebuild(store: RunStore) -> Reindexed:
+    """Move the registry of ``store`` aside and build a new one from the run folders."""
     done = Reindexed()
-    path = outputs / REGISTRY
+    path = store.registry
     if path.exists() or path.is_symlink():
         stamp = dt.datetime.now(dt.UTC).strftime("%Y%m%dT%H%M%S%f")
         done.kept_as = path.with_name(f"{REGISTRY}.{stamp}.bak")
@@ -134,8 +140,8 @@ def reindex(outputs: Path) -> Reindexed:
                 companion.rename(done.kept_as.with_name(done.kept_as.name + side))
     old_tags, old_notes = _salvage(done.kept_as)
     claims: dict[str, tuple[str, Path]] = {}  # tag → (when, folder): the latest claim wins
-    with registry.connection(outputs) as con:
-        for folder in run_folders(outputs):
+    with store.connection() as con:
+        for folder in run_folders(store.outputs):
             record = read_record(folder)
             if record is None:
                 done.skipped.append(f"{folder}: no readable run.json of run {folder.name}")
@@ -153,7 +159,7 @@ def reindex(outputs: Path) -> Reindexed:
             if not found.notes:
                 for written, text in old_notes.get(folder.name, []):
                     labels.add_note(folder, written, text)
-            registry.index_folder(con, outputs, record, folder)
+            registry.index_folder(con, record, folder, store.relative(folder))
             done.runs += 1
         with writing(con):
             con.executemany(

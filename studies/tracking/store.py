@@ -1,264 +1,301 @@
-"""Run records: one folder per run and a row per run in a local SQLite registry.
+"""The run store: one outputs root, its run folders and the registry that indexes them.
 
-    outputs/
-      registry.sqlite              one row per run, its values, tags and notes (studies.tracking.registry)
-      .trash/                      removed runs (studies.tracking.trash)
-      <study>/<run-id>/
-        study.toml                 exact copy of the definition that ran
-        labels.json                its tags and notes (studies.common.labels)
-        run.json                   id, status, code (engine and scene distributions, versions
-                                   and source hashes), git commit + dirty flag, versions,
-                                   host, start/end, compile vs run time, accuracy settings
-        results.nc                 the labelled results (see studies.run.results)
-        analysis.txt               range analysis and ANOVA tables
-        *.png                      figures
-
-The run id is ``<UTC timestamp>-<6 hex digits of the definition hash>``, so ids sort by time
-and runs of the same definition share a suffix. The folders are the truth and the registry
-their index: listing or looking up runs first registers what the registry misses
-(:func:`studies.tracking.reindex.reconcile`), and rows address folders relative to the outputs root.
+:class:`RunStore` is the one way into a tracked outputs root: it opens the registry
+(``registry.sqlite``, :mod:`studies.tracking.registry`), brings it to the current schema once
+per object, and offers every operation on the runs as a method: register and list them, look one
+up by id, tag or prefix, tag and note them, read their indexed values, move them to the trash and
+back, collect garbage, and re-index. The folders are the truth and the registry their index:
+listing or looking up runs first registers what the registry misses (:meth:`RunStore.reconcile`),
+and rows address folders relative to the outputs root.
 """
 
 from __future__ import annotations
 
 import datetime as dt
-import hashlib
-import json
-import os
-import platform
-import threading
-from dataclasses import asdict, dataclass, field
+import sqlite3
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from studies.common.bounded_files import TABLE_FILE_BYTES, InputFileError, read_bounded_bytes
-from studies.common.errors import RunNotFound
-from studies.run.runner import DEFAULT_CHUNK_SIZE
-from studies.tracking import registry, trash
-from studies.tracking.liveness import is_locked
-from studies.tracking.reindex import reconcile
-
-OUTPUTS_VARIABLE = "ENGINE_STUDIES_OUTPUTS"
-HEARTBEAT_S = 5.0  # a live run's heartbeat thread rewrites run.json this often
-STALE_S = 120.0  # a heartbeat older than this marks a run on another host as interrupted
-_WRITING = threading.Lock()  # run.json is written by the run and by its heartbeat thread
-
-
-@dataclass
-class RunRecord:
-    """What ``run.json`` holds and what the registry indexes."""
-
-    run_id: str
-    study: str
-    scene: str
-    design: str
-    runs: int
-    status: str
-    started: str
-    git_commit: str
-    git_dirty: bool
-    definition_sha256: str
-    folder: str
-    versions: dict[str, str] = field(default_factory=dict)
-    host: dict[str, str] = field(default_factory=dict)
-    settings: dict[str, Any] = field(default_factory=dict)
-    finished: str = ""
-    timings: dict[str, float] = field(default_factory=dict)
-    error: str = ""
-    chunk_size: int = DEFAULT_CHUNK_SIZE
-    pid: int = 0
-    heartbeat: str = ""
-    points_without_value: int = 0
-    code: dict[str, Any] = field(default_factory=dict)
-    code_sha256: str = ""
-
-    def write(self) -> None:
-        """Write ``run.json`` (under a temporary name renamed into place: never half a file)."""
-        path = Path(self.folder) / "run.json"
-        tmp = path.with_name("run.json.writing")
-        with _WRITING:
-            text = json.dumps(asdict(self), indent=2, default=str) + "\n"
-            tmp.write_text(text, encoding="utf-8")
-            tmp.replace(path)
-
-    def beat(self) -> None:
-        """Record that the run is alive now (the heartbeat thread calls this)."""
-        self.heartbeat = dt.datetime.now(dt.UTC).isoformat(timespec="milliseconds")
-        self.write()
-
-
-def liveness(record: dict[str, Any], folder: Path | None = None) -> str:
-    """The status of a recorded run as it is now: an unfinished run is running while a
-    process holds the lock on its ``folder`` (a resume, from its first instant); otherwise a
-    "running" run is "interrupted" when its process is gone (same host) or its heartbeat is
-    older than ``STALE_S`` (another host)."""
-    status = str(record.get("status", ""))
-    if status in ("running", "failed") and folder is not None and is_locked(folder):
-        return "running"
-    if status != "running":
-        return status
-    same_host = record.get("host", {}).get("node") == platform.node()
-    pid = int(record.get("pid") or 0)
-    if same_host and pid:
-        return "running" if _alive(pid) else "interrupted"
-    beat = record.get("heartbeat") or record.get("started", "")
-    if not beat:
-        return "running"
-    age = (dt.datetime.now(dt.UTC) - dt.datetime.fromisoformat(beat)).total_seconds()
-    return "interrupted" if age > STALE_S else "running"
-
-
-def _alive(pid: int) -> bool:
-    """Whether a process with this id exists on this host (a zombie counts as gone)."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    try:
-        stat = Path(f"/proc/{pid}/stat").read_text(encoding="ascii")
-    except OSError:
-        return True
-    return stat.rsplit(")", 1)[-1].split()[0] != "Z"
-
-
-def current_status(row: dict[str, Any]) -> tuple[str, dict[str, Any] | None]:
-    """A registry row's status now ("missing" when its folder is gone) and its run.json."""
-    folder = Path(row["folder"])
-    path = folder / "run.json"
-    if not path.exists():
-        return "missing", None
-    record = json.loads(path.read_text(encoding="utf-8"))
-    return liveness(record, folder), record
-
-
-def resume_command(run_id: str, outputs: Path) -> str:
-    """The command that finishes an interrupted or failed run."""
-    return f"python -m studies run --resume {run_id} --outputs {outputs}"
-
-
-def default_outputs() -> Path:
-    """Where runs are recorded when no ``--outputs`` is given, the same from any folder: the
-    environment variable ``ENGINE_STUDIES_OUTPUTS``, else the ``outputs/`` folder of this
-    checkout (beside ``studies/``), else ``./outputs`` (an installed package)."""
-    chosen = os.environ.get(OUTPUTS_VARIABLE)
-    if chosen:
-        return Path(chosen).expanduser().resolve()
-    checkout = Path(__file__).resolve().parents[2] / "outputs"
-    if (checkout / "README.md").exists():
-        return checkout
-    return Path("outputs").resolve()
-
-
-def now() -> str:
-    return dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
-
+from studies.common import labels
+from studies.common.errors import RunNotFound, RunStateError
+from studies.tracking import housekeeping, registry, reindex, trash
+from studies.tracking.records import RunRecord
+from studies.tracking.registry_file import REGISTRY, open_file, unusable, writing
 
 RUN_ID_ATTEMPTS = 1000  # runs of one definition started in the same millisecond
 
 
-def definition_hash(text: str, inputs: tuple[Path, ...] = ()) -> str:
-    """The SHA-256 of a study's text and of the contents of every file it reads (``inputs``,
-    e.g. a lift table): the cache key, so a changed table is never served from a stale run.
-    With no input files it is the hash of the text alone."""
-    digest = hashlib.sha256(text.encode("utf-8"))
-    for path in inputs:
-        digest.update(b"\0" + str(path).encode("utf-8") + b"\0")
+class RunStore:
+    """The runs recorded under one outputs root [folder] and their registry.
+
+    A connection is opened per operation and closed after it, not held by the object: SQLite
+    connections belong to the thread that made them (the run's heartbeat thread must not share
+    one), and a closed connection holds no lock or file handle while a long run computes, so
+    other processes register, tag and list runs in the same registry meanwhile. Opening costs
+    one ``open`` of the file; the schema migration and the table check are done once per
+    object, by its first connection.
+    """
+
+    def __init__(self, outputs: Path) -> None:
+        self.outputs = outputs
+        self.registry = outputs / REGISTRY
+        self.trash = outputs / trash.TRASH
+        self._up_to_date = False
+
+    def __repr__(self) -> str:
+        return f"RunStore({str(self.outputs)!r})"
+
+    def connect(self) -> sqlite3.Connection:
+        """A connection to the registry, created whole or migrated to
+        :data:`registry.SCHEMA_VERSION` first (by this object's first connection); in
+        ``DEFERRED`` mode (``with con:`` is one transaction). Raises
+        :class:`~studies.tracking.registry_file.RegistryUnusable` (or
+        :class:`~studies.tracking.registry.RegistryError`)."""
+        con = open_file(self.registry, registry.create)
         try:
-            digest.update(read_bounded_bytes(path, "input file", TABLE_FILE_BYTES))
-        except InputFileError as exc:  # planning reports the unreadable file; the key differs
-            digest.update(f"unreadable: {exc}".encode())
-    return digest.hexdigest()
+            if not self._up_to_date:
+                registry.bring_up_to_date(con, self.registry, self.folder)
+                self._up_to_date = True
+        except sqlite3.Error as exc:
+            con.close()
+            raise unusable(exc, self.registry) from None
+        except BaseException:
+            con.close()
+            raise
+        con.isolation_level = "DEFERRED"
+        return con
 
-
-def new_run_id(text: str) -> str:
-    stamp = dt.datetime.now(dt.UTC).strftime("%Y%m%dT%H%M%S%f")[:-3]
-    return f"{stamp}-{definition_hash(text)[:6]}"
-
-
-def run_folder(outputs: Path, study: str, run_id: str) -> tuple[str, Path]:
-    """Create the run's folder; the id gets a suffix ``-1``, ``-2``, … when another run of the
-    same definition took it in the same millisecond. Returns the id used and the folder."""
-    (outputs / study).mkdir(parents=True, exist_ok=True)
-    taken = run_id
-    for attempt in range(1, RUN_ID_ATTEMPTS + 1):
-        folder = outputs / study / taken
+    @contextmanager
+    def connection(self) -> Iterator[sqlite3.Connection]:
+        """:meth:`connect`, closed after the block; any SQLite error in the block becomes
+        :class:`~studies.tracking.registry_file.RegistryUnusable`."""
+        con = self.connect()
         try:
-            folder.mkdir()
-        except FileExistsError:
-            taken = f"{run_id}-{attempt}"
-            continue
-        return taken, folder
-    msg = f"{RUN_ID_ATTEMPTS} runs of {study!r} took the id {run_id} at once: start fewer together"
-    raise FileExistsError(msg)
+            yield con
+        except sqlite3.Error as exc:
+            raise unusable(exc, self.registry) from None
+        finally:
+            con.close()
 
+    def folder(self, row: Mapping[str, Any]) -> Path:
+        """A row's run folder under this outputs root (rows written before folders were stored
+        relative hold an absolute path, which is not followed: it may be another root's)."""
+        stored = Path(row.get("folder") or "")
+        if stored.parts and not stored.is_absolute():
+            return self.outputs / stored
+        return self.outputs / str(row["study"]) / str(row["run_id"])
 
-def register(outputs: Path, record: RunRecord) -> None:
-    """Insert or update the registry row of ``record`` (and its queryable values)."""
-    row = registry.row_of(asdict(record), f"{record.study}/{record.run_id}")
-    with registry.connection(outputs) as con:
-        registry.upsert_run(con, row, outputs)
+    def relative(self, folder: Path) -> str:
+        """How the registry stores a run folder of this root: ``<study>/<run-id>``."""
+        return folder.relative_to(self.outputs).as_posix()
 
+    def run_folder(self, study: str, run_id: str) -> tuple[str, Path]:
+        """Create a run's folder; the id gets a suffix ``-1``, ``-2``, … when another run of
+        the same definition took it in the same millisecond. Returns the id used and the
+        folder."""
+        (self.outputs / study).mkdir(parents=True, exist_ok=True)
+        taken = run_id
+        for attempt in range(1, RUN_ID_ATTEMPTS + 1):
+            folder = self.outputs / study / taken
+            try:
+                folder.mkdir()
+            except FileExistsError:
+                taken = f"{run_id}-{attempt}"
+                continue
+            return taken, folder
+        msg = (
+            f"{RUN_ID_ATTEMPTS} runs of {study!r} took the id {run_id} at once: "
+            "start fewer together"
+        )
+        raise FileExistsError(msg)
 
-def list_runs(outputs: Path, study: str | None = None) -> list[dict[str, Any]]:
-    """Registry rows, newest first (optionally of one study), each with its ``folder`` under
-    ``outputs``; what the registry missed is registered first."""
-    reconcile(outputs)
-    if not (outputs / registry.REGISTRY).exists():
-        return []
-    with registry.connection(outputs) as con:
-        query = "SELECT * FROM runs"
-        args: tuple[str, ...] = ()
-        if study:
-            query += " WHERE study = ?"
-            args = (study,)
-        rows = [dict(r) for r in con.execute(query + " ORDER BY started DESC, run_id DESC", args)]
-    return [r | {"folder": str(registry.folder_of(outputs, r))} for r in rows]
+    def resume_command(self, run_id: str) -> str:
+        """The command that finishes an interrupted or failed run."""
+        return f"python -m studies run --resume {run_id} --outputs {self.outputs}"
 
+    def register(self, record: RunRecord) -> None:
+        """Insert or update the registry row of ``record`` (and its queryable values)."""
+        row = registry.row_of(asdict(record), f"{record.study}/{record.run_id}")
+        with self.connection() as con:
+            registry.upsert_run(con, row, self.folder(row))
 
-def finished_identical(
-    outputs: Path, definition_sha256: str, code_sha256: str
-) -> dict[str, Any] | None:
-    """The newest finished run of the same definition (study text and input files) computed by
-    the same code (engine and scene sources, library versions: :func:`provenance.code_hash`)."""
-    for row in list_runs(outputs):
-        same = row["definition_sha256"] == definition_sha256 and row["code_sha256"] == code_sha256
-        if same and row["status"] == "finished" and (Path(row["folder"]) / "results.nc").exists():
+    def list_runs(self, study: str | None = None) -> list[dict[str, Any]]:
+        """Registry rows, newest first (optionally of one study), each with its ``folder``
+        under the outputs root; what the registry missed is registered first."""
+        self.reconcile()
+        if not self.registry.exists():
+            return []
+        with self.connection() as con:
+            query = "SELECT * FROM runs"
+            args: tuple[str, ...] = ()
+            if study:
+                query += " WHERE study = ?"
+                args = (study,)
+            order = " ORDER BY started DESC, run_id DESC"
+            rows = [dict(r) for r in con.execute(query + order, args)]
+        return [r | {"folder": str(self.folder(r))} for r in rows]
+
+    def finished_identical(self, definition_sha256: str, code_sha256: str) -> dict[str, Any] | None:
+        """The newest finished run of the same definition (study text and input files)
+        computed by the same code (engine and scene sources, library versions:
+        :func:`studies.run.provenance.code_hash`)."""
+        for row in self.list_runs():
+            same = row["definition_sha256"] == definition_sha256
+            same = same and row["code_sha256"] == code_sha256
+            if (
+                same
+                and row["status"] == "finished"
+                and (Path(row["folder"]) / "results.nc").exists()
+            ):
+                return row
+        return None
+
+    def find_run(self, ref: str) -> dict[str, Any] | None:
+        """The registry row named by ``ref``: the id, else a tag, else a unique prefix of the
+        id (a tag never hides a run's own id)."""
+        rows = self.list_runs()
+        exact = [r for r in rows if r["run_id"] == ref]
+        if not exact and rows:
+            tagged = self.tagged_run(ref)
+            exact = [r for r in rows if r["run_id"] == tagged]
+        chosen = exact or [r for r in rows if r["run_id"].startswith(ref)]
+        return chosen[0] if len(chosen) == 1 else None
+
+    def resolve_run(self, ref: str) -> dict[str, Any]:
+        """:meth:`find_run`, or :class:`RunNotFound` with one sentence on what was wrong."""
+        row = self.find_run(ref)
+        if row is not None:
             return row
-    return None
+        matches = [r["run_id"] for r in self.list_runs() if r["run_id"].startswith(ref)]
+        if matches:
+            msg = (
+                f"{ref!r} matches {len(matches)} runs ({', '.join(matches[:4])}…): "
+                "give more of the id"
+            )
+        elif trash.holds(self.trash, ref):
+            msg = (
+                f"run {ref} is in the trash: bring it back with "
+                f"python -m studies restore {ref} --outputs {self.outputs}"
+            )
+        else:
+            msg = (
+                f"no run or tag {ref!r} under {self.outputs} "
+                "(`python -m studies runs` lists the runs and their tags)"
+            )
+        raise RunNotFound(msg)
 
+    def run_values(self, run_id: str) -> list[dict[str, Any]]:
+        """The indexed values of one run (kind, name, text, num in SI, units: the SI unit,
+        declared_units: the scene's)."""
+        with self.connection() as con:
+            rows = con.execute(
+                "SELECT kind, name, text, num, units, declared_units FROM run_values "
+                "WHERE run_id = ? ORDER BY kind, name, num",
+                (run_id,),
+            )
+            return [dict(r) for r in rows]
 
-def find_run(outputs: Path, run_id: str) -> dict[str, Any] | None:
-    """The registry row named by ``run_id``: the id, else a tag, else a unique prefix of the id
-    (a tag never hides a run's own id)."""
-    rows = list_runs(outputs)
-    exact = [r for r in rows if r["run_id"] == run_id]
-    if not exact and rows:
-        tagged = registry.tagged_run(outputs, run_id)
-        exact = [r for r in rows if r["run_id"] == tagged]
-    chosen = exact or [r for r in rows if r["run_id"].startswith(run_id)]
-    return chosen[0] if len(chosen) == 1 else None
+    def _labelled(self, con: sqlite3.Connection, run_id: str) -> Path:
+        """The folder of a registered run, to write its labels into (RunStateError when it is
+        gone)."""
+        row = con.execute("SELECT * FROM runs WHERE run_id = ?", (run_id,)).fetchone()
+        folder = self.folder(dict(row)) if row else None
+        if folder is None or not folder.is_dir():
+            msg = f"run {run_id} has no folder under {self.outputs}: nothing to label"
+            raise RunStateError(msg)
+        return folder
 
+    def set_tag(self, run_id: str, tag: str) -> str | None:
+        """Tag a run, in its folder and the registry; return the run the tag named before (it
+        moves), if another. StudyError for a tag that could be taken for a run id."""
+        labels.check_tag(tag)
+        when = dt.datetime.now(dt.UTC).isoformat(timespec="milliseconds")
+        with self.connection() as con, labels.Undo() as undo, writing(con):
+            folder = self._labelled(con, run_id)
+            before = con.execute("SELECT run_id FROM tags WHERE tag = ?", (tag,)).fetchone()
+            moved = before["run_id"] if before and before["run_id"] != run_id else None
+            undo.save(folder)
+            labels.add_tag(folder, tag, when)
+            if moved is not None:
+                try:
+                    previous = self._labelled(con, moved)
+                except FileNotFoundError:
+                    previous = None  # the other run's folder is gone: only its row names the tag
+                if previous is not None:
+                    undo.save(previous)
+                    labels.drop_tag(previous, tag)
+            con.execute("INSERT OR REPLACE INTO tags (tag, run_id) VALUES (?, ?)", (tag, run_id))
+        return moved
 
-def resolve_run(outputs: Path, ref: str) -> dict[str, Any]:
-    """:func:`find_run`, or KeyError with one sentence on what was wrong."""
-    row = find_run(outputs, ref)
-    if row is not None:
-        return row
-    matches = [r["run_id"] for r in list_runs(outputs) if r["run_id"].startswith(ref)]
-    if matches:
-        msg = (
-            f"{ref!r} matches {len(matches)} runs ({', '.join(matches[:4])}…): give more of the id"
-        )
-    elif trash.holds(outputs, ref):
-        msg = (
-            f"run {ref} is in the trash: bring it back with "
-            f"python -m studies restore {ref} --outputs {outputs}"
-        )
-    else:
-        msg = (
-            f"no run or tag {ref!r} under {outputs} "
-            "(`python -m studies runs` lists the runs and their tags)"
-        )
-    raise RunNotFound(msg)
+    def remove_tag(self, tag: str) -> bool:
+        """Remove a tag from its run and the registry (False when no run has it)."""
+        with self.connection() as con, labels.Undo() as undo, writing(con):
+            before = con.execute("SELECT run_id FROM tags WHERE tag = ?", (tag,)).fetchone()
+            if before is None:
+                return False
+            try:
+                folder = self._labelled(con, before["run_id"])
+            except FileNotFoundError:
+                folder = None
+            if folder is not None:
+                undo.save(folder)
+                labels.drop_tag(folder, tag)
+            con.execute("DELETE FROM tags WHERE tag = ?", (tag,))
+            return True
+
+    def add_note(self, run_id: str, written: str, text: str) -> None:
+        """Add a note (``written``: its UTC time) to a run, in its folder and the registry."""
+        with self.connection() as con, labels.Undo() as undo, writing(con):
+            folder = self._labelled(con, run_id)
+            undo.save(folder)
+            labels.add_note(folder, written, text)
+            con.execute("INSERT INTO notes VALUES (?, ?, ?)", (run_id, written, text))
+
+    def tags_and_notes(self) -> tuple[dict[str, list[str]], dict[str, list[str]]]:
+        """Run id → its tags, and run id → its notes ("<time> <text>"), oldest first."""
+        tags: dict[str, list[str]] = {}
+        notes: dict[str, list[str]] = {}
+        with self.connection() as con:
+            for r in con.execute("SELECT tag, run_id FROM tags ORDER BY tag"):
+                tags.setdefault(r["run_id"], []).append(r["tag"])
+            for r in con.execute("SELECT run_id, written, text FROM notes ORDER BY written"):
+                notes.setdefault(r["run_id"], []).append(f"{r['written']} {r['text']}")
+        return tags, notes
+
+    def tagged_run(self, tag: str) -> str | None:
+        """The id of the run that ``tag`` names, if any."""
+        with self.connection() as con:
+            row = con.execute("SELECT run_id FROM tags WHERE tag = ?", (tag,)).fetchone()
+        return row["run_id"] if row else None
+
+    def reconcile(self) -> None:
+        """Register what the registry missed (:func:`studies.tracking.reindex.reconcile`)."""
+        reindex.reconcile(self)
+
+    def reindex(self) -> reindex.Reindexed:
+        """Move the registry aside and build a new one from the run folders
+        (:func:`studies.tracking.reindex.rebuild`)."""
+        return reindex.rebuild(self)
+
+    def remove(self, row: dict[str, Any], force: bool = False) -> Path | None:
+        """Move a run to the trash and delete its registry rows; where it went (None when its
+        folder was gone already). See :func:`studies.tracking.housekeeping.remove_run`."""
+        return housekeeping.remove_run(self, row, force)
+
+    def restore(self, ref: str) -> tuple[trash.Trashed, Path, list[str]]:
+        """Bring a run back from the trash and register it: (the entry, its folder, the tags it
+        could not take back). See :func:`studies.tracking.housekeeping.restore_run`."""
+        return housekeeping.restore_run(self, ref)
+
+    def collect_garbage(
+        self, older_than: dt.timedelta, keep_tagged: bool, dry_run: bool = False
+    ) -> housekeeping.Collected:
+        """``gc``: see :func:`studies.tracking.housekeeping.collect_garbage`."""
+        return housekeeping.collect_garbage(self, older_than, keep_tagged, dry_run)
+
+    def trash_entries(self) -> list[trash.Trashed]:
+        """Every run in the trash, most recently removed first."""
+        return trash.entries(self.trash)

@@ -5,7 +5,8 @@
 A folder is moved in and out by a single rename (atomic on one filesystem), so it is always in
 exactly one place and comes back bit-identical. Emptying an entry renames it to
 ``<run-id>.purging`` first, so a ``restore`` and a purge racing for one entry cannot both have
-it; leftovers of a purge that was killed are deleted by the next ``gc``.
+it; leftovers of a purge that was killed are deleted by the next ``gc``. The functions here take
+the trash folder ``outputs/.trash`` (:attr:`RunStore.trash <studies.tracking.store.RunStore>`).
 """
 
 from __future__ import annotations
@@ -54,10 +55,10 @@ def _folders(path: Path) -> list[Path]:
         return []
 
 
-def entries(outputs: Path) -> list[Trashed]:
-    """Every run in the trash, most recently removed first."""
+def entries(root: Path) -> list[Trashed]:
+    """Every run in the trash folder ``root``, most recently removed first."""
     found = []
-    for stamp in reversed(_folders(outputs / TRASH)):
+    for stamp in reversed(_folders(root)):
         removed = _stamp_time(stamp.name)
         if removed is None:
             continue
@@ -70,24 +71,24 @@ def entries(outputs: Path) -> list[Trashed]:
     return found
 
 
-def holds(outputs: Path, run_id: str) -> bool:
-    """Whether the run ``run_id`` is in the trash."""
-    return "/" not in run_id and any((outputs / TRASH).glob(f"*/*/{glob.escape(run_id)}"))
+def holds(root: Path, run_id: str) -> bool:
+    """Whether the run ``run_id`` is in the trash folder ``root``."""
+    return "/" not in run_id and any(root.glob(f"*/*/{glob.escape(run_id)}"))
 
 
-def move_in(outputs: Path, folder: Path, study: str) -> Path:
-    """Move a run folder into the trash (one rename); return where it went."""
+def move_in(root: Path, folder: Path, study: str) -> Path:
+    """Move a run folder into the trash folder ``root`` (one rename); return where it went."""
     stamp = dt.datetime.now(dt.UTC).strftime(STAMP)
-    target = outputs / TRASH / stamp / study / folder.name
+    target = root / stamp / study / folder.name
     target.parent.mkdir(parents=True, exist_ok=True)
     folder.rename(target)
     return target
 
 
-def find(outputs: Path, ref: str) -> Trashed:
-    """The trashed run named by ``ref``: its id, a tag it had, or a unique prefix of its id
-    (KeyError with one sentence otherwise)."""
-    found = entries(outputs)
+def find(root: Path, ref: str) -> Trashed:
+    """The run in the trash folder ``root`` named by ``ref``: its id, a tag it had, or a unique
+    prefix of its id (RunNotFound with one sentence otherwise)."""
+    found = entries(root)
     chosen = [e for e in found if e.run_id == ref] or [e for e in found if ref in e.tags()]
     chosen = chosen or [e for e in found if e.run_id.startswith(ref)]
     if len(chosen) == 1:
@@ -95,7 +96,7 @@ def find(outputs: Path, ref: str) -> Trashed:
     if chosen:
         names = ", ".join(e.run_id for e in chosen[:4])
         raise RunNotFound(f"{ref!r} matches {len(chosen)} runs in the trash ({names}…): say which")
-    msg = f"no run {ref!r} in the trash under {outputs} (`python -m studies trash` lists it)"
+    msg = f"no run {ref!r} in the trash under {root.parent} (`python -m studies trash` lists it)"
     raise RunNotFound(msg)
 
 
@@ -118,9 +119,9 @@ def purge(entry: Trashed) -> bool:
     return True
 
 
-def sweep(outputs: Path) -> None:
-    """Delete what killed purges left and the trash's empty folders once they have settled."""
-    root = outputs / TRASH
+def sweep(root: Path) -> None:
+    """Delete what killed purges left in the trash folder ``root``, and its empty folders once
+    they have settled."""
     for leftover in root.glob(f"*/*/*{PURGING}"):
         shutil.rmtree(leftover, ignore_errors=True)
     settled = dt.datetime.now(dt.UTC) - dt.timedelta(seconds=SETTLE_S)

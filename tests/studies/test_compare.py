@@ -13,8 +13,7 @@ from studies.compare.runs import compare, load_run
 from studies.compare.tolerances import Tolerance
 from studies.define.definition import find_study
 from studies.pipeline import run_study
-from studies.tracking.registry import run_values
-from studies.tracking.store import list_runs
+from studies.tracking.store import RunStore
 
 CAM = """
 name = "cam_grid"
@@ -59,7 +58,7 @@ def test_runs_differing_in_one_setting_name_it_and_the_responses_it_moved(
     outputs = tmp_path / "out"
     a = run_text(tmp_path, outputs, "a", valve_study("1e-10"))
     b = run_text(tmp_path, outputs, "b", valve_study("1e-5"))
-    c = compare([load_run(outputs, a), load_run(outputs, b)])
+    c = compare([load_run(RunStore(outputs), a), load_run(RunStore(outputs), b)])
     assert [(d.kind, d.name, d.values) for d in c.definition] == [
         ("setting", "reference_rtol", ["1e-10", "1e-05"])
     ]
@@ -82,7 +81,7 @@ def test_different_designs_compare_on_their_common_points(
     outputs = tmp_path / "out"
     a = run_text(tmp_path, outputs, "a", CAM.format(base_radius="[16.0, 18.0, 20.0]"))
     b = run_text(tmp_path, outputs, "b", CAM.format(base_radius="[18.0, 20.0, 22.0, 24.0]"))
-    c = compare([load_run(outputs, a), load_run(outputs, b)])
+    c = compare([load_run(RunStore(outputs), a), load_run(RunStore(outputs), b)])
     assert c.matched_on == ["base_radius", "cam_speed"]
     # common points: base radius 18 and 20 at both speeds; same definition there, same values
     assert {ch.points for ch in c.changes} == {4}
@@ -126,7 +125,7 @@ def test_bad_input_is_one_line_and_exit_2(
         err = capsys.readouterr().err
         assert message in err, (argv, err)
         assert "Traceback" not in err
-    assert len(list_runs(outputs)) == 3
+    assert len(RunStore(outputs).list_runs()) == 3
 
 
 SPELLED = """
@@ -156,15 +155,17 @@ def test_runs_differing_only_in_how_units_are_written_are_identical(
     b = run_text(tmp_path, outputs, "b", in_m)
 
     def indexed(run_id: str) -> list[tuple]:
-        return sorted(tuple(v.values()) for v in run_values(outputs, run_id))
+        return sorted(tuple(v.values()) for v in RunStore(outputs).run_values(run_id))
 
     # the registry: every value the same, in SI (lift 10.8 mm = 0.0108 m)
     assert indexed(a) == indexed(b)
-    lift = [v for v in run_values(outputs, a) if v["name"] == "lift"]
+    lift = [v for v in RunStore(outputs).run_values(a) if v["name"] == "lift"]
     assert [(v["num"], v["units"], v["declared_units"]) for v in lift] == [(0.0108, "m", "mm")]
 
     # compare: nothing differs, and no response moved even with zero tolerance
-    c = compare([load_run(outputs, a), load_run(outputs, b)], Tolerance(0.0, 0.0))
+    c = compare(
+        [load_run(RunStore(outputs), a), load_run(RunStore(outputs), b)], Tolerance(0.0, 0.0)
+    )
     assert (c.definition, c.code, c.versions) == ([], [], [])
     assert c.moved() == []
     assert {ch.points for ch in c.changes} == {4}

@@ -22,7 +22,7 @@ from run_faults import failing_on_call
 from studies import pipeline
 from studies.cli import EXIT_OUTPUT_ERROR, EXIT_STUDY_ERROR, main
 from studies.run.results import open_results
-from studies.tracking import store
+from studies.tracking.store import RunStore
 
 STUDY = """
 name = "chunks"
@@ -51,7 +51,7 @@ def expected(tmp_path_factory: pytest.TempPathFactory) -> dict[str, np.ndarray]:
     study = tmp / "chunks.toml"
     study.write_text(STUDY)
     assert run(study, tmp / "out") == 0
-    (row,) = store.list_runs(tmp / "out")
+    (row,) = RunStore(tmp / "out").list_runs()
     ds = open_results(Path(row["folder"]) / "results.nc")
     return {name: ds[name].values for name in RESPONSES}
 
@@ -66,7 +66,7 @@ def failed(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> tuple[Path, Path]
     with monkeypatch.context() as patch:
         patch.setattr(pipeline, "_save_chunk", failing_on_call(pipeline._save_chunk, 3, full))
         assert run(study, outputs, "--chunk-size", "3") == EXIT_OUTPUT_ERROR
-    (row,) = store.list_runs(outputs)
+    (row,) = RunStore(outputs).list_runs()
     return outputs, Path(row["folder"])
 
 

@@ -24,7 +24,7 @@ from run_faults import failing_on_call
 
 from studies.cli import EXIT_OUTPUT_ERROR, main
 from studies.run import results_writer
-from studies.tracking import store
+from studies.tracking.store import RunStore
 
 STUDY = """
 name = "full"
@@ -78,13 +78,13 @@ def check_failed_run(outputs: Path, capsys: pytest.CaptureFixture[str], reason: 
     (line,) = err.splitlines()
     assert line.startswith("error: ")
     assert reason in line
-    (row,) = store.list_runs(outputs)
+    (row,) = RunStore(outputs).list_runs()
     folder = Path(row["folder"])
     record = json.loads((folder / "run.json").read_text())
     assert record["status"] == "failed"
     assert "No space left" in record["error"] or "HDF error" in record["error"]
     assert {p.name for p in folder.iterdir()} == KEPT  # nothing of the attempt left
-    assert line.endswith(store.resume_command(row["run_id"], outputs))
+    assert line.endswith(RunStore(outputs).resume_command(row["run_id"]))
     return folder
 
 
@@ -146,7 +146,7 @@ def test_analyze_onto_a_full_disk_leaves_nothing_behind(
     study.write_text(STUDY)
     outputs = tmp_path / "out"
     assert run(study, outputs) == 0
-    (row,) = store.list_runs(outputs)
+    (row,) = RunStore(outputs).list_runs()
     target = tmp_path / "again"
     capsys.readouterr()
     with monkeypatch.context() as patch:
@@ -167,7 +167,7 @@ def test_analyze_to_another_runs_folder_is_refused(
     outputs = tmp_path / "out"
     assert run(study, outputs) == 0
     assert run(study, outputs, "--force") == 0
-    first, second = (Path(r["folder"]) for r in store.list_runs(outputs))
+    first, second = (Path(r["folder"]) for r in RunStore(outputs).list_runs())
     report = (second / "report.md").read_bytes()
     capsys.readouterr()
     assert main(["analyze", str(first / "results.nc"), "--to", str(second)]) == 2
@@ -204,7 +204,7 @@ def test_a_real_file_size_limit_is_one_line(tmp_path: Path) -> None:
     assert "Traceback" not in done.stderr
     (line,) = done.stderr.strip().splitlines()
     assert line.startswith("error: ")
-    (row,) = store.list_runs(outputs)
+    (row,) = RunStore(outputs).list_runs()
     folder = Path(row["folder"])
     assert json.loads((folder / "run.json").read_text())["status"] == "failed"
     assert {p.name for p in folder.iterdir()} == KEPT

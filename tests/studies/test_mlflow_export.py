@@ -12,7 +12,7 @@ import pytest
 import xarray as xr
 
 from studies.cli import main
-from studies.tracking import store
+from studies.tracking.store import RunStore
 
 mlflow = pytest.importorskip("mlflow")
 URI = "sqlite:///mlflow.db"  # as the README writes it: a file in the current folder
@@ -45,7 +45,7 @@ def test_run_with_mlflow_logs_params_metrics_tags_and_artifacts(logged) -> None:
     here, outputs, first, again = logged
     assert (first, again) == (0, 0)
     (row,) = mlflow.search_runs(experiment_names=["isac_l9"]).to_dict("records")  # logged once
-    (run,) = store.list_runs(outputs)
+    (run,) = RunStore(outputs).list_runs()
     folder = Path(run["folder"])
     assert row["tags.engine_studies.run_id"] == run["run_id"]
     assert row["tags.tag.review"] == "1"
@@ -75,7 +75,7 @@ def test_studies_mlflow_logs_an_existing_run_once(
     study = tmp_path / "tiny_cam.toml"
     study.write_text(TINY, encoding="utf-8")
     assert main(["run", str(study), "--outputs", str(outputs), "--no-progress"]) == 0
-    (tiny,) = store.list_runs(outputs, "tiny_cam")
+    (tiny,) = RunStore(outputs).list_runs("tiny_cam")
     uri = f"sqlite:///{here / 'mlflow.db'}"
     argv = ["mlflow", tiny["run_id"], "--to", uri, "--outputs", str(outputs)]
     assert main(argv) == 0
@@ -91,14 +91,14 @@ def test_a_store_mlflow_refuses_is_one_line_before_anything_runs(
     logged, capsys: pytest.CaptureFixture[str]
 ) -> None:
     _, outputs, _, _ = logged
-    before = len(store.list_runs(outputs))
+    before = len(RunStore(outputs).list_runs())
     argv = ["run", "isac_l9", "--outputs", str(outputs), "--force", "--mlflow", "file:./mlruns"]
     assert main(argv) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1
     assert "MLflow cannot use this store" in err
     assert "sqlite:///mlflow.db" in err
-    assert len(store.list_runs(outputs)) == before  # no run recorded for a failed export
+    assert len(RunStore(outputs).list_runs()) == before  # no run recorded for a failed export
 
 
 def test_an_export_that_fails_part_way_leaves_no_mlflow_run_behind(
@@ -110,7 +110,7 @@ def test_an_export_that_fails_part_way_leaves_no_mlflow_run_behind(
     study = tmp_path / "tiny_fail.toml"
     study.write_text(TINY.replace("tiny_cam", "tiny_fail"), encoding="utf-8")
     assert main(["run", str(study), "--outputs", str(outputs), "--no-progress"]) == 0
-    (run,) = store.list_runs(outputs, "tiny_fail")
+    (run,) = RunStore(outputs).list_runs("tiny_fail")
     uri = f"sqlite:///{here / 'mlflow.db'}"
 
     def broken(*args, **kwargs):

@@ -264,7 +264,7 @@ def test_a_noise_run_stopped_at_a_checkpoint_resumes_to_the_same_numbers(tmp_pat
 
     from studies import pipeline
     from studies.cli import EXIT_OUTPUT_ERROR, main
-    from studies.tracking import store
+    from studies.tracking.store import RunStore
 
     study = tmp_path / "study.toml"
     study.write_text(L4_NOISE, encoding="utf-8")
@@ -276,11 +276,11 @@ def test_a_noise_run_stopped_at_a_checkpoint_resumes_to_the_same_numbers(tmp_pat
         pipeline, "_save_chunk", failing_on_call(pipeline._save_chunk, 3, crash)
     ):
         assert main([*args, "--outputs", str(broken)]) == EXIT_OUTPUT_ERROR
-    (row,) = store.list_runs(broken)
+    (row,) = RunStore(broken).list_runs()
     assert len(list((Path(row["folder"]) / "chunks").glob("*.npz"))) == 2  # design points 1-2
     assert main(["run", "--resume", row["run_id"], "--outputs", str(broken)]) == 0
-    (done,) = store.list_runs(broken)
-    (reference,) = store.list_runs(whole)
+    (done,) = RunStore(broken).list_runs()
+    (reference,) = RunStore(whole).list_runs()
     resumed = open_results(Path(done["folder"]) / "results.nc")
     expected = open_results(Path(reference["folder"]) / "results.nc")
     assert resumed["mean_piston_speed"].dims == ("run", "noise")

@@ -17,7 +17,7 @@ from run_faults import failing_on_call
 from studies import pipeline
 from studies.cli import EXIT_OUTPUT_ERROR, main
 from studies.run.results import open_results
-from studies.tracking import store
+from studies.tracking.store import RunStore
 
 STUDY = """
 name = "disk"
@@ -86,10 +86,10 @@ def one_line_error(capsys: pytest.CaptureFixture[str]) -> str:
 
 
 def assert_identical_to_an_uninterrupted_run(outputs: Path, study: Path, tmp_path: Path) -> None:
-    (row,) = store.list_runs(outputs)
+    (row,) = RunStore(outputs).list_runs()
     assert row["status"] == "finished"
     assert run(study, tmp_path / "fresh", "--force") == 0
-    (fresh,) = store.list_runs(tmp_path / "fresh")
+    (fresh,) = RunStore(tmp_path / "fresh").list_runs()
     resumed = open_results(Path(row["folder"]) / "results.nc")
     expected = open_results(Path(fresh["folder"]) / "results.nc")
     for name in RESPONSES:
@@ -125,9 +125,9 @@ def test_a_disk_that_fills_during_chunk_writes_leaves_a_resumable_run(
     monkeypatch.setattr(pipeline, "_save_chunk", failing_on_call(save, 3, full))
     assert run(study, outputs, "--chunk-size", "3") == EXIT_OUTPUT_ERROR
     err = one_line_error(capsys)
-    (row,) = store.list_runs(outputs)
+    (row,) = RunStore(outputs).list_runs()
     assert err.startswith(f"error: {os.strerror(code)}: chunks/000002.npz; run {row['run_id']}")
-    assert err.endswith(store.resume_command(row["run_id"], outputs))
+    assert err.endswith(RunStore(outputs).resume_command(row["run_id"]))
     folder = Path(row["folder"])
     assert row["status"] == "failed"
     assert sorted(p.name for p in (folder / "chunks").glob("*.npz")) == [
@@ -149,7 +149,7 @@ def failed_run(outputs: Path, study: Path, monkeypatch: pytest.MonkeyPatch) -> P
     with monkeypatch.context() as patch:
         patch.setattr(pipeline, "_save_chunk", failing_on_call(save, 3, full))
         assert run(study, outputs, "--chunk-size", "3") == EXIT_OUTPUT_ERROR
-    (row,) = store.list_runs(outputs)
+    (row,) = RunStore(outputs).list_runs()
     return Path(row["folder"])
 
 

@@ -20,7 +20,8 @@ from registry_writers import RUNS_EACH, register_many, run_id
 from studies.cli import main
 from studies.common import labels
 from studies.pipeline import run_study
-from studies.tracking import registry, store, trash
+from studies.tracking import registry, trash
+from studies.tracking.store import RunStore
 
 STUDY = """
 name = "tiny"
@@ -62,7 +63,7 @@ def test_a_version_1_registry_is_migrated_in_place(tmp_path: Path) -> None:
             "(?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
             row,
         )
-    values = {v["name"]: v for v in registry.run_values(outputs, run_id)}
+    values = {v["name"]: v for v in RunStore(outputs).run_values(run_id)}
     with closing(sqlite3.connect(outputs / registry.REGISTRY)) as con:
         assert con.execute("PRAGMA user_version").fetchone()[0] == registry.SCHEMA_VERSION
     # indexed in SI: 1000 rpm = 1000 · 2π/60 rad/s; the scene's units kept beside
@@ -72,7 +73,7 @@ def test_a_version_1_registry_is_migrated_in_place(tmp_path: Path) -> None:
         "rpm",
     )
     assert values["max_jerk.max"]["units"] == "m/rad^3"
-    assert [r["run_id"] for r in store.list_runs(outputs)] == [run_id]
+    assert [r["run_id"] for r in RunStore(outputs).list_runs()] == [run_id]
 
 
 def test_a_version_2_registry_is_indexed_again_in_si(tmp_path: Path) -> None:
@@ -98,11 +99,11 @@ def test_a_version_2_registry_is_indexed_again_in_si(tmp_path: Path) -> None:
         )
         con.execute("INSERT INTO tags VALUES ('kept', ?)", (run_id,))
         con.execute("PRAGMA user_version = 2")
-    values = [v for v in registry.run_values(outputs, run_id) if v["name"] == "cam_speed"]
+    values = [v for v in RunStore(outputs).run_values(run_id) if v["name"] == "cam_speed"]
     (value,) = values  # 1000 rpm = 1000 · 2π/60 rad/s
     assert value["num"] == pytest.approx(1000.0 * 2 * math.pi / 60, rel=1e-15)
     assert value["units"] == "rad/s"
-    assert registry.tagged_run(outputs, "kept") == run_id
+    assert RunStore(outputs).tagged_run("kept") == run_id
     with closing(sqlite3.connect(outputs / registry.REGISTRY)) as con:
         assert con.execute("PRAGMA user_version").fetchone()[0] == 3
 
@@ -116,6 +117,33 @@ def test_a_newer_registry_is_refused_with_exit_2(
         con.execute(f"PRAGMA user_version = {registry.SCHEMA_VERSION + 1}")
     assert main(["runs", "--outputs", str(outputs)]) == 2
     assert "upgrade engine-studies" in capsys.readouterr().err
+
+
+def test_a_run_store_brings_its_registry_up_to_date_once_and_closes_each_connection(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # What RunStore's docstring promises: the migration and table check on the first
+    # connection of an object only; every operation's connection closed after it (brute force:
+    # count the calls and close every connection handed out, then look for one still open).
+    checks: list[Path] = []
+    check = registry.bring_up_to_date
+    monkeypatch.setattr(registry, "bring_up_to_date", lambda *a: checks.append(a[1]) or check(*a))
+    opened: list[sqlite3.Connection] = []
+    connect = RunStore.connect
+    monkeypatch.setattr(
+        RunStore, "connect", lambda self: opened.append(connect(self)) or opened[-1]
+    )
+    store = RunStore(tmp_path)
+    assert store.tags_and_notes() == ({}, {})
+    assert store.tagged_run("nothing") is None
+    assert store.run_values("20260101T000000000-abcdef") == []
+    assert checks == [tmp_path / registry.REGISTRY]
+    assert len(opened) == 3
+    for con in opened:
+        with pytest.raises(sqlite3.ProgrammingError, match="closed"):
+            con.execute("SELECT 1")
+    RunStore(tmp_path).tagged_run("nothing")  # a new object checks again
+    assert len(checks) == 2
 
 
 def test_four_processes_registering_removing_restoring_at_once_leave_it_consistent(
@@ -137,7 +165,7 @@ def test_four_processes_registering_removing_restoring_at_once_leave_it_consiste
         indexed = {r[0] for r in con.execute("SELECT run_id FROM run_values")}
         noted = {r[0] for r in con.execute("SELECT run_id FROM notes")}
     folders = {p.parent.name for p in (tmp_path / "many").glob("*/run.json")}
-    trashed = {e.run_id for e in trash.entries(tmp_path)}
+    trashed = {e.run_id for e in RunStore(tmp_path).trash_entries()}
     # the registry indexes exactly the folders in place, none in the trash
     assert set(rows) == folders
     assert not folders & trashed
@@ -173,7 +201,7 @@ def test_tags_and_notes_work_wherever_a_run_id_does(
     assert "fixed parameter cam_speed  1000 rpm → 1200 rpm" in capsys.readouterr().out
     assert main(["tag", second, "baseline", *out]) == 0  # a tag names one run: it moves
     assert f"moved from {first}" in capsys.readouterr().out
-    assert store.find_run(outputs, "baseline")["run_id"] == second
+    assert RunStore(outputs).find_run("baseline")["run_id"] == second
     assert main(["export", "baseline", *out]) == 0
     assert main(["tag", first, "nothing", "--remove", *out]) == 2
     assert "no tag 'nothing'" in capsys.readouterr().err
@@ -193,48 +221,46 @@ def test_rm_of_a_tagged_run_needs_force_and_restore_brings_it_back_bit_identical
 ) -> None:
     outputs = tmp_path / "out"
     run_id = tiny_run(tmp_path, outputs)
-    folder = Path(store.find_run(outputs, run_id)["folder"])
+    folder = Path(RunStore(outputs).find_run(run_id)["folder"])
     out = ["--outputs", str(outputs)]
     assert main(["tag", run_id, "keepme", *out]) == 0
     assert main(["note", "keepme", "the review's run", *out]) == 0
     before = tree(folder)
-    values = registry.run_values(outputs, run_id)
+    values = RunStore(outputs).run_values(run_id)
     assert main(["rm", "keepme", *out]) == 2
     assert "is tagged (keepme)" in capsys.readouterr().err
     assert tree(folder) == before
     assert main(["rm", "keepme", "--force", *out]) == 0
     assert "restore" in capsys.readouterr().out
     assert not folder.exists()
-    assert store.list_runs(outputs) == []
-    assert registry.run_values(outputs, run_id) == []
-    assert registry.tagged_run(outputs, "keepme") is None
+    assert RunStore(outputs).list_runs() == []
+    assert RunStore(outputs).run_values(run_id) == []
+    assert RunStore(outputs).tagged_run("keepme") is None
     assert main(["trash", *out]) == 0
     assert f"{run_id}" in capsys.readouterr().out
     assert main(["restore", "keepme", *out]) == 0  # a tag it had finds it in the trash
     assert tree(folder) == before
-    assert registry.run_values(outputs, run_id) == values
-    assert registry.tagged_run(outputs, "keepme") == run_id
-    _, notes = registry.tags_and_notes(outputs)
+    assert RunStore(outputs).run_values(run_id) == values
+    assert RunStore(outputs).tagged_run("keepme") == run_id
+    _, notes = RunStore(outputs).tags_and_notes()
     assert notes[run_id][0].endswith("the review's run")
-    assert trash.entries(outputs) == []
+    assert RunStore(outputs).trash_entries() == []
 
 
 def test_rm_keeps_the_folder_when_the_registry_cannot_change(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    from studies.tracking.housekeeping import remove_run
-
     outputs = tmp_path / "out"
-    row = store.find_run(outputs, tiny_run(tmp_path, outputs))
+    row = RunStore(outputs).find_run(tiny_run(tmp_path, outputs))
     monkeypatch.setattr("studies.tracking.registry_file.BUSY_TIMEOUT_S", 0.2)
     with closing(sqlite3.connect(outputs / registry.REGISTRY, isolation_level=None)) as other:
         other.execute("BEGIN IMMEDIATE")  # another writer holds the write lock; reads go on
         with pytest.raises(registry.RegistryUnusable, match="is locked by another process"):
-            remove_run(outputs, row)
+            RunStore(outputs).remove(row)
         other.execute("ROLLBACK")
     assert (Path(row["folder"]) / "results.nc").exists()
-    assert store.find_run(outputs, row["run_id"]) is not None
-    assert trash.entries(outputs) == []
+    assert RunStore(outputs).find_run(row["run_id"]) is not None
+    assert RunStore(outputs).trash_entries() == []
 
 
 def test_gc_moves_old_runs_to_the_trash_and_empties_it_by_age(
@@ -242,25 +268,25 @@ def test_gc_moves_old_runs_to_the_trash_and_empties_it_by_age(
 ) -> None:
     outputs = tmp_path / "out"
     old, tagged, new = (tiny_run(tmp_path, outputs, s) for s in (1000.0, 1100.0, 1200.0))
-    registry.set_tag(outputs, tagged, "baseline")
+    RunStore(outputs).set_tag(tagged, "baseline")
     long_ago = (dt.datetime.now(dt.UTC) - dt.timedelta(days=40)).isoformat(timespec="seconds")
-    with closing(registry.connect(outputs)) as con, con:
+    with closing(RunStore(outputs).connect()) as con, con:
         con.execute("UPDATE runs SET started = ? WHERE run_id IN (?, ?)", (long_ago, old, tagged))
     out = ["--outputs", str(outputs)]
     assert main(["gc", "--older-than", "30d", "--keep-tagged", "--dry-run", *out]) == 0
     assert f"would move {old}" in capsys.readouterr().out
-    assert len(store.list_runs(outputs)) == 3
+    assert len(RunStore(outputs).list_runs()) == 3
     assert main(["gc", "--older-than", "30d", "--keep-tagged", *out]) == 0
-    assert {r["run_id"] for r in store.list_runs(outputs)} == {tagged, new}
+    assert {r["run_id"] for r in RunStore(outputs).list_runs()} == {tagged, new}
     assert sorted(p.name for p in (outputs / "tiny").iterdir()) == sorted([tagged, new])
-    assert [e.run_id for e in trash.entries(outputs)] == [old]
+    assert [e.run_id for e in RunStore(outputs).trash_entries()] == [old]
     assert main(["gc", "--older-than", "30d", *out]) == 0  # trashed just now: kept 30 days
-    assert [r["run_id"] for r in store.list_runs(outputs)] == [new]
-    assert {e.run_id for e in trash.entries(outputs)} == {old, tagged}
+    assert [r["run_id"] for r in RunStore(outputs).list_runs()] == [new]
+    assert {e.run_id for e in RunStore(outputs).trash_entries()} == {old, tagged}
     assert main(["gc", "--older-than", "0s", "--dry-run", *out]) == 0
     assert "would delete 2 from it" in capsys.readouterr().out
     assert main(["gc", "--older-than", "0s", *out]) == 0
-    assert {e.run_id for e in trash.entries(outputs)} == {new}  # the last one moved in
+    assert {e.run_id for e in RunStore(outputs).trash_entries()} == {new}  # the last one moved in
     assert main(["gc", "--older-than", "thirty days", *out]) == 2
     assert "--older-than 'thirty days'" in capsys.readouterr().err
     assert main(["gc", "--older-than", "99999999999w", "--dry-run", *out]) == 2  # > 1000 years
@@ -285,4 +311,4 @@ def test_gc_collects_what_killed_processes_left_and_nothing_else(tmp_path: Path)
     assert not stillborn.exists()
     assert starting.exists()
     assert not (outputs / trash.TRASH / "20200101T000000000000").exists()
-    assert len(store.list_runs(outputs)) == 1
+    assert len(RunStore(outputs).list_runs()) == 1

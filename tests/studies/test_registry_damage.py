@@ -18,7 +18,8 @@ import pytest
 
 from studies.cli import main
 from studies.pipeline import run_study
-from studies.tracking import registry, registry_file, store
+from studies.tracking import records, registry, registry_file
+from studies.tracking.store import RunStore
 
 STUDY = """
 name = "tiny"
@@ -48,8 +49,8 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, list
     study.write_text(STUDY, encoding="utf-8")
     outputs = base / "out"
     ids = [run_study(study, outputs=outputs, progress=False).record.run_id for _ in range(2)]
-    registry.set_tag(outputs, ids[0], "baseline")
-    registry.add_note(outputs, ids[0], store.now(), "the design review's run")
+    RunStore(outputs).set_tag(ids[0], "baseline")
+    RunStore(outputs).add_note(ids[0], records.now(), "the design review's run")
     return study, outputs, ids
 
 
@@ -135,13 +136,13 @@ def test_a_damaged_registry_gives_one_line_and_reindex_loses_nothing(
     said = capsys.readouterr().out
     assert "reindexed 2 run(s), 1 tag(s) and 1 note(s)" in said
     assert "the old registry is kept as" in said  # moved aside, never deleted
-    rows = {r["run_id"]: r for r in store.list_runs(outputs)}
+    rows = {r["run_id"]: r for r in RunStore(outputs).list_runs()}
     assert set(rows) == set(ids)
     assert {r["status"] for r in rows.values()} == {"finished"}
-    assert store.find_run(outputs, "baseline")["run_id"] == ids[0]
-    _, notes = registry.tags_and_notes(outputs)
+    assert RunStore(outputs).find_run("baseline")["run_id"] == ids[0]
+    _, notes = RunStore(outputs).tags_and_notes()
     assert notes[ids[0]][0].endswith("the design review's run")
-    assert {v["name"] for v in registry.run_values(outputs, ids[1])} >= {"max_jerk.max"}
+    assert {v["name"] for v in RunStore(outputs).run_values(ids[1])} >= {"max_jerk.max"}
     assert fingerprint(outputs) == before
 
 
@@ -220,7 +221,7 @@ def test_a_full_disk_under_the_registry_gives_one_line(
         line = one_line(done.stderr)
         assert "could not be written" in line
     assert fingerprint(outputs) == before
-    assert {r["run_id"] for r in store.list_runs(outputs)} == set(ids)
+    assert {r["run_id"] for r in RunStore(outputs).list_runs()} == set(ids)
 
 
 def test_sqlite_full_is_said_as_a_full_disk(tmp_path: Path) -> None:
@@ -230,7 +231,7 @@ def test_sqlite_full_is_said_as_a_full_disk(tmp_path: Path) -> None:
         con.execute(f"PRAGMA max_page_count = {pages}")  # SQLite's own full-disk answer
         with pytest.raises(sqlite3.OperationalError) as full:
             con.executemany("INSERT INTO t VALUES (?)", [("x" * 1000,)] * 100)
-    said = str(registry_file.unusable(full.value, tmp_path))
+    said = str(registry_file.unusable(full.value, tmp_path / registry_file.REGISTRY))
     assert "is full; nothing was changed: free some space" in said
 
 
@@ -239,5 +240,5 @@ def test_a_deleted_registry_is_rebuilt_on_sight(
 ) -> None:
     _, _, ids = recorded
     (outputs / registry.REGISTRY).unlink()
-    assert {r["run_id"] for r in store.list_runs(outputs)} == set(ids)
-    assert store.find_run(outputs, "baseline")["run_id"] == ids[0]  # from labels.json
+    assert {r["run_id"] for r in RunStore(outputs).list_runs()} == set(ids)
+    assert RunStore(outputs).find_run("baseline")["run_id"] == ids[0]  # from labels.json

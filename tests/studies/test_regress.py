@@ -16,7 +16,7 @@ import xarray as xr
 from studies.cli import main
 from studies.compare.testing import assert_results_close
 from studies.pipeline import run_study
-from studies.tracking.store import list_runs
+from studies.tracking.store import RunStore
 
 ROOT = Path(__file__).resolve().parents[2]
 HERTZ = "return math.sqrt(force * modulus / (math.pi * width * radius))"
@@ -59,7 +59,7 @@ def runs(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str, str, str]
         timeout=600,
     )
     assert done.returncode == 0, done.stderr
-    (changed,) = {r["run_id"] for r in list_runs(outputs)} - {base, rerun}
+    (changed,) = {r["run_id"] for r in RunStore(outputs).list_runs()} - {base, rerun}
     return outputs, base, rerun, changed
 
 
@@ -109,7 +109,7 @@ def test_a_tolerance_file_can_allow_the_change(
 @pytest.mark.slow
 def test_assert_results_close_in_a_users_suite(runs) -> None:
     outputs, base, rerun, changed = runs
-    folder = {r["run_id"]: Path(r["folder"]) for r in list_runs(outputs)}
+    folder = {r["run_id"]: Path(r["folder"]) for r in RunStore(outputs).list_runs()}
     assert_results_close(folder[rerun] / "results.nc", folder[base] / "results.nc")
     with pytest.raises(AssertionError, match=r"(?s)✗ max_contact_stress \[MPa\].*FAILED"):
         assert_results_close(folder[changed] / "results.nc", folder[base] / "results.nc")

@@ -20,7 +20,7 @@ from run_faults import failing_on_call
 from studies import pipeline
 from studies.cli import EXIT_OUTPUT_ERROR, main
 from studies.run.results import open_results
-from studies.tracking import store
+from studies.tracking.store import RunStore
 
 STUDIES = {
     "cam": (
@@ -39,7 +39,7 @@ POINTS = 12
 
 
 def results(outputs: Path) -> dict[str, np.ndarray]:
-    (row,) = store.list_runs(outputs)
+    (row,) = RunStore(outputs).list_runs()
     assert row["status"] == "finished"
     ds = open_results(Path(row["folder"]) / "results.nc")
     return {str(name): ds[name].values for name in ds.data_vars}
@@ -78,7 +78,7 @@ def test_a_run_stopped_at_any_checkpoint_resumes_to_the_same_numbers(
         failing = failing_on_call(pipeline._save_chunk, dies_at, crash)
         with mock.patch.object(pipeline, "_save_chunk", failing):
             assert run(study, outputs, "--chunk-size", str(chunk)) == EXIT_OUTPUT_ERROR
-        (row,) = store.list_runs(outputs)
+        (row,) = RunStore(outputs).list_runs()
         assert row["status"] == "failed"
         kept = sorted((Path(row["folder"]) / "chunks").glob("*.npz"))
         assert len(kept) == dies_at - 1  # every chunk before the failing one was kept

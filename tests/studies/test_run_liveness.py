@@ -23,8 +23,10 @@ from studies.cli import main
 from studies.define.plan import plan_text
 from studies.pipeline import run_plan
 from studies.run.results import open_results
-from studies.tracking import registry, store, trash
-from studies.tracking.liveness import lock_folder
+from studies.tracking import liveness as live
+from studies.tracking import registry
+from studies.tracking.liveness import current_status, liveness, lock_folder
+from studies.tracking.store import RunStore
 
 STUDY = """
 name = "alive"
@@ -44,15 +46,15 @@ def another_host_sees(outputs: Path) -> str:
     (path,) = outputs.glob("alive/*/run.json")
     record = json.loads(path.read_text(encoding="utf-8"))
     record["host"] = {"node": "another-host"}
-    return store.liveness(record)
+    return liveness(record)
 
 
 @pytest.mark.parametrize("phase", ["compile", "chunk", "analysis"])
 def test_another_host_sees_a_run_alive_through_a_long_phase(
     phase: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setattr(store, "HEARTBEAT_S", 0.05)
-    monkeypatch.setattr(store, "STALE_S", 1.0)
+    monkeypatch.setattr(live, "HEARTBEAT_S", 0.05)
+    monkeypatch.setattr(live, "STALE_S", 1.0)
     seen: list[str] = []
 
     def long_phase() -> None:  # 2.5 heartbeat ages of silence, were it not for the thread
@@ -115,7 +117,7 @@ def test_a_resume_is_refused_while_another_holds_the_run_folder(
         assert "is being run or resumed by another process" in one_line(capsys.readouterr().err)
         assert main(["rm", run_id, "--outputs", str(tmp_path)]) == 2
         assert "is still running" in one_line(capsys.readouterr().err)
-        assert store.current_status(store.find_run(tmp_path, run_id))[0] == "running"
+        assert current_status(RunStore(tmp_path).find_run(run_id))[0] == "running"
     assert main(command) == 0
 
 
@@ -149,12 +151,12 @@ def test_a_run_killed_at_a_phase_boundary_is_listed_and_resumes_bit_identical(
             "--chunk-size", "2")  # fmt: skip
     assert main(["runs", "--outputs", str(outputs)]) == 0  # registered on sight
     listed = capsys.readouterr().out
-    (row,) = store.list_runs(outputs)
+    (row,) = RunStore(outputs).list_runs()
     assert " interrupted " in listed
     assert f"run --resume {row['run_id']}" in listed
     command = ["run", "--resume", row["run_id"], "--outputs", str(outputs), "--no-progress"]
     assert main(command) == 0
-    (row,) = store.list_runs(outputs)
+    (row,) = RunStore(outputs).list_runs()
     assert row["status"] == "finished"
     with open_results(Path(row["folder"]) / "results.nc") as ds:
         for name, values in fresh.items():
@@ -171,7 +173,7 @@ def test_a_run_killed_after_finishing_is_finished_everywhere(
     kill_at("after-finished", "run", str(study), "--outputs", str(outputs), "--no-progress")
     with closing(sqlite3.connect(outputs / registry.REGISTRY)) as con:
         assert con.execute("SELECT status FROM runs").fetchall() == [("running",)]
-    (row,) = store.list_runs(outputs)  # seeing it mends the registry row
+    (row,) = RunStore(outputs).list_runs()  # seeing it mends the registry row
     with closing(sqlite3.connect(outputs / registry.REGISTRY)) as con:
         assert con.execute("SELECT status FROM runs").fetchall() == [("finished",)]
     assert main(["runs", "--where", "max_jerk.max>0", "--outputs", str(outputs)]) == 0
@@ -186,10 +188,10 @@ def test_an_rm_killed_between_the_trash_and_the_registry_loses_nothing(
 ) -> None:
     run_id = run_plan(plan_text(STUDY), tmp_path, progress=False).record.run_id
     kill_at("rm-before-registry", "rm", run_id, "--outputs", str(tmp_path))
-    assert [e.run_id for e in trash.entries(tmp_path)] == [run_id]
-    assert store.list_runs(tmp_path) == []  # its rows are deleted on sight
+    assert [e.run_id for e in RunStore(tmp_path).trash_entries()] == [run_id]
+    assert RunStore(tmp_path).list_runs() == []  # its rows are deleted on sight
     assert main(["restore", run_id, "--outputs", str(tmp_path)]) == 0
-    assert [r["run_id"] for r in store.list_runs(tmp_path)] == [run_id]
+    assert [r["run_id"] for r in RunStore(tmp_path).list_runs()] == [run_id]
 
 
 @pytest.mark.slow
@@ -204,7 +206,7 @@ def test_two_resumes_started_together_one_runs_the_other_is_refused(
     assert [code for code, _ in answers] == [0, 2]
     refused = one_line(answers[1][1])
     assert "not resumed" in refused or "nothing to resume" in refused
-    assert store.list_runs(tmp_path)[0]["status"] == "finished"
+    assert RunStore(tmp_path).list_runs()[0]["status"] == "finished"
 
 
 def fingerprint(folder: Path) -> dict[str, bytes]:
@@ -223,13 +225,13 @@ def test_gc_of_a_copied_outputs_tree_removes_the_copys_runs_never_the_originals(
             con.execute("UPDATE runs SET folder = ?", (str(a / "alive" / run_id),))
     before = fingerprint(a)
     assert main(["gc", "--older-than", "0s", "--outputs", str(b)]) == 0
-    assert [e.run_id for e in trash.entries(b)] == [run_id]
+    assert [e.run_id for e in RunStore(b).trash_entries()] == [run_id]
     assert main(["gc", "--older-than", "0s", "--outputs", str(b)]) == 0  # empties B's trash
-    assert trash.entries(b) == []
+    assert RunStore(b).trash_entries() == []
     assert not (b / "alive" / run_id).exists()
-    assert store.list_runs(b) == []
+    assert RunStore(b).list_runs() == []
     assert fingerprint(a) == before
-    assert [r["run_id"] for r in store.list_runs(a)] == [run_id]
+    assert [r["run_id"] for r in RunStore(a).list_runs()] == [run_id]
 
 
 def test_a_tag_cannot_take_the_form_of_a_run_id_nor_hijack_one(
@@ -240,11 +242,11 @@ def test_a_tag_cannot_take_the_form_of_a_run_id_nor_hijack_one(
     for tag in (a, a[:8], "2026-review", "with space"):
         assert main(["tag", b, tag, *out]) == 2
         assert "can never be mistaken for a run id" in one_line(capsys.readouterr().err)
-    assert registry.tags_and_notes(tmp_path)[0] == {}
+    assert RunStore(tmp_path).tags_and_notes()[0] == {}
     # a registry written before tags were checked may hold one: the id still names its run
     with closing(sqlite3.connect(tmp_path / registry.REGISTRY)) as con, con:
         con.execute("INSERT INTO tags (tag, run_id) VALUES (?, ?)", (a, b))
-    assert store.find_run(tmp_path, a)["run_id"] == a
+    assert RunStore(tmp_path).find_run(a)["run_id"] == a
     assert main(["rm", a, *out]) == 0
-    assert [e.run_id for e in trash.entries(tmp_path)] == [a]
-    assert [r["run_id"] for r in store.list_runs(tmp_path)] == [b]
+    assert [e.run_id for e in RunStore(tmp_path).trash_entries()] == [a]
+    assert [r["run_id"] for r in RunStore(tmp_path).list_runs()] == [b]

@@ -16,7 +16,7 @@ from studies.cli import main
 from studies.define import plan as planning
 from studies.define.plan import plan_text
 from studies.scenes import get_scene
-from studies.tracking import store
+from studies.tracking.store import RunStore
 
 GB = 1e9
 CRANK = 'name = "fine"\nscene = "crank"\nresponses = ["max_piston_velocity"]\n'
@@ -83,6 +83,6 @@ def test_a_fine_cam_grid_runs_in_smaller_chunks(
     study.write_text(text)
     outputs = tmp_path / "out"
     assert main(["run", str(study), "--outputs", str(outputs), "--no-progress"]) == 0
-    (row,) = store.list_runs(outputs)
+    (row,) = RunStore(outputs).list_runs()
     record = json.loads((Path(row["folder"]) / "run.json").read_text())
     assert record["chunk_size"] == 11

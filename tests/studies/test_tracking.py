@@ -18,7 +18,9 @@ from studies.cli import main
 from studies.define.plan import plan_text
 from studies.pipeline import resume_run, run_plan
 from studies.run.results import open_results
-from studies.tracking import registry, store
+from studies.tracking import records, registry
+from studies.tracking.liveness import liveness
+from studies.tracking.store import RunStore
 
 STUDY = """
 name = "resumable"
@@ -69,9 +71,9 @@ def test_identical_definition_on_clean_commit_is_reused(
     assert main(args) == 0
     assert main(args) == 0
     assert "reusing run" in capsys.readouterr().out
-    assert len(store.list_runs(outputs)) == 1
+    assert len(RunStore(outputs).list_runs()) == 1
     assert main([*args, "--force"]) == 0
-    assert len(store.list_runs(outputs)) == 2
+    assert len(RunStore(outputs).list_runs()) == 2
 
 
 def failed_run(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
@@ -112,7 +114,7 @@ def test_a_checkpoint_left_mid_write_does_not_stop_a_resume(
 
 
 def test_runs_of_one_definition_started_together_get_distinct_ids(tmp_path: Path) -> None:
-    ids = [store.run_folder(tmp_path, "same", "20260101T000000000-abcdef")[0] for _ in range(3)]
+    ids = [RunStore(tmp_path).run_folder("same", "20260101T000000000-abcdef")[0] for _ in range(3)]
     assert ids == [
         "20260101T000000000-abcdef",
         "20260101T000000000-abcdef-1",
@@ -160,7 +162,7 @@ def test_ctrl_c_ends_with_one_line_naming_the_run_and_the_resume_command(
     err = capsys.readouterr().err.strip()
     assert "Traceback" not in err
     assert len(err.splitlines()) == 1
-    (row,) = store.list_runs(outputs)
+    (row,) = RunStore(outputs).list_runs()
     assert f"python -m studies run --resume {row['run_id']} --outputs {outputs}" in err
     monkeypatch.setitem(plan.scene.stages, "geometry", original)
     assert main(["run", "--resume", row["run_id"], "--outputs", str(outputs), "--no-progress"]) == 0
@@ -168,7 +170,7 @@ def test_ctrl_c_ends_with_one_line_naming_the_run_and_the_resume_command(
 
 def registered(outputs: Path) -> bool:
     try:
-        return bool(store.list_runs(outputs))
+        return bool(RunStore(outputs).list_runs())
     except registry.RegistryUnusable:  # the other process held the registry past the wait
         return False
 
@@ -191,7 +193,7 @@ def test_after_kill_9_runs_shows_interrupted_and_the_resume_command(
     assert json.loads(record.read_text())["status"] == "running"
     assert main(["runs", "--outputs", str(outputs)]) == 0
     out = capsys.readouterr().out
-    (row,) = store.list_runs(outputs)
+    (row,) = RunStore(outputs).list_runs()
     assert " interrupted " in out
     command = f"python -m studies run --resume {row['run_id']} --outputs {outputs}"
     assert command in out
@@ -200,7 +202,7 @@ def test_after_kill_9_runs_shows_interrupted_and_the_resume_command(
     assert '"status": "interrupted"' in shown
     assert command in shown
     assert main(["run", "--resume", row["run_id"], "--outputs", str(outputs), "--no-progress"]) == 0
-    assert store.list_runs(outputs)[0]["status"] == "finished"
+    assert RunStore(outputs).list_runs()[0]["status"] == "finished"
 
 
 def test_a_live_run_is_not_resumed_and_a_deleted_folder_is_marked(
@@ -222,9 +224,9 @@ def test_a_live_run_is_not_resumed_and_a_deleted_folder_is_marked(
 def test_a_stale_heartbeat_from_another_host_reads_as_interrupted() -> None:
     old = "2020-01-01T00:00:00+00:00"
     record = {"status": "running", "host": {"node": "elsewhere"}, "pid": 1, "heartbeat": old}
-    assert store.liveness(record) == "interrupted"
-    record["heartbeat"] = store.now()
-    assert store.liveness(record) == "running"
+    assert liveness(record) == "interrupted"
+    record["heartbeat"] = records.now()
+    assert liveness(record) == "running"
 
 
 def test_the_outputs_root_is_the_same_from_any_folder(
@@ -241,14 +243,14 @@ def test_the_outputs_root_is_the_same_from_any_folder(
     monkeypatch.chdir(tmp_path / "there")
     capsys.readouterr()
     assert main(["runs"]) == 0
-    (row,) = store.list_runs(root)
+    (row,) = RunStore(root).list_runs()
     assert row["run_id"] in capsys.readouterr().out
     assert Path(row["folder"]).is_absolute()
     assert not (tmp_path / "here" / "outputs").exists()
     # without the variable: this checkout's outputs/ folder, wherever the command runs
     monkeypatch.delenv("ENGINE_STUDIES_OUTPUTS")
     checkout = Path(__file__).resolve().parents[2] / "outputs"  # tests/studies/ -> the checkout
-    assert store.default_outputs() == checkout
+    assert records.default_outputs() == checkout
 
 
 def test_a_relative_outputs_folder_is_recorded_absolute(
@@ -258,7 +260,7 @@ def test_a_relative_outputs_folder_is_recorded_absolute(
     study.write_text(STUDY)
     monkeypatch.chdir(tmp_path)
     assert main(["run", str(study), "--no-progress", "--outputs", "rel"]) == 0
-    (row,) = store.list_runs(tmp_path / "rel")
+    (row,) = RunStore(tmp_path / "rel").list_runs()
     assert Path(row["folder"]) == (tmp_path / "rel" / "resumable" / row["run_id"])
 
 
@@ -287,7 +289,7 @@ def test_the_cache_key_covers_the_contents_of_a_lift_table(
     lift_table(table, peak_mm=5.0)  # the same file name, halved lifts
     assert main(args) == 0
     assert "reusing run" not in capsys.readouterr().out
-    newest, first = store.list_runs(outputs)
+    newest, first = RunStore(outputs).list_runs()
     assert newest["definition_sha256"] != first["definition_sha256"]
     for row, peak in ((first, 10.0), (newest, 5.0)):  # the spline interpolates the table peak
         result = open_results(Path(row["folder"]) / "results.nc")
