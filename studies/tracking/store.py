@@ -222,7 +222,7 @@ class RunStore:
             if moved is not None:
                 try:
                     previous = self._labelled(con, moved)
-                except FileNotFoundError:
+                except RunStateError:
                     previous = None  # the other run's folder is gone: only its row names the tag
                 if previous is not None:
                     undo.save(previous)
@@ -238,8 +238,8 @@ class RunStore:
                 return False
             try:
                 folder = self._labelled(con, before["run_id"])
-            except FileNotFoundError:
-                folder = None
+            except RunStateError:
+                folder = None  # its folder is gone: only the registry names the tag
             if folder is not None:
                 undo.save(folder)
                 labels.drop_tag(folder, tag)

@@ -207,6 +207,25 @@ def test_tags_and_notes_work_wherever_a_run_id_does(
     assert "no tag 'nothing'" in capsys.readouterr().err
 
 
+def test_a_tag_moves_off_or_comes_off_a_run_whose_folder_was_deleted_by_hand(
+    tmp_path: Path,
+) -> None:
+    """The tag of a run whose folder is gone moves to another run, or is removed, instead of
+    refusing with "nothing to label" (the registry row alone still names it)."""
+    outputs = tmp_path / "out"
+    first = tiny_run(tmp_path, outputs, 1000.0)
+    second = tiny_run(tmp_path, outputs, 1200.0)
+    store = RunStore(outputs)
+    store.set_tag(first, "baseline")
+    store.set_tag(first, "old")
+    folder = store.folder(store.find_run(first))
+    shutil.rmtree(folder)
+    assert store.set_tag(second, "baseline") == first
+    assert store.tagged_run("baseline") == second
+    assert store.remove_tag("old")
+    assert store.tagged_run("old") is None
+
+
 def tree(folder: Path) -> dict[str, bytes]:
     """Every file under ``folder`` and its bytes (with the modes, to compare bit for bit)."""
     return {
