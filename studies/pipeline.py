@@ -18,6 +18,7 @@ import difflib
 import os
 import shutil
 import sqlite3
+import time
 from concurrent.futures import Executor
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -220,9 +221,11 @@ def _execute(
             executor=executor,
             collect=False,
         )
+        started = time.perf_counter()
         files = [writer.close({"timings": ev.timings})]
+        phases = {**ev.timings, "results_s": time.perf_counter() - started}
         ds = open_results(files[0])
-        files += write_analysis(ds, folder)
+        files += write_analysis(ds, folder, timings=phases)
         with xr.open_dataset(folder / ANALYSIS_NAME) as an:
             record.points_without_value = int(an.attrs.get("points_without_value", 0))
     except BaseException as exc:
@@ -242,7 +245,7 @@ def _execute(
         )
         raise
     heartbeat.stop()
-    record.status, record.finished, record.timings = "finished", records.now(), ev.timings
+    record.status, record.finished, record.timings = "finished", records.now(), phases
     record.write()  # the one step that finishes the run; the registry follows
     shutil.rmtree(folder / CHECKPOINTS, ignore_errors=True)
     try:

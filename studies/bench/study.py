@@ -31,6 +31,7 @@ import numpy as np
 
 from studies.define.definition import find_study
 
+PHASES = ("results_s", "analysis_s", "figures_s", "report_s")  # after the chunks (run.json)
 SHAPES = {10**6: (40, 25, 25, 40), 10**7: (100, 40, 50, 50)}
 RANGES = {  # factor: (low, high, units), the ranges of ohc125_dynamics
     "cam_speed": (3000.0, 6000.0, "rpm"),
@@ -148,6 +149,7 @@ def _run_study(name: str, text: str, step: float) -> dict[str, Any]:
         },
         "end_to_end": {"cases": cases, "seconds": wall, "cases_per_s": cases / wall},
         "compile_s": round(timings["compile_s"], 3),
+        **{k: round(timings[k], 2) for k in PHASES if k in timings},
         "wall_over_compute": wall / timings["run_s"],
         "peak_rss_mb": round(peak, 1),
         "results_nc_mb": round(size / 1e6, 1),

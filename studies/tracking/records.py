@@ -8,7 +8,7 @@
         labels.json                its tags and notes (studies.common.labels)
         run.json                   id, status, code (engine and scene distributions, versions
                                    and source hashes), git commit + dirty flag, versions,
-                                   host, start/end, compile vs run time, accuracy settings
+                                   host, start/end, seconds per phase, accuracy settings
         results.nc                 the labelled results (see studies.run.results)
         analysis.txt               range analysis and ANOVA tables
         *.png                      figures
