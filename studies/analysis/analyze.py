@@ -28,14 +28,14 @@ a full factorial) and ``level_a`` × ``level_b`` for two-way tables of means.
   mean over the strongest factor pair (``map_mean``, factors in ``map_x``/``map_y``);
 * status codes and bit masks (counted, never averaged): ``<response>_count`` on
   ``<response>_flag`` (the CF flag meanings), the names in the attribute ``status_responses``;
-* responses under noise (:mod:`studies.analysis.robust`): per design point ``noise_mean``,
+* responses under noise (:mod:`studies.analysis.uncertainty.noise_statistics`): per design point ``noise_mean``,
   ``noise_sd``, ``noise_quantile`` and, for responses with ``[limits]``, the probability of
   violating the limit with its Wilson interval, on (``noise_response``, ``run``), and its
-  ``violation_map`` (:mod:`studies.analysis.violation_map`); S/N and means as replicates;
-* a Saltelli design (:mod:`studies.analysis.sobol_indices`): ``S1``, ``S1_conf``, ``ST``,
+  ``violation_map`` (:mod:`studies.analysis.uncertainty.violation_map`); S/N and means as replicates;
+* a Saltelli design (:mod:`studies.analysis.uncertainty.sobol_indices`): ``S1``, ``S1_conf``, ``ST``,
   ``ST_conf`` on (response, factor) (and ``S2``, ``S2_conf`` where asked) instead of
   everything above; a Sobol' or Latin-hypercube sample
-  (:mod:`studies.analysis.sample_statistics`): moments, quantiles and correlations instead;
+  (:mod:`studies.analysis.uncertainty.sample_statistics`): moments, quantiles and correlations instead;
 * several responses: the trade-off (``chosen_level``, ``decided_by``, ``conflict`` per term,
   ``compromise``, ``compromise_worst``, ``compromise_half_width`` per response and
   ``compromise_at`` per condition).
@@ -62,9 +62,6 @@ from studies.analysis import missing, prediction, taguchi
 from studies.analysis import optimum as analysis_optimum
 from studies.analysis.factorial import factorial, factorial_frame, grid_of
 from studies.analysis.grid_optimum import Grid
-from studies.analysis.robust import robust_statistics
-from studies.analysis.sample_statistics import sample_analysis
-from studies.analysis.sobol_indices import sobol_analysis
 from studies.analysis.statistics import (
     SENSES,
     UNRANKED,
@@ -74,7 +71,10 @@ from studies.analysis.statistics import (
     status_counts,
     sweep_runs,
 )
-from studies.analysis.violation_map import with_violation_maps
+from studies.analysis.uncertainty.noise_statistics import robust_statistics
+from studies.analysis.uncertainty.sample_statistics import sample_analysis
+from studies.analysis.uncertainty.sobol_indices import sobol_analysis
+from studies.analysis.uncertainty.violation_map import with_violation_maps
 from studies.define.sampling import SAMPLING_DESIGNS
 from studies.run.results import NOT_EVALUATED, PASS_FAIL, is_status, write_netcdf
 

@@ -44,10 +44,10 @@ from studies.report.markdown_format import (
 from studies.report.markdown_response import constant_section, response_section
 from studies.report.markdown_terms import computed, optimum_levels
 from studies.report.markdown_tradeoff import tradeoff_section
-from studies.report.robust import robust_markdown
-from studies.report.sample_report import sample_markdown
-from studies.report.sensitivity_report import sobol_markdown
 from studies.report.text import status_line
+from studies.report.uncertainty.noise_report import robust_markdown
+from studies.report.uncertainty.sample_report import sample_markdown
+from studies.report.uncertainty.sobol_report import sobol_markdown
 
 REPORT_NAME = "report.md"
 CONFIRMATION_NAME = "confirmation.toml"

@@ -28,9 +28,9 @@ from studies.common.errors import StudyError
 from studies.common.figure_layout import save_figures
 from studies.define.sampling import SAMPLING_DESIGNS
 from studies.report import html as html_report
-from studies.report import markdown_report, plots, sample_report, sensitivity_report
-from studies.report import robust as robust_report
+from studies.report import markdown_report, plots
 from studies.report import text as analysis_text
+from studies.report.uncertainty import noise_report, sample_report, sobol_report
 from studies.run.results import NOISE
 from studies.scenes import SCENES, get_scene
 
@@ -123,19 +123,19 @@ def _design_outputs(
         return [analysis_text.format_sweep(ds, analysed)], figures
     if design == "saltelli":
         with clock("figures_s"):
-            figures = sensitivity_report.save_tornado(an, folder)
-        return sensitivity_report.sobol_text(an), figures
+            figures = sobol_report.save_tornado(an, folder)
+        return sobol_report.sobol_text(an), figures
     if design in SAMPLING_DESIGNS:
         with clock("figures_s"):
             figures = sample_report.save_correlations(an, folder)
         return sample_report.sample_text(an), figures
-    body = [robust_report.robust_text(ds, an)] if robust_report.has_noise(an) else []
+    body = [noise_report.robust_text(ds, an)] if noise_report.has_noise(an) else []
     body += [analysis_text.format_tables(an, means[r]) for r in analysed]
     varying = [means[r] for r in analysed if int(an["varies"].sel(response=means[r]))]
     with clock("figures_s"):
         figures = plots.save_main_effects(an, varying, folder)
-        if robust_report.has_noise(an):
-            figures += robust_report.save_noise_figures(ds, an, folder)
+        if noise_report.has_noise(an):
+            figures += noise_report.save_noise_figures(ds, an, folder)
         sn = [r for r in analysed if f"{r}_sn" in an["response"].values]
         figures += plots.save_sn_plots(an, sn, folder)
         figures += plots.save_interaction_plots(an, [means[r] for r in analysed], folder)

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from studies.analysis.robust import QUANTILES, quantile_interval, wilson
+from studies.analysis.uncertainty.noise_statistics import QUANTILES, quantile_interval, wilson
 from studies.common.errors import StudyError
 from studies.define.plan import plan_text
 from studies.pipeline import run_plan
@@ -310,12 +310,12 @@ def test_the_noise_table_prints_each_design_points_own_statistics(
     design larger than MAX_ROWS lists MAX_ROWS rows."""
     import xarray as xr
 
-    from studies.report import robust
     from studies.report.markdown_format import num
+    from studies.report.uncertainty import noise_report
 
     ds = sobol_run.dataset
     an = xr.open_dataset(sobol_run.folder / "analysis.nc")
-    header, rows = robust._rows(ds, an, "mean_piston_speed")
+    header, rows = noise_report._rows(ds, an, "mean_piston_speed")
     assert len(rows) == ds.sizes["run"] == 4
     y = ds["mean_piston_speed"].values
     for i, row in enumerate(rows):
@@ -325,8 +325,8 @@ def test_the_noise_table_prints_each_design_points_own_statistics(
         assert cells["rod_ratio"] == num(float(ds["rod_ratio"].values[i]))
         assert cells["mean [95 % CI]"].startswith(f"{num(float(y[i].mean()))} [")
         assert cells["sd"] == num(float(y[i].std(ddof=1)))
-    monkeypatch.setattr(robust, "MAX_ROWS", 2)
-    assert len(robust._rows(ds, an, "mean_piston_speed")[1]) == 2
+    monkeypatch.setattr(noise_report, "MAX_ROWS", 2)
+    assert len(noise_report._rows(ds, an, "mean_piston_speed")[1]) == 2
 
 
 def test_the_sd_interval_is_bonetts_and_covers_a_skewed_response() -> None:
@@ -336,7 +336,7 @@ def test_the_sd_interval_is_bonetts_and_covers_a_skewed_response() -> None:
     scrambled Sobol' samples of 64 cases where the normal-theory χ² interval does not."""
     from scipy.stats import qmc
 
-    from studies.analysis.robust import sd_interval
+    from studies.analysis.uncertainty.noise_statistics import sd_interval
 
     rng = np.random.default_rng(3)
     y = rng.lognormal(size=(3, 40))

@@ -101,7 +101,7 @@ def test_the_correlation_intervals_cover_the_true_correlation_where_fishers_do_n
     of the time (1000 samples: 13.5 %); the distribution-free one keeps close to 95 % (93.8 %)."""
     from scipy.stats import qmc
 
-    from studies.analysis.sample_statistics import correlation_interval
+    from studies.analysis.uncertainty.sample_statistics import correlation_interval
 
     v = 49 / 8 + math.pi**4 / 50 + math.pi**8 / 1800 + 0.5
     true = (1 + math.pi**4 / 50) / math.sqrt(math.pi**2 / 3 * v), 0.0

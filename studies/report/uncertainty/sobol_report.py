@@ -1,4 +1,4 @@
-"""Renderers of a Saltelli design's Sobol' indices (:mod:`studies.analysis.sobol_indices`): a
+"""Renderers of a Saltelli design's Sobol' indices (:mod:`studies.analysis.uncertainty.sobol_indices`): a
 table per response (text and Markdown), with a table of the second-order indices where the
 study asked for them, and a tornado figure of S1 and ST with their bootstrap
 intervals. Every number comes from the analysis Dataset."""

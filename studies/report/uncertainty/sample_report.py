@@ -1,5 +1,5 @@
 """Renderers of a Sobol' or Latin-hypercube sample's statistics
-(:mod:`studies.analysis.sample_statistics`): per response its mean, sd, quantiles and
+(:mod:`studies.analysis.uncertainty.sample_statistics`): per response its mean, sd, quantiles and
 probability of violating a limit with their intervals, a table of the factors' Pearson and
 Spearman correlations with it (text and Markdown), and a figure of the correlations with their
 intervals. Every number comes from the analysis Dataset."""

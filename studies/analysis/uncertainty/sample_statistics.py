@@ -3,10 +3,10 @@
 strongly each factor drives it, with 95 % intervals.
 
 Per response (dimension ``response``), over the runs with a finite value (``sample_n``), with
-the interval machinery of the statistics under noise (:mod:`studies.analysis.robust`):
+the interval machinery of the statistics under noise (:mod:`studies.analysis.uncertainty.noise_statistics`):
 
 * ``sample_mean`` with its t interval ``sample_mean_low`` … ``_high``; ``sample_sd`` (divisor
-  n − 1) with Bonett's interval (:func:`studies.analysis.robust.sd_interval`);
+  n − 1) with Bonett's interval (:func:`studies.analysis.uncertainty.noise_statistics.sd_interval`);
   ``sample_quantile`` at ``QUANTILES`` with the distribution-free order-statistic interval
   ``sample_quantile_low`` … ``_high``;
 * where the study gives a ``[limits]`` entry: ``sample_violations``, ``sample_violation_n`` and
@@ -43,7 +43,7 @@ import numpy as np
 import xarray as xr
 from scipy import stats
 
-from studies.analysis.robust import (
+from studies.analysis.uncertainty.noise_statistics import (
     CONFIDENCE,
     QUANTILES,
     moments,

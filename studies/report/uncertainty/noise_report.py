@@ -1,8 +1,8 @@
-"""Renderers of the statistics under noise (:mod:`studies.analysis.robust`): per response a
+"""Renderers of the statistics under noise (:mod:`studies.analysis.uncertainty.noise_statistics`): per response a
 table of every design point's mean, sd, quantiles and probability of violating its limit, and
 the robust choice — the most robust computed design point and the control levels that the S/N
 ratio over the noise prefers, and the map of the probability of violation over the two
-strongest control factors (:mod:`studies.report.violation_map`). Text for ``analysis.txt``, Markdown for ``report.md`` (and so
+strongest control factors (:mod:`studies.report.uncertainty.violation_map`). Text for ``analysis.txt``, Markdown for ``report.md`` (and so
 ``report.html``). Every number comes from the results or the analysis Dataset."""
 
 from __future__ import annotations
@@ -14,11 +14,11 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from studies.analysis.robust import DIM
+from studies.analysis.uncertainty.noise_statistics import DIM
 from studies.common.figure_style import axis_label
 from studies.common.text_safety import Markup, md_escape
-from studies.report import violation_map
 from studies.report.markdown_format import aligned, figure, label, levels_of, num, table
+from studies.report.uncertainty import violation_map
 from studies.run.results import NOISE
 
 MAX_ROWS = 100  # design points listed; larger designs point to analysis.nc

@@ -1,6 +1,6 @@
 """The probability of violating a limit over the two strongest control factors: for a study
 with ``[noise]`` and ``[limits]``, per limited response, the mean of each design point's
-probability of violation (:mod:`studies.analysis.robust`) at every level pair of the two control
+probability of violation (:mod:`studies.analysis.uncertainty.noise_statistics`) at every level pair of the two control
 factors with the largest range R of the response's mean over the noise (range analysis,
 :func:`studies.analysis.statistics.range_analysis`), averaged over the other factors' runs at
 that pair (pandas ``groupby``; O(runs)).
@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
-from studies.analysis.robust import DIM
+from studies.analysis.uncertainty.noise_statistics import DIM
 
 X, Y = "violation_level_x", "violation_level_y"
 

@@ -1,4 +1,4 @@
-"""Renderers of the probability-of-violation map (:mod:`studies.analysis.violation_map`): a
+"""Renderers of the probability-of-violation map (:mod:`studies.analysis.uncertainty.violation_map`): a
 heat map of P per level pair of the two strongest control factors, the limit and the response
 in its title, and the sentence that says how the factors were chosen. Every number comes from
 the analysis Dataset."""
@@ -11,7 +11,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from studies.analysis.robust import DIM
+from studies.analysis.uncertainty.noise_statistics import DIM
 from studies.common.figure_style import axis_label
 from studies.report.markdown_format import aligned, levels_of, num
 
