@@ -355,6 +355,11 @@ def test_the_sd_interval_is_bonetts_and_covers_a_skewed_response() -> None:
         se = c * np.sqrt((g4 - (k - 3) / k) / (k - 1))
         expected = np.sqrt(c * v.var(ddof=1) * np.exp([-z * se, z * se]))
         assert (low[i], high[i]) == pytest.approx(tuple(expected), rel=1e-12)
+    flat = np.full((1, 8), 15.6)  # a response the noise does not move: sd exactly 0
+    assert sd_interval(flat, np.ones((1, 8), bool), np.array([8]), np.array([0.0])) == (
+        np.array([0.0]),
+        np.array([0.0]),
+    )
     true_sd = np.sqrt((np.e - 1) * np.e)
     ours = chi2 = 0
     for seed in range(200):

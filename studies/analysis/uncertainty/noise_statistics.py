@@ -156,7 +156,8 @@ def sd_interval(
     """Bonett's (2006) 95 % interval of the sd of each row of ``y`` (its ``finite`` values,
     ``n`` of them, sample variance ``var``): ln(c s²) ∓ z c √((γ₄ − (n − 3)/n)/(n − 1)) with
     c = n/(n − z) and the kurtosis γ₄ = n Σ(y − m)⁴ / (Σ(y − ȳ)²)² about the mean m trimmed by
-    1/(2√(n − 4)) at each end (as ``scipy.stats.trim_mean`` cuts). NaN where n < 5."""
+    1/(2√(n − 4)) at each end (as ``scipy.stats.trim_mean`` cuts). [0, 0] for a row whose
+    values are all equal; NaN where n < 5."""
     z = stats.norm.ppf(0.5 + CONFIDENCE / 2)
     count = n.astype(np.int64)
     ordered = np.sort(np.where(finite, y, np.inf), axis=1)  # the values first, then the rest
@@ -172,6 +173,8 @@ def sd_interval(
         c = n / (n - z)
         se = c * np.sqrt(np.maximum(kurtosis - (n - 3) / n, 0.0) / (n - 1))
         low, high = np.sqrt(c * var * np.exp(-z * se)), np.sqrt(c * var * np.exp(z * se))
+    constant = var == 0.0  # every case the same value: the sd is exactly 0
+    low, high = np.where(constant, 0.0, low), np.where(constant, 0.0, high)
     enough = count >= 5
     return np.where(enough, low, np.nan), np.where(enough, high, np.nan)
 

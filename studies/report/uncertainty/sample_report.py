@@ -74,7 +74,8 @@ def summary(an: xr.Dataset, response: str) -> list[str]:
     lines.append(
         "Correlation of each factor with it: Spearman's rank ρ (monotone effects) and "
         "Pearson's r (linear; r² is the share of the variance a factor explains when the "
-        "response is additive and linear); intervals by Fisher's z"
+        "response is additive and linear); 95 % intervals on Fisher's z scale with the variance "
+        "estimated from the data (no normality assumed)"
     )
     return lines
 
