@@ -301,20 +301,20 @@ def _run_plans(args: argparse.Namespace, plans: list[Plan], executor: Executor |
 
 
 def _report(result: RunResult) -> None:
-    r = result.record
-    t = r.timings
+    r, t = result.record, result.record.timings
     print(
         f"{r.study}: {r.runs} design points ({r.design}), "
         f"compile {t['compile_s']:.2f} s, run {t['run_s']:.3f} s"
     )
-    for f in result.files:
-        print(f"  {f}")
+    print("\n".join(f"  {f}" for f in result.files))
     if r.points_without_value:
         print(
             f"warning: {r.points_without_value} of {r.runs} design points of {r.study} gave no "
             f"value for any response (they did not run; reasons in {r.folder}/analysis.txt)",
             file=sys.stderr,
         )
+    for line in r.warnings:  # a figure that could not be drawn: the numbers are complete
+        print(f"warning: {r.study}: {line}", file=sys.stderr)
 
 
 def _default_outputs() -> Path:

@@ -225,7 +225,8 @@ def _execute(
         files = [writer.close({"timings": ev.timings})]
         phases = {**ev.timings, "results_s": time.perf_counter() - started}
         ds = open_results(files[0])
-        files += write_analysis(ds, folder, timings=phases)
+        record.warnings = []  # this attempt's (a resume draws every figure again)
+        files += write_analysis(ds, folder, timings=phases, problems=record.warnings)
         with xr.open_dataset(folder / ANALYSIS_NAME) as an:
             record.points_without_value = int(an.attrs.get("points_without_value", 0))
     except BaseException as exc:

@@ -15,9 +15,10 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 import xarray as xr
 
@@ -41,16 +42,19 @@ def write_analysis(
     responses: list[str] | None = None,
     pool: list[str] | None = None,
     timings: dict[str, float] | None = None,
+    problems: list[str] | None = None,
 ) -> list[Path]:
     """Analyse once and save ``analysis.nc`` first (the numbers are on disk before anything is
     drawn), then render ``analysis.txt``, ``report.md`` and the PNG figures into ``folder``;
     return the paths (text first). ``timings`` gets the seconds of each phase:
-    ``analysis_s``, ``figures_s`` and ``report_s`` (the texts).
+    ``analysis_s``, ``figures_s`` and ``report_s`` (the texts). A figure that fails to draw
+    costs that figure only: the report leaves it out and ``problems`` gets one line saying
+    which and why.
 
     A response that is NaN in every run (e.g. ``jump_start`` when no design point separates)
     gets a line saying so instead of tables and figures.
     """
-    clock = Phases(timings if timings is not None else {})
+    clock = Phases(timings if timings is not None else {}, problems if problems is not None else [])
     names = responses or json.loads(ds.attrs.get("responses", "[]")) or list(ds.data_vars)
     scalar = [r for r in names if r in ds and ds[r].dims in (("run",), ("run", NOISE))]
     missing = [r for r in names if r not in ds]
@@ -81,8 +85,7 @@ def write_analysis(
     elif scene_name in SCENES:  # a plugin scene that is not installed here: generic outputs only
         scene = get_scene(scene_name)
         body += scene.summaries(ds)
-        with clock("figures_s"):
-            figures += save_figures(ds, folder, scene.figures())
+        figures += clock.draw(save_figures, ds, folder, scene.figures())
     with clock("report_s"):
         text_path = folder / "analysis.txt"
         text_path.write_text("\n\n".join([header, *body]) + "\n", encoding="utf-8")
@@ -92,10 +95,11 @@ def write_analysis(
 
 
 class Phases:
-    """Seconds spent per phase, added up into ``timings`` (``with clock("figures_s"): …``)."""
+    """Seconds spent per phase, added up into ``timings`` (``with clock("figures_s"): …``),
+    and the figures that could not be drawn, one line each into ``problems``."""
 
-    def __init__(self, timings: dict[str, float]) -> None:
-        self.timings = timings
+    def __init__(self, timings: dict[str, float], problems: list[str]) -> None:
+        self.timings, self.problems = timings, problems
 
     @contextmanager
     def __call__(self, phase: str) -> Iterator[None]:
@@ -105,6 +109,20 @@ class Phases:
         finally:
             spent = time.perf_counter() - start
             self.timings[phase] = self.timings.get(phase, 0.0) + spent
+
+    def draw(self, figures: Callable[..., list[Path]], *args: Any) -> list[Path]:
+        """``figures(*args)``, timed as ``figures_s``; [] and a line in ``problems`` if it
+        raises (the numbers and texts never depend on a figure). A full disk or exhausted
+        memory is the run's failure, not the figure's: it propagates."""
+        with self("figures_s"):
+            try:
+                return figures(*args)
+            except (OSError, MemoryError):
+                raise
+            except Exception as exc:  # noqa: BLE001  (any other failure of one figure kind)
+                name = getattr(figures, "__name__", "figures")
+                self.problems.append(f"{name} drew nothing: {type(exc).__name__}: {exc}")
+                return []
 
 
 def _design_outputs(
@@ -118,28 +136,23 @@ def _design_outputs(
     """The design's own text blocks and figures (sweep, Saltelli, sample or array/factorial)."""
     design = ds.attrs.get("design")
     if design == "sweep":
-        with clock("figures_s"):
-            figures = plots.save_sweep_plots(ds, analysed, folder)
+        figures = clock.draw(plots.save_sweep_plots, ds, analysed, folder)
         return [analysis_text.format_sweep(ds, analysed)], figures
     if design == "saltelli":
-        with clock("figures_s"):
-            figures = sobol_report.save_tornado(an, folder)
-        return sobol_report.sobol_text(an), figures
+        return sobol_report.sobol_text(an), clock.draw(sobol_report.save_tornado, an, folder)
     if design in SAMPLING_DESIGNS:
-        with clock("figures_s"):
-            figures = sample_report.save_correlations(an, folder)
+        figures = clock.draw(sample_report.save_correlations, an, folder)
         return sample_report.sample_text(an), figures
     body = [noise_report.robust_text(ds, an)] if noise_report.has_noise(an) else []
     body += [analysis_text.format_tables(an, means[r]) for r in analysed]
     varying = [means[r] for r in analysed if int(an["varies"].sel(response=means[r]))]
-    with clock("figures_s"):
-        figures = plots.save_main_effects(an, varying, folder)
-        if noise_report.has_noise(an):
-            figures += noise_report.save_noise_figures(ds, an, folder)
-        sn = [r for r in analysed if f"{r}_sn" in an["response"].values]
-        figures += plots.save_sn_plots(an, sn, folder)
-        figures += plots.save_interaction_plots(an, [means[r] for r in analysed], folder)
-        figures += plots.save_maps(an, varying, folder)
+    figures = clock.draw(plots.save_main_effects, an, varying, folder)
+    if noise_report.has_noise(an):
+        figures += clock.draw(noise_report.save_noise_figures, ds, an, folder)
+    sn = [r for r in analysed if f"{r}_sn" in an["response"].values]
+    figures += clock.draw(plots.save_sn_plots, an, sn, folder)
+    figures += clock.draw(plots.save_interaction_plots, an, [means[r] for r in analysed], folder)
+    figures += clock.draw(plots.save_maps, an, varying, folder)
     return body, figures
 
 

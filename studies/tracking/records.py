@@ -63,6 +63,7 @@ class RunRecord:
     points_without_value: int = 0
     code: dict[str, Any] = field(default_factory=dict)
     code_sha256: str = ""
+    warnings: list[str] = field(default_factory=list)  # e.g. a figure that could not be drawn
 
     def write(self) -> None:
         """Write ``run.json`` (under a temporary name renamed into place: never half a file)."""

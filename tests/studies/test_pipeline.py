@@ -192,3 +192,31 @@ def test_pooling_from_the_study_and_from_the_cli(tmp_path: Path, capsys) -> None
     capsys.readouterr()
     assert main(["analyze", str(path), "--pool", "cam_sped"]) == 2
     assert "cannot pool ['cam_sped']" in capsys.readouterr().err
+
+
+def test_a_run_whose_figure_fails_finishes_with_its_numbers_and_says_which(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Before, any failure while drawing marked the run failed and removed results.nc and
+    analysis.nc (the chunks were kept for a resume). A figure is not a result: the run
+    finishes, run.json and the command line say which figure is missing and why."""
+    from studies.cli import main
+    from studies.report import plots
+
+    def broken(*args: object, **kwargs: object) -> list[Path]:
+        raise RuntimeError("no display")
+
+    monkeypatch.setattr(plots, "save_main_effects", broken)
+    study = tmp_path / "small.toml"
+    study.write_text(small(), encoding="utf-8")
+    outputs = tmp_path / "out"
+    assert main(["run", str(study), "--outputs", str(outputs), "--no-progress"]) == 0
+    (record_path,) = outputs.glob("small/*/run.json")
+    record = json.loads(record_path.read_text())
+    assert record["status"] == "finished"
+    assert record["warnings"] == ["broken drew nothing: RuntimeError: no display"]
+    assert {"results.nc", "analysis.nc", "report.md"} <= {
+        p.name for p in record_path.parent.iterdir()
+    }
+    err = capsys.readouterr().err
+    assert "warning: small: broken drew nothing: RuntimeError: no display" in err
