@@ -305,8 +305,14 @@ class Scene(ABC, Generic[State]):
         curves: list[str],
     ) -> State:
         """The run state of one chunk before any stage ran: a :attr:`state_type` holding the
-        request (a scene that derives more from it up front extends this)."""
-        return cast(State, self.state_type.of(points, settings, responses, curves))
+        request, then :meth:`prepare`."""
+        state = cast(State, self.state_type.of(points, settings, responses, curves))
+        self.prepare(state)
+        return state
+
+    def prepare(self, state: State) -> None:
+        """Derive up front what every stage reads (kernel parameter rows, groups of points);
+        nothing by default."""
 
     def finish(self, state: State) -> SceneOutput:
         """The responses and curves asked for, in their declared units, from the run state.

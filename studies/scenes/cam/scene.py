@@ -232,17 +232,9 @@ class CamScene(Scene[CamState]):
         return out
 
     # --- evaluation -----------------------------------------------------------------------
-    def start(
-        self,
-        points: dict[str, np.ndarray],
-        settings: dict[str, Any],
-        responses: list[str],
-        curves: list[str],
-    ) -> CamState:
-        state = CamState.of(points, settings, responses, curves)
-        state.params, state.shapes, state.coeffs = kernel_inputs(points)
-        state.theta = np.deg2rad(self.curve_coordinate(settings))
-        return state
+    def prepare(self, state: CamState) -> None:
+        state.params, state.shapes, state.coeffs = kernel_inputs(state.points)
+        state.theta = np.deg2rad(self.curve_coordinate(state.settings))
 
     def finish(self, state: CamState) -> SceneOutput:
         scalars = {}

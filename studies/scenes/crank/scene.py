@@ -215,19 +215,11 @@ class CrankScene(Scene[CrankState]):
         found.add_checked(cycle, columns, lambda i: cycle_problems(points, i))
 
     # --- stages --------------------------------------------------------------------------
-    def start(
-        self,
-        points: dict[str, np.ndarray],
-        settings: dict[str, Any],
-        responses: list[str],
-        curves: list[str],
-    ) -> CrankState:
-        state = CrankState.of(points, settings, responses, curves)
-        state.n_angles = angle_count(settings["angle_step"])
-        state.params = crank_params(points, settings["model"])
+    def prepare(self, state: CrankState) -> None:
+        state.n_angles = angle_count(state.settings["angle_step"])
+        state.params = crank_params(state.points, state.settings["model"])
         # a curve's last stage is the one that produces it
-        state.stored = frozenset(self.curve(c).needs[-1] for c in curves)  # type: ignore[union-attr]
-        return state
+        state.stored = frozenset(self.curve(c).needs[-1] for c in state.curves)  # type: ignore[union-attr]
 
     def stage_kinematics(self, state: CrankState) -> None:
         params, n_angles = state.params, state.n_angles

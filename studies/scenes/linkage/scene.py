@@ -22,7 +22,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Hashable
 from dataclasses import dataclass, field
-from typing import Any, TypeVar, cast
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -177,17 +177,9 @@ class LinkageScene(Scene[Linkage]):
         return seen[1]
 
     # --- evaluation -----------------------------------------------------------------------
-    def start(
-        self,
-        points: dict[str, np.ndarray],
-        settings: dict[str, Any],
-        responses: list[str],
-        curves: list[str],
-    ) -> Linkage:
-        """The run state with the design points grouped by linkage (:func:`linkage_keys`)."""
-        state = cast(Linkage, self.state_type.of(points, settings, responses, curves))
-        state.groups = linkage_keys(points)
-        return state
+    def prepare(self, state: Linkage) -> None:
+        """The design points grouped by linkage (:func:`linkage_keys`)."""
+        state.groups = linkage_keys(state.points)
 
     def finish(self, state: Linkage) -> SceneOutput:
         return SceneOutput(
