@@ -31,6 +31,7 @@ from studies.define.noise import noise_table, noisy, range_problems
 from studies.define.sampling import SAMPLING_DESIGNS, sampled_levels
 from studies.scenes import Scene, get_scene
 from studies.scenes.base import short
+from studies.scenes.design_points import DesignPoints, Factor
 
 BYTES_PER_FACTOR = 48
 BYTES_PER_RESPONSE = 16
@@ -40,12 +41,13 @@ MAX_POINTS_VARIABLE = "ENGINE_STUDIES_MAX_POINTS"
 
 @dataclass(frozen=True)
 class Plan:
-    """Everything the runner needs; ``points`` are SI values per parameter, one per run."""
+    """Everything the runner needs; ``points`` are SI values per parameter and computed point,
+    made when read (a chunk's values: ``points.at(part)``)."""
 
     definition: StudyDefinition
     scene: Scene
     design: designs.Design
-    points: dict[str, np.ndarray]
+    points: DesignPoints
     settings: dict[str, Any]
     stages: tuple[str, ...]
     responses: tuple[str, ...]  # stored: the study's, then the scene's status responses
@@ -95,8 +97,9 @@ def _plan(definition: StudyDefinition | None, problems: list[str], source: str) 
         problems = problems + exc.problems
     if design is None or problems:
         raise StudyFileError(source, problems)
-    points = _points(scene, definition, design, design.runs)
-    points, noise_values, noise_problems = _noisy_points(scene, definition, points, design.runs)
+    points, noise_values, noise_problems = _noisy_points(
+        scene, definition, _points(scene, definition, design)
+    )
     if noise_problems:
         raise StudyFileError(source, noise_problems)
     cases = design.runs * (next(iter(noise_values.values())).shape[1] if noise_values else 1)
@@ -264,7 +267,7 @@ def _design(d: StudyDefinition) -> designs.Design:
         )
         if size_problem:
             raise designs.DesignError([size_problem])
-        return designs.full_factorial(counts)
+        return designs.full_factorial(counts, lazy=True)
     if d.design == "sweep":
         base = {
             f.name: f.levels.index(f.base) if f.base is not None else (len(f.levels) - 1) // 2
@@ -282,31 +285,30 @@ def _design(d: StudyDefinition) -> designs.Design:
     raise designs.DesignError([problem])
 
 
-def _points(
-    scene: Scene, d: StudyDefinition, design: designs.Design, runs: int
-) -> dict[str, np.ndarray]:
-    """SI values per parameter and run. A factor's levels are converted once and indexed by
-    the design; a fixed parameter is one value broadcast over the runs (a read-only view that
-    costs no memory per run)."""
+def _points(scene: Scene, d: StudyDefinition, design: designs.Design) -> DesignPoints:
+    """SI values per parameter and run, made when read (:class:`DesignPoints`): a factor's
+    levels are converted once and indexed by the design's codes; a fixed parameter is one
+    value."""
     factors = {f.name: f for f in d.factors}
-    points: dict[str, np.ndarray] = {}
+    fixed: dict[str, Any] = {}
+    varied: dict[str, Factor] = {}
     for p in scene.parameters:
         if p.name in factors:
             f = factors[p.name]
             levels = np.asarray(f.levels)
             if p.kind == "number":
                 levels = np.array([p.to_si(v, f.units) for v in f.levels])
-            points[p.name] = levels[design.levels[p.name]]
+            varied[p.name] = Factor(levels, design.levels[p.name])
             continue
         value, units = d.parameters.get(p.name, (p.default, p.units))
         if p.kind == "number":
-            points[p.name] = np.broadcast_to(p.to_si(value, units), (runs,))
+            fixed[p.name] = p.to_si(value, units)
         elif p.kind == "vector":
-            row = np.asarray(value, dtype=float) * p.to_si(1.0)
-            points[p.name] = np.broadcast_to(row, (runs, row.size))
+            fixed[p.name] = np.asarray(value, dtype=float) * p.to_si(1.0)
         else:
-            points[p.name] = np.broadcast_to(np.array(value, dtype=object), (runs,))
-    return points
+            fixed[p.name] = np.array(value, dtype=object)
+    order = [p.name for p in scene.parameters]
+    return DesignPoints(design.runs, fixed, varied, order=order)
 
 
 def _sampled(d: StudyDefinition) -> tuple[StudyDefinition, designs.Design]:
@@ -330,9 +332,9 @@ def _linear(lo: float, hi: float) -> Callable[[np.ndarray], np.ndarray]:
 
 
 def _noisy_points(
-    scene: Scene, d: StudyDefinition, points: dict[str, np.ndarray], runs: int
-) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], list[str]]:
-    """The SI points of every design point × noise case (flat, design point major), the noise
+    scene: Scene, d: StudyDefinition, points: DesignPoints
+) -> tuple[DesignPoints, dict[str, np.ndarray], list[str]]:
+    """The points of every design point × noise case (design point major), the noise
     factors' values (runs × cases, parameter units) and why the noise cannot run ([] if it
     can). Without [noise]: the points unchanged."""
     if d.noise is None:
@@ -345,6 +347,7 @@ def _noisy_points(
     except designs.DesignError as exc:
         return points, {}, [f"[noise] {p}" for p in exc.problems]
     cases = next(iter(table.values())).size
+    runs = points.runs
     size_problem = full_factorial_size_problem({"design points": runs, "noise cases": cases}, 1)
     if size_problem:
         return points, {}, [size_problem.replace("full factorial of", "noise study of", 1)]
@@ -357,18 +360,14 @@ def _noisy_points(
         values[f.name] = noisy(f, nominal, table[f.name])
     if problems:
         return points, {}, problems
-    flat = {
-        name: np.repeat(v, cases, axis=0) if v.strides[0] else _broadcast(v, runs * cases)
-        for name, v in points.items()
+    noise = {
+        name: v.reshape(-1) * scene.parameter(name).to_si(1.0)  # type: ignore[union-attr]
+        for name, v in values.items()
     }
-    for name, v in values.items():
-        flat[name] = v.reshape(-1) * scene.parameter(name).to_si(1.0)  # type: ignore[union-attr]
-    return flat, values, []
-
-
-def _broadcast(value: np.ndarray, n: int) -> np.ndarray:
-    """A fixed parameter (a broadcast view) over ``n`` points, still without memory per point."""
-    return np.broadcast_to(value[0], (n, *value.shape[1:]))
+    noisy_points = DesignPoints(
+        runs, points.fixed, points.factors, noise, cases=cases, order=points.order
+    )
+    return noisy_points, values, []
 
 
 def noise_label(d: StudyDefinition) -> str:

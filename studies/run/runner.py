@@ -57,7 +57,7 @@ def chunk_cases(plan: Plan, size: int) -> int:
 
 def chunk_points(plan: Plan, part: slice) -> dict[str, np.ndarray]:
     """The SI parameter values of the computed points ``part`` (design points × noise cases)."""
-    return {k: v[part] for k, v in plan.points.items()}
+    return plan.points.at(part)
 
 
 def evaluate_chunk(plan: Plan, part: slice) -> SceneOutput:

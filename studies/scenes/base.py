@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 from abc import ABC
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Generic, cast
 
@@ -323,7 +323,7 @@ class Scene(ABC, Generic[State]):
         raise NotImplementedError(f"scene {self.name!r} defines neither finish nor evaluate")
 
     # --- to be provided by each scene ---------------------------------------------------
-    def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+    def check_points(self, points: Mapping[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
         """Cross-parameter physical checks over all design points (SI values); problems."""
         return []
 
@@ -342,7 +342,9 @@ class Scene(ABC, Generic[State]):
         bounds the chunk size by it. Nothing known by default."""
         return WorkEstimate()
 
-    def point_warnings(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+    def point_warnings(
+        self, points: Mapping[str, np.ndarray], settings: dict[str, Any]
+    ) -> list[str]:
         """Design points that will run but give no value (e.g. a concave cam), with advice;
         ``check`` and ``run`` print them. None by default."""
         return []

@@ -7,21 +7,58 @@ bad fixed value gives one message instead of one per run.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from contextvars import ContextVar
 
 import numpy as np
 
+from studies.scenes.design_points import DesignPoints, Numbering
+
+LISTED_RANGES = 12
+"""A message names at most this many ranges of design points, then counts them all."""
+_NUMBERING: ContextVar[Numbering | None] = ContextVar("numbering", default=None)
+
+
+def on_distinct(
+    points: Mapping[str, np.ndarray], names: Sequence[str], check: Callable[..., list[str]]
+) -> list[str]:
+    """``check(values)`` over the distinct combinations of the parameters ``names`` (all that
+    the check reads) instead of every point, the design points its messages name numbered back
+    to the study's (:meth:`DesignPoints.distinct`). A plain dict of columns is checked whole."""
+    if not isinstance(points, DesignPoints):
+        return check(dict(points))
+    values, numbering = points.distinct(names)
+    token = _NUMBERING.set(numbering)
+    try:
+        return check(values)
+    finally:
+        _NUMBERING.reset(token)
+
+
+def numbered(indices: np.ndarray) -> np.ndarray:
+    """The design points of ``indices``: themselves, or inside :func:`on_distinct` the design
+    points of the combinations they number (sorted)."""
+    numbering = _NUMBERING.get()
+    return indices if numbering is None else numbering(np.asarray(indices, dtype=np.int64))
+
 
 def point_list(indices: Iterable[int] | np.ndarray) -> str:
-    """``design point 3`` or ``design points 0–4, 7`` (0-based run indices, ranges merged)."""
+    """``design point 3`` or ``design points 0–4, 7`` (0-based run indices, ranges merged; the
+    first LISTED_RANGES ranges, then the count). Inside :func:`on_distinct` the indices are
+    combinations, numbered back to design points here."""
     idx = np.unique(
         np.fromiter(indices, dtype=np.int64) if not isinstance(indices, np.ndarray) else indices
     )
+    idx = numbered(idx)
     breaks = np.flatnonzero(np.diff(idx) != 1)
-    starts = idx[np.r_[0, breaks + 1]].tolist()
-    stops = idx[np.r_[breaks, idx.size - 1]].tolist()
+    shown = breaks[: LISTED_RANGES - 1]
+    starts = idx[np.r_[0, shown + 1]].tolist()
+    stops = idx[np.r_[shown, idx.size - 1]].tolist()
+    if breaks.size >= LISTED_RANGES:
+        stops[-1] = int(idx[breaks[LISTED_RANGES - 1]])
     parts = [str(a) if a == b else f"{a}–{b}" for a, b in zip(starts, stops, strict=True)]
-    return f"design point{'s' if idx.size > 1 else ''} {', '.join(parts)}"
+    more = f", … ({idx.size} in all)" if breaks.size >= LISTED_RANGES else ""
+    return f"design point{'s' if idx.size > 1 else ''} {', '.join(parts)}{more}"
 
 
 class PointProblems:
@@ -174,12 +211,12 @@ def _constant(values: np.ndarray) -> bool:
 
 
 def more_concave_line(
-    rest: np.ndarray, sizes: np.ndarray, radius_mm: np.ndarray, consequence: str
+    rest: np.ndarray, shape: np.ndarray, radius_mm: np.ndarray, consequence: str
 ) -> str:
-    """One line counting the concave cam shapes ``rest`` (indices into ``sizes``, the number of
-    design points of each shape; ``radius_mm`` their smallest radius of curvature) that were
-    not warned one by one."""
-    count = int(sizes[rest].sum())
+    """One line counting the concave cam shapes ``rest`` (``shape``: the shape of each point;
+    ``radius_mm``: each shape's smallest radius of curvature) that were not warned one by one,
+    and their design points (:func:`numbered`)."""
+    count = numbered(np.flatnonzero(np.isin(shape, rest))).size
     return (
         f"{rest.size} more concave cams at {count} more design points (smallest radius of "
         f"curvature {radius_mm[rest].min():.3g} … {radius_mm[rest].max():.3g} mm): {consequence}"

@@ -55,21 +55,46 @@ class Design:
         return len(next(iter(self.levels.values())))
 
 
-def full_factorial(level_counts: dict[str, int]) -> Design:
+def full_factorial(level_counts: dict[str, int], lazy: bool = False) -> Design:
     """Every combination of levels; the last factor varies fastest (C order). Level indices
     are repeated and tiled level ranges in a small integer type (10⁷ runs of four factors:
-    80 MB, not a list of tuples)."""
+    80 MB, not a list of tuples); ``lazy``: each factor's codes are a :class:`FactorialCodes`
+    that makes the codes of the runs it is indexed with (no memory per run)."""
     names = tuple(level_counts)
     counts = [level_counts[n] for n in names]
     runs = int(np.prod(counts, dtype=np.int64))
-    dtype = np.int16 if max(counts, default=1) < 2**15 else np.int32
-    levels = {}
+    levels: dict[str, np.ndarray] = {}
     stride = runs
     for name, count in zip(names, counts, strict=True):
         stride //= count
-        block = np.repeat(np.arange(count, dtype=dtype), stride)
-        levels[name] = np.tile(block, runs // (count * stride))
+        codes = FactorialCodes(count, stride, runs)
+        levels[name] = codes if lazy else codes[:]  # type: ignore[assignment]
     return Design("full_factorial", names, levels)
+
+
+@dataclass(frozen=True)
+class FactorialCodes:
+    """The level codes of one factor of a full factorial, made for the runs asked for: run i
+    is at level (i // stride) mod count. ``codes[part]`` (a slice or an index array) gives an
+    int array; ``len`` is the number of runs; ``np.asarray`` makes them all."""
+
+    count: int
+    stride: int
+    runs: int
+
+    def __len__(self) -> int:
+        return self.runs
+
+    def __getitem__(self, index: slice | np.ndarray) -> np.ndarray:
+        runs = np.arange(*index.indices(self.runs)) if isinstance(index, slice) else index
+        dtype = np.int16 if self.count < 2**15 else np.int32
+        return (np.asarray(runs, dtype=np.int64) // self.stride % self.count).astype(dtype)
+
+    def __array__(self, dtype: type | None = None, copy: bool | None = None) -> np.ndarray:
+        return self[:] if dtype is None else self[:].astype(dtype)
+
+    def astype(self, dtype: type) -> np.ndarray:
+        return self[:].astype(dtype)
 
 
 def sweep(level_counts: dict[str, int], base: dict[str, int]) -> Design:

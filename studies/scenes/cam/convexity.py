@@ -73,8 +73,7 @@ def concave_cams(
     if rest.size == 0:
         return found.messages()
     consequence = "their max_contact_stress is inf and their film thickness 0 too"
-    sizes = np.bincount(shape, minlength=first.size)
-    return [*found.messages(), more_concave_line(rest, sizes, radius, consequence) + scanned]
+    return [*found.messages(), more_concave_line(rest, shape, radius, consequence) + scanned]
 
 
 def _min_radii(

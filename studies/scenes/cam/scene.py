@@ -13,6 +13,7 @@ A response runs only the stages it needs (``Response.needs``).
 from __future__ import annotations
 
 from collections import defaultdict
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -33,7 +34,7 @@ from studies.scenes.cam.parameters import (
 )
 from studies.scenes.cam_laws import LAW_CODES, SHAPE_CODES, codes, polydyne_problems
 from studies.scenes.cam_radius import HALF_TURN_DEG, turn_deg
-from studies.scenes.checks import checked_groups
+from studies.scenes.checks import checked_groups, numbered, on_distinct
 from studies.scenes.state import RunState
 
 if TYPE_CHECKING:
@@ -173,13 +174,18 @@ class CamScene(Scene[CamState]):
         return turn_deg(np.rad2deg(settings["angle_step"]))
 
     # --- checks ---------------------------------------------------------------------------
-    def point_warnings(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+    def point_warnings(
+        self, points: Mapping[str, np.ndarray], settings: dict[str, Any]
+    ) -> list[str]:
         """The concave cams: their contact responses are inf or 0 (a result, warned)."""
-        from studies.scenes.cam.convexity import concave_cams  # noqa: PLC0415
+        from studies.scenes.cam.convexity import SHAPE, concave_cams  # noqa: PLC0415
 
-        return concave_cams(self, points, settings)
+        return on_distinct(points, SHAPE, lambda shapes: concave_cams(self, shapes, settings))
 
-    def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+    def check_points(self, points: Mapping[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+        return on_distinct(points, CHECKED, self._distinct_problems)
+
+    def _distinct_problems(self, points: dict[str, np.ndarray]) -> list[str]:
         found: dict[str, list[np.ndarray]] = defaultdict(list)
         tables: dict[str, str | None] = {}
         for problem, members in checked_groups(
@@ -189,7 +195,7 @@ class CamScene(Scene[CamState]):
         ):
             found[problem].append(members)
         return [
-            f"{_points_label(np.sort(np.concatenate(idx)).tolist())}: {msg}"
+            f"{_points_label(np.sort(numbered(np.concatenate(idx))).tolist())}: {msg}"
             for msg, idx in found.items()
         ]
 

@@ -5,6 +5,7 @@ distinct combination of the parameters it reads (:meth:`PointProblems.add_checke
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -60,7 +61,7 @@ CYCLE_NAMES = (
 """The parameters :func:`cycle_problems` reads."""
 
 
-def layout_problems(points: dict[str, np.ndarray], i: int) -> list[str]:
+def layout_problems(points: Mapping[str, np.ndarray], i: int) -> list[str]:
     """The firing order, crankpins, positions and firing angles of design point ``i`` that do
     not fit its number of cylinders."""
     out = []
@@ -89,7 +90,7 @@ def layout_problems(points: dict[str, np.ndarray], i: int) -> list[str]:
     return out
 
 
-def cycle_problems(points: dict[str, np.ndarray], i: int) -> list[str]:
+def cycle_problems(points: Mapping[str, np.ndarray], i: int) -> list[str]:
     """The combustion settings of design point ``i`` (``pressure_model = "cycle"``) that
     cannot work."""
     out = []

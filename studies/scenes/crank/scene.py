@@ -20,6 +20,7 @@ piston motion used for the inertia forces, the torque and the kinematic curves.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -180,7 +181,7 @@ class CrankScene(Scene[CrankState]):
         return CYCLE_DEG * np.arange(m) / m
 
     # --- checks --------------------------------------------------------------------------
-    def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+    def check_points(self, points: Mapping[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
         problems: list[str] = []
         step_deg = math.degrees(settings["angle_step"])
         if not math.isclose(CYCLE_DEG / step_deg, round(CYCLE_DEG / step_deg), abs_tol=1e-9):
@@ -203,7 +204,7 @@ class CrankScene(Scene[CrankState]):
         self._check_pressure(points, found)
         return problems + found.messages()
 
-    def _check_pressure(self, points: dict[str, np.ndarray], found: PointProblems) -> None:
+    def _check_pressure(self, points: Mapping[str, np.ndarray], found: PointProblems) -> None:
         table = np.flatnonzero(points["pressure_model"] == "table")
         if table.size:
             try:

@@ -20,7 +20,7 @@ runs.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Hashable
+from collections.abc import Callable, Hashable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
@@ -28,7 +28,7 @@ import numpy as np
 
 from engine_kernels.valvetrain import rocker
 from studies.scenes.base import CurveAxis, Scene, SceneOutput
-from studies.scenes.checks import distinct
+from studies.scenes.checks import distinct, on_distinct
 from studies.scenes.linkage.checks import linkage_point_problems
 from studies.scenes.linkage.parameters import (
     CAM_ANGLE,
@@ -54,6 +54,8 @@ GRID_UNIT_DEG = 2.0
 CACHE_SIZE = 64
 SIDES = {"ahead": rocker.PAD_AHEAD, "behind": rocker.PAD_BEHIND}
 KEY_NAMES = tuple(p.name for p in PARAMETERS if p.kind != "vector")
+LINKAGE_NAMES = tuple(p.name for p in PARAMETERS)
+"""The parameters of the cam law and the rocker: all that the linkage checks read."""
 """Parameters that fix the linkage (with the polydyne coefficients): the cache key."""
 
 # response -> (row of the linkage curves, reduction, factor to the response's units)
@@ -148,16 +150,24 @@ class LinkageScene(Scene[Linkage]):
         return grid_deg(-HALF_TURN_DEG, step, HALF_TURN_DEG)
 
     # --- checks ---------------------------------------------------------------------------
-    def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+    def check_points(self, points: Mapping[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
         problem = angle_step_problem(settings["angle_step"], "setting angle_step")
-        return ([problem] if problem else []) + self.linkage_point_problems(points)
+        return ([problem] if problem else []) + on_distinct(
+            points, LINKAGE_NAMES, self.linkage_point_problems
+        )
 
-    def point_warnings(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+    def point_warnings(
+        self, points: Mapping[str, np.ndarray], settings: dict[str, Any]
+    ) -> list[str]:
         """The linkages whose cam is concave: their points will not run (a result, not an error).
         The last user of the linkages :meth:`check_points` found: they are forgotten here."""
-        groups = self.linkage_groups(points)
-        self.groups_seen = None
-        return concave_linkages(points, *groups)
+
+        def concave(values: dict[str, np.ndarray]) -> list[str]:
+            groups = self.linkage_groups(values)
+            self.groups_seen = None
+            return concave_linkages(values, *groups)
+
+        return on_distinct(points, LINKAGE_NAMES, concave)
 
     def linkage_point_problems(self, points: dict[str, np.ndarray]) -> list[str]:
         """Input errors of the cam laws and rocker geometries, grouped by design points."""

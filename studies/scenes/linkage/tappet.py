@@ -169,8 +169,7 @@ def concave_linkages(
     rest = concave[LISTED_CHAINS:]
     if rest.size == 0:
         return found.messages()
-    sizes = np.bincount(linkage, minlength=first.size)
-    more = more_concave_line(rest, sizes, radius * 1e3, "these points will not run either")
+    more = more_concave_line(rest, linkage, radius * 1e3, "these points will not run either")
     return [*found.messages(), more + scanned]
 
 

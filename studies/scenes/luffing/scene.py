@@ -8,6 +8,7 @@ and pass flag; ``all_checks_ok`` and ``checks_passed`` sum them up.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -75,7 +76,7 @@ class LuffingScene(Scene[LuffingState]):
 
         return luffing_summary(ds)
 
-    def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+    def check_points(self, points: Mapping[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
         found = LoopOrder()
         mm = UNITS["mm"].to_si
         outer = np.asarray(points["tube_outer_diameter"])

@@ -33,6 +33,7 @@ custom        youngs_modulus, density parameters
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -327,7 +328,7 @@ class ReedScene(Scene[ReedState]):
     def curve_coordinate(self, settings: dict[str, Any]) -> np.ndarray:
         return np.linspace(0.0, 1.0, int(settings["shape_points"]))
 
-    def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+    def check_points(self, points: Mapping[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
         found = LoopOrder()
         mm = UNITS["mm"].to_si
         rpm = UNITS["rpm"].to_si

@@ -17,6 +17,7 @@ evaluated together by the ``valve`` machinery with those settings.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from functools import partial
 from typing import TYPE_CHECKING, Any
 
@@ -24,14 +25,16 @@ import numpy as np
 
 from engine_kernels import valvetrain as valve
 from studies.scenes.base import Parameter, Response, SceneOutput
-from studies.scenes.checks import PointProblems
+from studies.scenes.checks import PointProblems, on_distinct
 from studies.scenes.linkage.scene import (
     CACHE_SIZE,
+    LINKAGE_NAMES,
     BoundedCache,
     angle_step_problem,
     grid_deg,
     step_deg,
 )
+from studies.scenes.valve.batches import STABILITY_NAMES
 from studies.scenes.valve.error_bar import tolerance_rungs
 from studies.scenes.valve.parameters import (
     ANGLE_STEP,
@@ -132,17 +135,22 @@ class ValveAccuracyScene(ValveScene):
     def kinematic_grid(self, settings: dict[str, Any]) -> tuple[float, float, float]:
         return -180.0, WINDOW_PROBE_DEG, 180.0
 
-    def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
-        found = PointProblems()
-        steps = points["angle_step"]
-        for i, step in enumerate(steps):
-            problem = angle_step_problem(step, "angle_step")
-            if problem:
-                found.add(i, problem)
-        problems = found.messages() + self.linkage_point_problems(points)
-        return (
-            problems + jump_setting_problems(settings) + stability_problems(points, settings, steps)
-        )
+    def check_points(self, points: Mapping[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+        def step_problems(values: dict[str, np.ndarray]) -> list[str]:
+            found = PointProblems()
+            for i, step in enumerate(values["angle_step"]):
+                problem = angle_step_problem(step, "angle_step")
+                if problem:
+                    found.add(i, problem)
+            return found.messages()
+
+        def stability(values: dict[str, np.ndarray]) -> list[str]:
+            return stability_problems(values, settings, values["angle_step"])
+
+        problems = on_distinct(points, ("angle_step",), step_problems)
+        problems += on_distinct(points, LINKAGE_NAMES, self.linkage_point_problems)
+        problems += jump_setting_problems(settings)
+        return problems + on_distinct(points, (*STABILITY_NAMES, "angle_step"), stability)
 
     def evaluate(
         self,

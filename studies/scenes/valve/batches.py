@@ -36,6 +36,8 @@ _PARAM_COLUMN = {
 }
 
 
+STABILITY_NAMES = tuple(name for name in _PARAM_COLUMN if name != "spring_preload")
+"""The parameters the RK4 stability bound reads (valve_spectral_radius and the speed)."""
 CHECK_BLOCK = 1 << 18  # design points per block of the stability check
 
 

@@ -22,12 +22,14 @@ described in :mod:`studies.scenes.valve.parameters`.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from engine_kernels import valvetrain as valve
 from engine_kernels.valvetrain import rocker
+from studies.scenes.checks import on_distinct
 from studies.scenes.linkage.parameters import RESPONSES as ROCKER_RESPONSES
 from studies.scenes.linkage.scene import (
     CACHE_SIZE,
@@ -43,6 +45,7 @@ from studies.scenes.valve import spring, work
 from studies.scenes.valve.batches import (
     N_CURVES,
     N_OUT,
+    STABILITY_NAMES,
     dopri_jump_speeds,
     integrate,
     integrate_dopri,
@@ -137,11 +140,15 @@ class ValveScene(LinkageScene[ValveState]):
         self.window_cache = BoundedCache(CACHE_SIZE)
 
     # --- checks ---------------------------------------------------------------------------
-    def check_points(self, points: dict[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+    def check_points(self, points: Mapping[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
         problems = super().check_points(points, settings) + jump_setting_problems(settings)
-        steps = np.broadcast_to(settings["angle_step"], len(points["cam_speed"]))
-        problems += spring.spring_point_problems(points)
-        return problems + stability_problems(points, settings, steps)
+        problems += on_distinct(points, spring.MASS_NAMES, spring.spring_point_problems)
+
+        def stability(values: dict[str, np.ndarray]) -> list[str]:
+            steps = np.broadcast_to(settings["angle_step"], len(values["cam_speed"]))
+            return stability_problems(values, settings, steps)
+
+        return problems + on_distinct(points, STABILITY_NAMES, stability)
 
     def request_problems(
         self, settings: dict[str, Any], responses: list[str], curves: list[str]

@@ -54,6 +54,7 @@ TWO_PI = 2.0 * np.pi
 N_CHAIN_OUT = len(sc.CHAIN_OUTPUT_NAMES)
 N_CHAIN_CURVES = len(sc.CHAIN_CURVE_NAMES)
 SPRING_MASS_SHARE = 1.0 / 3.0
+MASS_NAMES = ("equivalent_mass", "spring_mass")  # what spring_point_problems reads
 """Share of the spring's mass in the [V1] equivalent mass (the lumped rung's m_s/3 rule)."""
 
 # lumped output column <- chain output column, for the responses both rungs observe
