@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from studies.define.plan import Plan, plan_text
+from studies.define.plan import Plan, plan_study, plan_text
 from studies.scenes.checks import point_list
 from studies.scenes.design_points import DesignPoints
 from study_text import scene_study
@@ -126,3 +126,21 @@ def test_a_long_list_of_design_points_is_cut_and_counted() -> None:
     assert line.startswith("design points 0, 2, 4,")
     assert line.endswith("… (500 in all)")
     assert point_list(np.r_[0:5, 7]) == "design points 0–4, 7"
+
+
+@pytest.mark.parametrize(
+    ("study", "bad", "expected"),
+    [
+        ("crank_lambda_sweep", {"rod_ratio": (1, 1.2)}, "must be < 1"),
+        ("v12_torque", {"max_pressure": (0, 1e5)}, "compression pressure"),
+        ("reed_resonance", {"length": (0, 1e-3)}, "not a slender beam"),
+    ],
+)
+def test_checks_of_the_other_scenes_over_combinations_equal_every_point(
+    study: str, bad: dict[str, tuple[int, float]], expected: str
+) -> None:
+    plan = plan_study(study)
+    spoil(plan.points, bad)
+    reduced = plan.scene.check_points(plan.points, plan.settings)
+    assert reduced == plan.scene.check_points(whole(plan.points), plan.settings)
+    assert any(expected in line for line in reduced)

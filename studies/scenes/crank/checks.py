@@ -59,6 +59,8 @@ CYCLE_NAMES = (
     "max_pressure",
 )
 """The parameters :func:`cycle_problems` reads."""
+CHECKED_NAMES = ("rod_ratio", *LAYOUT_NAMES, "pressure_model", "pressure_table", *CYCLE_NAMES)
+"""Every parameter ``CrankScene.check_points`` reads."""
 
 
 def layout_problems(points: Mapping[str, np.ndarray], i: int) -> list[str]:

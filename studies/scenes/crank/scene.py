@@ -32,9 +32,15 @@ from engine_kernels.crank import kinematics as ck
 from engine_kernels.crank import multicylinder as cl
 from studies.common.units import UNITS
 from studies.scenes.base import Scene, SceneOutput
-from studies.scenes.checks import PointProblems
+from studies.scenes.checks import PointProblems, on_distinct
 from studies.scenes.crank import work
-from studies.scenes.crank.checks import CYCLE_NAMES, LAYOUT_NAMES, cycle_problems, layout_problems
+from studies.scenes.crank.checks import (
+    CHECKED_NAMES,
+    CYCLE_NAMES,
+    LAYOUT_NAMES,
+    cycle_problems,
+    layout_problems,
+)
 from studies.scenes.crank.parameters import MAX_ORDER_HALVES, PARAMETERS, SETTINGS
 from studies.scenes.crank.pressure_tables import read_pressure_table, resample_pressure
 from studies.scenes.crank.responses import CRANK_ANGLE, CURVES, RESPONSES, order_name
@@ -189,6 +195,9 @@ class CrankScene(Scene[CrankState]):
                 f"setting angle_step = {step_deg:g} deg must divide 720 deg (a "
                 "whole number of grid points per cycle)"
             )
+        return problems + on_distinct(points, CHECKED_NAMES, self._distinct_problems)
+
+    def _distinct_problems(self, points: dict[str, np.ndarray]) -> list[str]:
         found = PointProblems()
         lam = np.asarray(points["rod_ratio"])
         found.add_grouped(
@@ -202,7 +211,7 @@ class CrankScene(Scene[CrankState]):
         columns = [points[name] for name in LAYOUT_NAMES]
         found.add_checked(np.arange(lam.size), columns, lambda i: layout_problems(points, i))
         self._check_pressure(points, found)
-        return problems + found.messages()
+        return found.messages()
 
     def _check_pressure(self, points: Mapping[str, np.ndarray], found: PointProblems) -> None:
         table = np.flatnonzero(points["pressure_model"] == "table")

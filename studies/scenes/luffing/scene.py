@@ -18,7 +18,7 @@ from engine_kernels.luffing import drive
 from engine_kernels.luffing import sizing as lf
 from studies.common.units import UNITS
 from studies.scenes.base import Scene, SceneOutput
-from studies.scenes.checks import LoopOrder, groups_of
+from studies.scenes.checks import LoopOrder, groups_of, on_distinct
 from studies.scenes.luffing.parameters import CHECKS, KERNEL_NAMES, NEEDS, PARAMETERS, RESPONSES
 from studies.scenes.state import RunState
 
@@ -42,6 +42,10 @@ def luffing_params(points: dict[str, np.ndarray]) -> np.ndarray:
         else:
             params[:, column] = points[name]
     return params
+
+
+CHECKED = ("tube_outer_diameter", "tube_inner_diameter", "motor_ratings")
+"""The parameters ``check_points`` reads."""
 
 
 @dataclass(slots=True)
@@ -77,6 +81,9 @@ class LuffingScene(Scene[LuffingState]):
         return luffing_summary(ds)
 
     def check_points(self, points: Mapping[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+        return on_distinct(points, CHECKED, self._distinct_problems)
+
+    def _distinct_problems(self, points: dict[str, np.ndarray]) -> list[str]:
         found = LoopOrder()
         mm = UNITS["mm"].to_si
         outer = np.asarray(points["tube_outer_diameter"])

@@ -42,7 +42,7 @@ import numpy as np
 from engine_kernels import reed as rd
 from studies.common.units import UNITS
 from studies.scenes.base import Curve, CurveAxis, Parameter, Response, Scene, SceneOutput
-from studies.scenes.checks import LoopOrder
+from studies.scenes.checks import LoopOrder, on_distinct
 from studies.scenes.state import RunState
 
 if TYPE_CHECKING:
@@ -278,6 +278,10 @@ def material_properties(points: dict[str, np.ndarray]) -> tuple[np.ndarray, np.n
     return modulus, density
 
 
+CHECKED = ("speed_min", "speed_max", "length", "thickness")
+"""The parameters ``check_points`` reads."""
+
+
 @dataclass(slots=True)
 class ReedState(RunState):
     """Run state of a ``reed`` chunk: the kernels' arrays (SI, columns of :mod:`engine_kernels.reed`)."""
@@ -329,6 +333,9 @@ class ReedScene(Scene[ReedState]):
         return np.linspace(0.0, 1.0, int(settings["shape_points"]))
 
     def check_points(self, points: Mapping[str, np.ndarray], settings: dict[str, Any]) -> list[str]:
+        return on_distinct(points, CHECKED, self._distinct_problems)
+
+    def _distinct_problems(self, points: dict[str, np.ndarray]) -> list[str]:
         found = LoopOrder()
         mm = UNITS["mm"].to_si
         rpm = UNITS["rpm"].to_si
