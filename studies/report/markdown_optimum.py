@@ -19,6 +19,7 @@ from studies.common.text_safety import Markup, md_escape
 from studies.report.markdown_format import levels_of, num, table, units_of, value_text
 from studies.report.markdown_ran import ran_note, ran_text, replaced
 from studies.report.markdown_terms import (
+    at_run,
     bound_mark,
     computed,
     control_terms,
@@ -78,7 +79,7 @@ def _levels_ofrun_text(view: xr.Dataset, an: xr.Dataset, run: int) -> Markup:
     """``factor = value (level n)`` of each control factor at ``run``."""
     parts = []
     for f in control_terms(an):
-        level = int(view[f"{f}_level"].values[run])
+        level = int(at_run(view, f"{f}_level", run))
         units = units_of(view, f)
         shown = value_text(levels_of(an, f)[level], units if units != "1" else "")
         parts.append(f"{md_escape(f)} = {shown} (level {level + 1})")

@@ -16,6 +16,7 @@ import xarray as xr
 from studies.analysis.taguchi import factor_names
 from studies.common.text_safety import Markup, md_escape
 from studies.report.markdown_format import levels_of, units_of, value_text
+from studies.report.markdown_terms import at_run
 
 
 def recorders(view: xr.Dataset) -> dict[str, str]:
@@ -28,7 +29,7 @@ def recorders(view: xr.Dataset) -> dict[str, str]:
 def _used(view: xr.Dataset, response: str, run: int) -> object:
     """The recorded value of ``response`` at ``run`` (a code's meaning for a status code)."""
     y = view[response]
-    value = y.values[run]
+    value = at_run(view, response, run)
     if "flag_values" in y.attrs:
         meanings = str(y.attrs["flag_meanings"]).split()
         codes = [int(v) for v in np.atleast_1d(y.attrs["flag_values"])]
@@ -48,7 +49,7 @@ def replaced(view: xr.Dataset, an: xr.Dataset, run: int) -> dict[str, Markup]:
     out = {}
     for f, response in recorders(view).items():
         used = _used(view, response, run)
-        requested = levels_of(an, f)[int(view[f"{f}_level"].values[run])]
+        requested = levels_of(an, f)[int(at_run(view, f"{f}_level", run))]
         if used is not None and not _same(requested, used):
             units = units_of(view, response)
             out[f] = value_text(used, units if units != "1" else "")

@@ -72,10 +72,17 @@ def run_text(index: int) -> str:
     return f"run {index + 1}"
 
 
+def at_run(view: xr.Dataset, name: str, run: int) -> np.ndarray:
+    """The value of ``name`` at ``run``, read alone: results are opened without a cache
+    (:func:`studies.run.results.open_results`), so ``.values`` would read the whole variable
+    for one value (O(N) per table cell)."""
+    return view[name].isel(run=int(run)).values
+
+
 def bound_mark(view: xr.Dataset, name: str, run: int) -> str:
     """``: no value, counted at the bound`` when ``run`` has no value of ``name`` of its own
     (its response's ``none_means`` counted it at the best or worst value seen)."""
-    own = float(view[name].values[run]) if name in view else math.nan
+    own = float(at_run(view, name, run)) if name in view else math.nan
     return "" if np.isfinite(own) else ": no value, counted at the bound"
 
 
