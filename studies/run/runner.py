@@ -9,15 +9,17 @@ compiled kernels). Any ``concurrent.futures.Executor`` can run them instead — 
 ``Client.get_executor()`` (see :func:`dask_executor`) or a process pool started with the
 ``spawn`` method (the kernels' threading layer must not be forked). Every chunk is the
 same pure function of its design points, so results are identical whichever executor ran
-them; a task carries only its chunk's points (never the whole plan).
+them. A task carries its chunk's index range and what makes the chunk's values (a few kB for a
+full factorial, never the whole plan), and at most ``MAX_IN_FLIGHT`` chunks are out at a time.
 """
 
 from __future__ import annotations
 
+import itertools
 import threading
 import time
 from collections.abc import Callable, Iterator, Mapping
-from concurrent.futures import Executor, Future, as_completed
+from concurrent.futures import FIRST_COMPLETED, Executor, Future, wait
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -27,8 +29,13 @@ from tqdm.auto import tqdm
 from studies.common.errors import ClusterError
 from studies.define.plan import Plan
 from studies.scenes import Scene, SceneOutput, get_scene
+from studies.scenes.design_points import DesignPoints
 
 DEFAULT_CHUNK_SIZE = 2048
+MAX_IN_FLIGHT = 16
+"""Chunks submitted to an executor and not yet finished: the next is submitted when one
+finishes, so neither the client nor the scheduler holds a task per chunk of a 10⁸-point study
+(each cluster worker core still has chunks queued)."""
 SCHEDULER_TIMEOUT_S = 5.0  # connecting to a --scheduler address; Dask's default is 30 s
 HANDSHAKE_GRACE_S = 2.0  # beyond it, an address that accepted but never answered is given up
 WORKERS_TIMEOUT_S = 30.0  # a scheduler with no worker: how long to wait for one to join
@@ -72,16 +79,18 @@ _WORKER_SCENES: dict[str, Scene] = {}
 
 def evaluate_part(
     scene: str,
-    points: dict[str, np.ndarray],
+    points: DesignPoints,
+    part: slice,
     settings: dict[str, Any],
     responses: list[str],
     curves: list[str],
 ) -> SceneOutput:
-    """One chunk on an executor's worker: only the chunk's points travel with the task; the
-    scene is built once per worker process (its caches are reused across chunks)."""
+    """One chunk on an executor's worker: the task carries the chunk's index range and what
+    makes its values (:meth:`DesignPoints.for_chunk`), not the values; the scene is built once
+    per worker process (its caches are reused across chunks)."""
     if scene not in _WORKER_SCENES:
         _WORKER_SCENES[scene] = get_scene(scene)
-    return _WORKER_SCENES[scene].evaluate(points, settings, responses, curves)
+    return _WORKER_SCENES[scene].evaluate(points.at(part), settings, responses, curves)
 
 
 def evaluate(
@@ -152,20 +161,21 @@ def _results(
             yield index, part, evaluate_chunk(plan, part)
         return
     d = plan.definition
-    futures: dict[Future[SceneOutput], tuple[int, slice]] = {
-        executor.submit(
-            evaluate_part,
-            d.scene,
-            chunk_points(plan, part),
-            plan.settings,
-            list(plan.responses),
-            list(d.curves),
-        ): (index, part)
-        for index, part in todo
-    }
-    for future in as_completed(futures):
-        index, part = futures[future]
-        yield index, part, future.result()
+
+    def submit(index: int, part: slice) -> tuple[Future[SceneOutput], tuple[int, slice]]:
+        task = (d.scene, plan.points.for_chunk(part), part, plan.settings)
+        future = executor.submit(evaluate_part, *task, list(plan.responses), list(d.curves))
+        return future, (index, part)
+
+    waiting = iter(todo)
+    running = dict(submit(*item) for item in itertools.islice(waiting, MAX_IN_FLIGHT))
+    while running:
+        finished, _ = wait(running, return_when=FIRST_COMPLETED)
+        for future in finished:
+            index, part = running.pop(future)
+            for item in itertools.islice(waiting, 1):
+                running.update([submit(*item)])
+            yield index, part, future.result()
 
 
 def dask_executor(scheduler: str) -> Executor:

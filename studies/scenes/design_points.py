@@ -53,8 +53,29 @@ class DesignPoints(Mapping[str, np.ndarray]):
         self.runs, self.cases = runs, cases
         self.fixed, self.factors, self.noise = fixed, factors, noise or {}
         self.order = tuple(order) or tuple(list(fixed) + list(factors) + list(self.noise))
+        self.start = 0  # the first computed point whose noise values and codes are held
         self._columns: dict[str, np.ndarray] = {}
         self._distinct: dict[tuple[str, ...], tuple[dict[str, np.ndarray], Numbering]] = {}
+
+    def for_chunk(self, part: slice) -> DesignPoints:
+        """What a worker needs to make the values of the computed points ``part`` (whole
+        design points) with :meth:`at`: the levels and fixed values, the codes and noise values
+        of ``part`` only, no caches. A full factorial's chunk without noise pickles to a few kB
+        whatever the study's size (a task carries it, not the chunk's values)."""
+        start, stop, _ = part.indices(self.n)
+        rows = slice(start // self.cases, -(-stop // self.cases))
+        factors = {
+            name: f if _strided(f) else Factor(f.levels, np.asarray(f.codes)[rows])
+            for name, f in self.factors.items()
+        }
+        noise = {name: values[start:stop] for name, values in self.noise.items()}
+        chunk = DesignPoints(self.runs, self.fixed, factors, noise, self.cases, self.order)
+        chunk.start = start
+        return chunk
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled without the caches (whole columns, combinations)."""
+        return {**self.__dict__, "_columns": {}, "_distinct": {}}
 
     @property
     def n(self) -> int:
@@ -89,10 +110,11 @@ class DesignPoints(Mapping[str, np.ndarray]):
         out: dict[str, np.ndarray] = {}
         for name in names or self.order:
             if name in self.noise:
-                out[name] = self.noise[name][flat]
+                out[name] = self.noise[name][flat - self.start]
             elif name in self.factors:
                 factor = self.factors[name]
-                out[name] = factor.levels[factor.codes[rows]]
+                held = rows if _strided(factor) else rows - self.start // self.cases
+                out[name] = factor.levels[factor.codes[held]]
             else:
                 value = np.asarray(self.fixed[name])
                 out[name] = np.broadcast_to(value, (flat.size, *value.shape))

@@ -144,3 +144,25 @@ def test_checks_of_the_other_scenes_over_combinations_equal_every_point(
     reduced = plan.scene.check_points(plan.points, plan.settings)
     assert reduced == plan.scene.check_points(whole(plan.points), plan.settings)
     assert any(expected in line for line in reduced)
+
+
+@pytest.mark.parametrize(
+    ("design", "noise"),
+    [
+        ("full_factorial", ""),
+        ("L18", ""),
+        ("full_factorial", NOISE.format(name="spring_preload")),
+        ("L18", NOISE.format(name="drive_stiffness")),
+    ],
+)
+def test_what_a_task_carries_makes_its_chunk_exactly(design: str, noise: str) -> None:
+    # DesignPoints.for_chunk: the codes and noise values of the chunk only, the same values
+    plan = valve_plan(design, noise)
+    points, cases = plan.points, plan.noise_cases
+    for first, last in [(0, 1), (2, 5), (plan.runs - 3, plan.runs)]:
+        part = slice(first * cases, last * cases)
+        chunk = points.for_chunk(part)
+        expected = points.at(part)
+        for name, values in chunk.at(part).items():
+            np.testing.assert_array_equal(values, expected[name], err_msg=name)
+        assert all(v.shape[0] == part.stop - part.start for v in chunk.noise.values())

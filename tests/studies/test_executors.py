@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from studies.define.plan import plan_text
+from studies.run import runner
 from studies.run.runner import evaluate
 
 STUDY = """
@@ -97,14 +98,47 @@ class Recorder(Executor):
 
 
 def test_a_task_carries_only_its_chunk(serial) -> None:
-    # What an executor receives for one chunk: the chunk's points, not the whole plan.
+    # What an executor receives for one chunk: its index range and the factors' levels, not
+    # the chunk's values and not the whole plan (issue #28: at most 10 kB a task).
     small, big = Recorder(), Recorder()
     assert_same(serial, evaluate(plan_text(STUDY), chunk_size=4, progress=False, executor=small))
     levels = str(list(range(10, 110)))  # 300 runs instead of 15, the same chunk size
     large = plan_text(STUDY.replace("[16.0, 18.0, 20.0, 22.0, 24.0]", levels))
     evaluate(large, chunk_size=4, progress=False, executor=big)
     assert len(big.sizes) == 75
-    assert max(big.sizes) <= 1.2 * max(small.sizes)  # tasks do not grow with the study
+    # 20x the runs: a task grows by the 95 more levels of base_radius (8 bytes each) only
+    assert max(big.sizes) - max(small.sizes) <= 8 * 95 + 100
+    wide = Recorder()
+    evaluate(large, chunk_size=100, progress=False, executor=wide)
+    assert max(wide.sizes) <= max(big.sizes) + 100  # nor with the chunk
+    assert max(wide.sizes) <= 10_000
+
+
+class Counting(ThreadPoolExecutor):
+    """A thread pool that records how many submitted tasks were unfinished at once."""
+
+    def __init__(self) -> None:
+        super().__init__(max_workers=2)
+        self.out, self.most = 0, 0
+
+    def submit(self, fn, /, *args, **kwargs):
+        self.out += 1
+        self.most = max(self.most, self.out)
+        future = super().submit(fn, *args, **kwargs)
+        future.add_done_callback(self._done)
+        return future
+
+    def _done(self, _: Future) -> None:
+        self.out -= 1
+
+
+def test_an_executor_is_given_a_bounded_number_of_chunks_at_a_time() -> None:
+    large = plan_text(STUDY.replace("[16.0, 18.0, 20.0, 22.0, 24.0]", str(list(range(10, 110)))))
+    alone = evaluate(large, chunk_size=4, progress=False)
+    with Counting() as pool:
+        result = evaluate(large, chunk_size=4, progress=False, executor=pool)
+    assert_same(alone, result)
+    assert 1 < pool.most <= runner.MAX_IN_FLIGHT < 75  # 75 chunks, never all out at once
 
 
 def test_an_unreachable_scheduler_is_one_line_and_writes_nothing(
