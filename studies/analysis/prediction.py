@@ -29,9 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 import xarray as xr
-from scipy import stats
 
-from studies.analysis.statistics import SENSES
+from studies.analysis.statistics import SENSES, f_quantile
 from studies.analysis.sums_of_squares import level_sums
 from studies.analysis.taguchi import (
     ALPHA,
@@ -152,7 +151,7 @@ class _Model:
         at = self.over(levels, conditions)
         half = confirm = np.nan
         if dof_e > 0 and np.isfinite(ms_e):
-            f = float(stats.f.ppf(1.0 - alpha, 1, dof_e))
+            f = f_quantile(1.0 - alpha, 1, dof_e)
             half = math.sqrt(f * ms_e / self.n_eff)
             confirm = math.sqrt(f * ms_e * (1.0 / self.n_eff + 1.0 / runs))
         return Prediction(

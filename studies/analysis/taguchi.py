@@ -29,9 +29,8 @@ from typing import Any, cast
 import numpy as np
 import pandas as pd
 import xarray as xr
-from scipy import stats
 
-from studies.analysis.statistics import anova
+from studies.analysis.statistics import anova, f_survival
 from studies.common.errors import StudyError
 from studies.define.plan import first_runs
 from studies.run.results import NOISE
@@ -200,7 +199,7 @@ def interaction_anova(table: pd.DataFrame, ds: xr.Dataset) -> pd.DataFrame:
         f_value, p = np.nan, np.nan
         if dof and dof_error and ms_error > 0.0:
             f_value = (ss / dof) / ms_error
-            p = float(stats.f.sf(f_value, dof, dof_error))
+            p = f_survival(f_value, dof, dof_error)
         rows[f"{a} x {b}"] = (
             float(part["SS"].sum()),
             int(part["dof"].sum()),

@@ -20,6 +20,7 @@ from statsmodels.formula.api import ols
 from statsmodels.stats.anova import anova_lm
 
 from studies.analysis.analyze import analyze, anova, range_analysis
+from studies.analysis.statistics import f_quantile, f_survival
 from studies.define.designs.orthogonal_arrays import orthogonal_array
 from studies.report.plots import main_effects_figure, save_main_effects
 from studies.report.text import format_tables
@@ -310,3 +311,25 @@ def test_main_effects_over_more_than_two_decades_get_a_log_axis(l9):
     an = analyze(spread, ["error", "stress"])
     assert main_effects_figure(an, "error").axes[0].get_yscale() == "log"  # 1e-3 … 1e-1
     assert main_effects_figure(an, "stress").axes[0].get_yscale() == "linear"
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    f=st.one_of(st.floats(-5.0, 1e4), st.sampled_from([0.0, math.inf, math.nan])),
+    dof=st.integers(0, 80),
+    dof_error=st.integers(0, 500),
+    q=st.floats(0.5, 0.999),
+)
+def test_the_f_distribution_is_scipy_stats_bit_for_bit(
+    f: float, dof: int, dof_error: int, q: float
+) -> None:
+    # the analysis reads F's tail and quantile from scipy.special (scipy.stats costs a second
+    # of start-up); reference: scipy.stats.f itself
+    from scipy import stats
+
+    expected = float(stats.f.sf(f, dof, dof_error))
+    got = f_survival(f, dof, dof_error)
+    assert got == expected or (math.isnan(got) and math.isnan(expected))
+    expected_q = float(stats.f.ppf(q, dof, dof_error))
+    got_q = f_quantile(q, dof, dof_error)
+    assert got_q == expected_q or (math.isnan(got_q) and math.isnan(expected_q))

@@ -41,7 +41,6 @@ from typing import Any
 
 import numpy as np
 import xarray as xr
-from scipy import stats
 
 from studies.run.results import NOISE
 
@@ -135,6 +134,8 @@ def moments(
     out: dict[str, np.ndarray], i: int, y: np.ndarray, finite: np.ndarray, n: np.ndarray
 ) -> None:
     """Mean and sd with their intervals into row ``i`` of ``out`` (NaN where n < 2)."""
+    from scipy import stats  # noqa: PLC0415  (on use: a study without noise or samples needs none)
+
     with np.errstate(invalid="ignore", divide="ignore"):
         mean = np.where(finite, y, 0.0).sum(axis=1) / n
         var = np.where(finite, (y - mean[:, None]) ** 2, 0.0).sum(axis=1) / (n - 1)
@@ -158,6 +159,8 @@ def sd_interval(
     c = n/(n − z) and the kurtosis γ₄ = n Σ(y − m)⁴ / (Σ(y − ȳ)²)² about the mean m trimmed by
     1/(2√(n − 4)) at each end (as ``scipy.stats.trim_mean`` cuts). [0, 0] for a row whose
     values are all equal; NaN where n < 5."""
+    from scipy import stats  # noqa: PLC0415  (on use: a study without noise or samples needs none)
+
     z = stats.norm.ppf(0.5 + CONFIDENCE / 2)
     count = n.astype(np.int64)
     ordered = np.sort(np.where(finite, y, np.inf), axis=1)  # the values first, then the rest
@@ -182,6 +185,8 @@ def sd_interval(
 def quantile_interval(y: np.ndarray, p: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The p-quantile of each row of ``y`` over its finite values and the distribution-free
     order-statistic interval at ``CONFIDENCE`` (an end beyond the sample is NaN)."""
+    from scipy import stats  # noqa: PLC0415  (on use: a study without noise or samples needs none)
+
     rows = y.shape[0]
     values = np.where(np.isfinite(y), y, np.nan)
     ordered = np.sort(values, axis=1)  # NaN last
@@ -222,6 +227,8 @@ def violation_counts(
 def wilson(k: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """k/n and the Wilson score interval at ``CONFIDENCE`` per element (NaN where n = 0),
     from scipy's binomtest, once per distinct (k, n)."""
+    from scipy import stats  # noqa: PLC0415  (on use: a study without noise or samples needs none)
+
     p_hat, low, high = (np.full(k.shape, np.nan) for _ in range(3))
     pairs, where = np.unique(np.stack([k, n], axis=-1), axis=0, return_inverse=True)
     for j, (kj, nj) in enumerate(pairs):

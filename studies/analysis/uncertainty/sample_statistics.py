@@ -41,7 +41,6 @@ from typing import Any
 
 import numpy as np
 import xarray as xr
-from scipy import stats
 
 from studies.analysis.uncertainty.noise_statistics import (
     CONFIDENCE,
@@ -62,6 +61,8 @@ def correlation_interval(x: np.ndarray, y: np.ndarray, r: float) -> tuple[float,
     tanh(atanh r ∓ z σ_ψ / ((1 − r²) √(n − 3))), with σ_ψ² the mean square of the influence
     function ψ = x̃ỹ − r (x̃² + ỹ²)/2 of the standardised x̃, ỹ (distribution-free; equal to
     Fisher's (1 − r²)² for a bivariate normal). NaN when n ≤ 3; [r, r] when |r| = 1."""
+    from scipy import stats  # noqa: PLC0415  (on use: a study without noise or samples needs none)
+
     n = x.size
     if n <= 3 or not np.isfinite(r):
         return np.nan, np.nan
@@ -79,6 +80,8 @@ def correlation_interval(x: np.ndarray, y: np.ndarray, r: float) -> tuple[float,
 def correlations(x: np.ndarray, y: np.ndarray) -> dict[str, float]:
     """Pearson r and Spearman ρ of ``x`` with ``y`` and their intervals (NaN when either is
     constant or fewer than 4 points)."""
+    from scipy import stats  # noqa: PLC0415  (on use: a study without noise or samples needs none)
+
     out = dict.fromkeys((*CORRELATIONS, "spearman_high"), np.nan)
     if x.size < 4 or np.ptp(x) == 0 or np.ptp(y) == 0:
         return out

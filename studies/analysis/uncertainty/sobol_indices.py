@@ -26,7 +26,6 @@ from typing import Any
 
 import numpy as np
 import xarray as xr
-from scipy import stats
 
 RESAMPLES = 100
 CONFIDENCE = 0.95
@@ -68,6 +67,8 @@ KEYS = ("S1", "S1_conf", "ST", "ST_conf")
 def indices(y: np.ndarray, d: int, seed: int, second: bool = False) -> dict[str, np.ndarray]:
     """S1, S1_conf, ST, ST_conf (each length D), with ``second`` S2 and S2_conf (D × D, i < j
     only) and the base rows used."""
+    from scipy import stats  # noqa: PLC0415  (on use: a study without noise or samples needs none)
+
     a, ab, ba, b = split(np.asarray(y, dtype=float), d, second)
     keep = np.isfinite(a) & np.isfinite(b) & np.isfinite(ab).all(axis=1) & np.isfinite(ba).all(1)
     a, ab, ba, b = a[keep], ab[keep], ba[keep], b[keep]
