@@ -361,7 +361,8 @@ def _filled(
 def _range(
     out: xr.Dataset, view: xr.Dataset, name: str, terms: list[str], operating: list[str]
 ) -> None:
-    ra = range_analysis(view, name, terms)
+    values = dict(zip(terms, out["level_value"].values, strict=True))
+    ra = range_analysis(view, name, terms, level_values=values)
     at = {"response": name}
     out["k"].loc[at] = np.pad(
         ra.k.values, ((0, 0), (0, out.sizes["level"] - ra.sizes["level"])), constant_values=np.nan

@@ -96,11 +96,6 @@ class Grid:
         codes = tuple(int(levels[f]) for f in self.control)
         return int(np.ravel_multi_index(codes, self.control_counts))
 
-    def at(self, y: np.ndarray, levels: Mapping[str, int]) -> tuple[np.ndarray, np.ndarray]:
-        """Value and run in each condition at the control ``levels``."""
-        row = self.combination(levels)
-        return self.table(y)[row], self.runs[row]
-
     def optimum(
         self, y: np.ndarray, sense: str, beyond: np.ndarray | None = None
     ) -> GridOptimum | None:
@@ -114,8 +109,7 @@ class Grid:
             mean = signed.mean(axis=1)
         if not np.isfinite(mean).any():
             return None
-        rank = self._rank(mean, beyond)
-        row, ties, rule = self._tie_break(mean, rank)
+        row, ties, rule = self._tie_break(mean, self._best(mean, beyond))
         codes = np.unravel_index(row, self.control_counts) if self.control else ()
         levels = {f: int(c) for f, c in zip(self.control, codes, strict=True)}
         best_values = np.full(values.shape[1], np.nan)
@@ -137,42 +131,40 @@ class Grid:
             levels, values[row], self.runs[row], best_values, best_runs, neighbours, ties, rule
         )
 
-    def _rank(self, mean: np.ndarray, beyond: np.ndarray | None) -> np.ndarray:
-        """Per control combination, its place in the order of the module docstring (0 best;
-        combinations without a mean last)."""
+    def _best(self, mean: np.ndarray, beyond: np.ndarray | None) -> np.ndarray:
+        """The control combinations that share the first place in the order of the module
+        docstring (a mask): fewest worst-bound runs, then most best-bound runs, then the best
+        mean. O(N), one pass per key (no sort: only the first place is needed)."""
         finite = np.isfinite(mean)
         # Means within round-off of the best are ties, as in the range analysis (R = 0).
         best = np.min(mean[finite])
         tolerance = ROUND_OFF * np.max(np.abs(mean[finite]))
-        mean = np.where(finite & (mean <= best + tolerance), best, mean)
-        if beyond is None:
-            worse = better = np.zeros(mean.shape, dtype=np.int64)
-        else:
+        chosen = finite.copy()
+        if beyond is not None:
             bounds = np.asarray(beyond)[self.runs]
             worse, better = (bounds < 0).sum(axis=1), (bounds > 0).sum(axis=1)
-        order = np.lexsort((np.where(finite, mean, np.inf), -better, worse, ~finite))
-        keys = np.stack([~finite, worse, -better, np.where(finite, mean, np.inf)])[:, order]
-        new = np.concatenate([[True], (keys[:, 1:] != keys[:, :-1]).any(axis=0)])
-        rank = np.empty(mean.size, dtype=np.int64)
-        rank[order] = np.cumsum(new) - 1
-        return rank
+            chosen &= worse == worse[chosen].min()
+            chosen &= better == better[chosen].max()
+        near = np.where(mean <= best + tolerance, best, mean)
+        return chosen & (near == near[chosen].min())
 
-    def _tie_break(self, mean: np.ndarray, rank: np.ndarray) -> tuple[int, int, str]:
+    def _tie_break(self, mean: np.ndarray, first: np.ndarray) -> tuple[int, int, str]:
         """The best-ranked row, the number of rows sharing its rank and the rule that chose:
         among exact ties, the one whose levels have the best main effects (mean of ``mean``
         over each factor's level, summed), so a flat optimum agrees with the range analysis
         instead of the grid order."""
-        tied = np.flatnonzero(rank == 0)
+        tied = np.flatnonzero(first)
         if tied.size == 1:
             return int(tied[0]), 1, ""
         if not self.control:
             return int(tied[0]), int(tied.size), "grid order"
         grid = mean.reshape(self.control_counts)
+        finite = np.isfinite(grid)
+        filled = np.where(finite, grid, 0.0)
         score = np.zeros(tied.size)
         for axis, _ in enumerate(self.control):
             others = tuple(a for a in range(len(self.control)) if a != axis)
-            finite = np.isfinite(grid)
-            total = np.where(finite, grid, 0.0).sum(axis=others)
+            total = filled.sum(axis=others)
             count = finite.sum(axis=others)
             effect = np.where(count > 0, total / np.maximum(count, 1), np.nan)
             codes = np.unravel_index(tied, self.control_counts)[axis]

@@ -17,7 +17,7 @@ and any other free degrees of freedom), F = MS / MS_error with P from the F dist
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -103,18 +103,21 @@ def _sense(y: xr.DataArray, sense: str | None) -> str:
 
 
 def _level_table(
-    ds: xr.Dataset, y: xr.DataArray, finite: np.ndarray, f: str
+    ds: xr.Dataset, y: xr.DataArray, finite: np.ndarray, f: str, known: np.ndarray | None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Levels of ``f`` with a finite response, their mean response and the factor's value
-    there (NaN where it has none); O(N) by ``bincount``."""
+    there (NaN where it has none; ``known``: the values per level, else read from ``ds``);
+    O(N) by ``bincount``."""
     codes = ds[f"{f}_level"].values
     n = int(codes.max()) + 1
     counts, sums = level_sums(codes, y.values, n, finite)
     present = np.flatnonzero(counts)
     k = sums[present] / counts[present]
     value = np.full(present.size, np.nan)
-    if f in ds.coords and np.issubdtype(ds[f].dtype, np.number):
-        value = ds[f].values[first_runs(codes, n)[present]].astype(float)
+    if known is not None:
+        value = np.asarray(known, dtype=float)[present]
+    elif f in ds.coords and np.issubdtype(ds[f].dtype, np.number):  # read at one run a level
+        value = ds[f].isel(run=first_runs(codes, n)[present]).values.astype(float)
     return present, k, value
 
 
@@ -132,7 +135,11 @@ def _range_and_best(k: np.ndarray, sense: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 def range_analysis(
-    ds: xr.Dataset, response: str, factors: Sequence[str] | None = None, sense: str | None = None
+    ds: xr.Dataset,
+    response: str,
+    factors: Sequence[str] | None = None,
+    sense: str | None = None,
+    level_values: Mapping[str, np.ndarray] | None = None,
 ) -> xr.Dataset:
     """Range analysis of ``response``: level means k, range R, rank, best level per factor.
 
@@ -140,12 +147,14 @@ def range_analysis(
     attribute, else "smaller". Returns a Dataset on dims ``factor`` x ``level`` (0-based) with
     ``k`` (NaN where a factor has fewer levels), ``R``, ``rank`` (1 = largest R) and
     ``best_level``; coordinates ``level_value`` (the factor's value at each level, NaN where
-    unknown or not numeric) and ``factor_units``.
+    unknown or not numeric) and ``factor_units``. ``level_values``: each factor's value per
+    level when known (an analysis of many responses reads them once, not per response).
     """
     names = _factor_names(ds, factors)
     y, finite = _response(ds, response)
     chosen = _sense(y, sense)
-    tables = [_level_table(ds, y, finite, f) for f in names]
+    known = level_values or {}
+    tables = [_level_table(ds, y, finite, f, known.get(f)) for f in names]
     nlevels = max(int(present.max()) + 1 for present, _, _ in tables)
     k = np.full((len(names), nlevels), np.nan)
     level_value = np.full((len(names), nlevels), np.nan)

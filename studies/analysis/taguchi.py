@@ -97,8 +97,8 @@ def sn_responses(ds: xr.Dataset, responses: Sequence[str]) -> list[str]:
         r
         for r in responses
         if "flag_values" not in ds[r].attrs
-        and varies(ds, r)
         and (array or observation_dim(ds[r]) is not None)
+        and varies(ds, r)  # last: it reads the response
     ]
 
 

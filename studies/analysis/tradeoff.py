@@ -87,7 +87,8 @@ def tradeoff(
     for r in responses:
         sense = str(ds[r].attrs.get("better", "smaller"))
         if grid is not None:
-            values, _ = grid.at(ds[r].values, levels)
+            runs = grid.runs[grid.combination(levels)]  # read at these runs only
+            values = ds[r].isel(run=runs).values.astype(float)
             half = np.nan
         else:
             p: Prediction = predict(ds, r, levels, alpha=alpha, table=tables[r])

@@ -19,6 +19,8 @@ import xarray as xr
 from results_datasets import CATALOG, study_dataset
 from studies.analysis import confirmation
 from studies.analysis.analyze import analyze
+from studies.analysis.grid_optimum import Grid
+from studies.analysis.sums_of_squares import ROUND_OFF
 from studies.define.plan import plan_text
 from studies.report.markdown_report import report_text
 from studies.report.write import write_analysis
@@ -180,7 +182,6 @@ def test_a_tied_optimum_takes_the_levels_with_the_best_main_effects() -> None:
     """Five control combinations tie at 0 (smaller is better). Brute force: the main effect of
     each level is the mean of its row or column; among the tied cells the one with the smallest
     sum of its two main effects is (a=1, b=0) — not the first tied cell in grid order (0, 0)."""
-    from studies.analysis.grid_optimum import Grid
 
     y = np.array([[0.0, 5.0, 9.0], [0.0, 0.0, 0.0], [7.0, 6.0, 0.0]])
     tied = [(i, j) for i in range(3) for j in range(3) if y[i, j] == y.min()]
@@ -356,3 +357,41 @@ def test_trade_off_marks_a_best_point_level_that_is_not_the_main_effect_best() -
     assert row.split(" | ")[2].endswith("≠")  # a: level 1 at the best point, not the main effect's
     assert not row.split(" | ")[3].endswith("≠")  # b: level 1 either way
     assert "≠ Not the range analysis' best level" in text
+
+
+def first_place_by_sorting(grid: Grid, mean: np.ndarray, beyond: np.ndarray | None) -> np.ndarray:
+    """Reference: rank every combination by sorting on (no mean, worst-bound runs, −best-bound
+    runs, mean with round-off ties) and keep rank 0 (the implementation before #28, O(N log N))."""
+    finite = np.isfinite(mean)
+    best = np.min(mean[finite])
+    tolerance = ROUND_OFF * np.max(np.abs(mean[finite]))
+    mean = np.where(finite & (mean <= best + tolerance), best, mean)
+    if beyond is None:
+        worse = better = np.zeros(mean.shape, dtype=np.int64)
+    else:
+        bounds = np.asarray(beyond)[grid.runs]
+        worse, better = (bounds < 0).sum(axis=1), (bounds > 0).sum(axis=1)
+    keys = [~finite, worse, -better, np.where(finite, mean, np.inf)]
+    order = np.lexsort(keys[::-1])
+    rows = np.stack(keys)[:, order]
+    new = np.concatenate([[True], (rows[:, 1:] != rows[:, :-1]).any(axis=0)])
+    rank = np.empty(mean.size, dtype=np.int64)
+    rank[order] = np.cumsum(new) - 1
+    return rank == 0
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_the_first_place_is_what_sorting_every_combination_gives(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    counts = (int(rng.integers(2, 5)), int(rng.integers(2, 5)), int(rng.integers(1, 4)))
+    runs = int(np.prod(counts))
+    grid = Grid(["a", "b", "c"], list(counts), rng.permutation(runs), ["c"])
+    y = rng.choice([0.0, 1.0, 2.0, 1.0 + 1e-15, np.nan], size=runs)  # ties, round-off, holes
+    beyond = rng.choice([-1, 0, 0, 1], size=runs) if seed % 2 else None
+    with np.errstate(invalid="ignore"):
+        mean = grid.table(y).mean(axis=1)
+    if not np.isfinite(mean).any():
+        return
+    np.testing.assert_array_equal(
+        grid._best(mean, beyond), first_place_by_sorting(grid, mean, beyond)
+    )
