@@ -220,9 +220,11 @@ def plain(value: Any) -> Any:
 def level_values(ds: xr.Dataset, factor: str) -> dict[int, Any]:
     """Level index → the factor's physical value (level number + 1 when it has none)."""
     levels = ds[f"{factor}_level"].values
-    values = ds[factor].values if factor in ds.coords else levels + 1
     first = first_runs(levels, int(levels.max()) + 1)
-    return {int(lv): plain(values[run]) for lv, run in enumerate(first) if run >= 0}
+    present = np.flatnonzero(first >= 0)
+    runs = first[present]  # the factor's values are read at these runs only
+    values = ds[factor].isel(run=runs).values if factor in ds.coords else levels[runs] + 1
+    return {int(lv): plain(v) for lv, v in zip(present, values, strict=True)}
 
 
 def interaction_means(ds: xr.Dataset, response: str, a: str, b: str) -> xr.DataArray:

@@ -135,11 +135,21 @@ def _report(
     return "\n".join(lines).rstrip() + "\n", toml
 
 
+VALUE_BLOCK = 1 << 16  # runs read at a time while looking for a response's first value
+
+
 def _has_value(ds: xr.Dataset, response: str) -> bool:
     """Whether ``response`` has a value (finite or ±inf) in some run: a column of the runs
-    table even when the analysis has nothing to analyse (inf in every run)."""
-    values = ds[response].values
-    return bool((~np.isnan(values)).any()) if values.dtype.kind == "f" else True
+    table even when the analysis has nothing to analyse (inf in every run). Read a block of
+    runs at a time, up to the first value (not the whole response)."""
+    y = ds[response]
+    if y.dtype.kind != "f":
+        return True
+    runs = ds.sizes["run"]
+    return any(
+        bool((~np.isnan(y.isel(run=slice(start, start + VALUE_BLOCK)).values)).any())
+        for start in range(0, runs, VALUE_BLOCK)
+    )
 
 
 def _next_study(
