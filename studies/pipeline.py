@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import contextlib
 import difflib
+import errno
 import os
 import shutil
 import sqlite3
@@ -31,7 +32,7 @@ from studies.define.definition import parse_study
 from studies.define.plan import Plan, plan_study
 from studies.report.write import write_analysis
 from studies.run import provenance
-from studies.run.results import open_results
+from studies.run.results import checkpoint_bytes, open_results
 from studies.run.results_writer import ResultsWriter
 from studies.run.runner import DEFAULT_CHUNK_SIZE, chunk_cases, chunks, evaluate
 from studies.scenes import SceneOutput
@@ -76,6 +77,7 @@ def run_plan(
 ) -> RunResult:
     """Run a validated plan in a new run folder under ``outputs`` (chunks on ``executor``)."""
     store = RunStore((outputs or records.default_outputs()).resolve())
+    _check_disk(plan, store.outputs)
     chunk_size = chunk_cases(plan, min(chunk_size, plan.max_chunk))  # fine settings: fewer
     d = plan.definition
     commit, dirty = provenance.git_state()
@@ -113,6 +115,24 @@ def run_plan(
         return _execute(plan, store, record, progress, {}, executor, fresh=True)
     finally:
         lock.release()
+
+
+def _check_disk(plan: Plan, root: Path) -> None:
+    """Refuse, before anything is written, a run whose checkpoints alone cannot fit on the
+    disk of ``root`` (:func:`studies.run.results.checkpoint_bytes`; results.nc and the figures
+    come on top)."""
+    needed = checkpoint_bytes(plan)
+    existing = next(p for p in (root, *root.parents) if p.exists())
+    free = shutil.disk_usage(existing).free
+    if needed > free:
+        what = (
+            f"{plan.definition.name} needs at least {needed / 1e9:.3g} GB of disk for its "
+            f"{plan.cases} points' checkpoints ({len(plan.responses)} responses"
+            + (f" and {len(plan.definition.curves)} curves" if plan.definition.curves else "")
+            + f"), {free / 1e9:.3g} GB are free: free space, choose another --outputs, or "
+            "ask for fewer curves or points"
+        )
+        raise OSError(errno.ENOSPC, what, str(root))
 
 
 def resume_run(run_id: str, outputs: Path | None = None, progress: bool = True) -> RunResult:

@@ -12,9 +12,11 @@ import errno
 import json
 import os
 import resource
+import shutil
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import matplotlib.figure
 import netCDF4
@@ -22,8 +24,12 @@ import pytest
 import xarray as xr
 from run_faults import failing_on_call
 
+from studies import pipeline
 from studies.cli import EXIT_OUTPUT_ERROR, main
+from studies.define.plan import plan_text
 from studies.run import results_writer
+from studies.run.results import checkpoint_bytes
+from studies.run.runner import evaluate
 from studies.tracking.store import RunStore
 
 STUDY = """
@@ -209,3 +215,36 @@ def test_a_real_file_size_limit_is_one_line(tmp_path: Path) -> None:
     assert json.loads((folder / "run.json").read_text())["status"] == "failed"
     assert {p.name for p in folder.iterdir()} == KEPT
     assert main(["run", "--resume", row["run_id"], "--outputs", str(outputs), "--no-progress"]) == 0
+
+
+def test_what_the_checkpoints_take_is_what_a_run_computes() -> None:
+    # reference: the bytes of the chunk outputs an evaluation actually returns
+    plan = plan_text(
+        STUDY.replace(
+            'min_radius_of_curvature"]', 'min_radius_of_curvature"]\ncurves = ["lift", "velocity"]'
+        )
+    )
+    ev = evaluate(plan, progress=False)
+    made = sum(v.nbytes for v in ev.scalars.values()) + sum(v.nbytes for v in ev.curves.values())
+    assert checkpoint_bytes(plan) == made > 0
+
+
+def test_a_run_that_cannot_fit_on_the_disk_is_refused_before_it_starts(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    study = tmp_path / "full.toml"
+    study.write_text(STUDY, encoding="utf-8")
+    outputs = tmp_path / "out"
+    real = shutil.disk_usage
+
+    def small(path: str | Path) -> Any:
+        return real(path)._replace(free=50)  # 6 points × 2 responses × 8 bytes do not fit
+
+    monkeypatch.setattr(pipeline.shutil, "disk_usage", small)
+    assert main(["run", str(study), "--outputs", str(outputs)]) == EXIT_OUTPUT_ERROR
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "Traceback" not in err
+    assert "full needs at least 9.6e-08 GB of disk for its 6 points' checkpoints" in err
+    assert "5e-08 GB are free" in err
+    assert not any(p.is_dir() and p.name == "full" for p in outputs.glob("*"))
