@@ -32,12 +32,17 @@ from studies.define.definition import parse_study
 from studies.define.plan import Plan, plan_study
 from studies.report.write import write_analysis
 from studies.run import provenance
-from studies.run.results import checkpoint_bytes, open_results
+from studies.run.results import open_results
 from studies.run.results_writer import ResultsWriter
 from studies.run.runner import DEFAULT_CHUNK_SIZE, chunk_cases, chunks, evaluate
 from studies.scenes import SceneOutput
 from studies.tracking import liveness, records
-from studies.tracking.checkpoints import load_chunk, read_run_record, save_chunk
+from studies.tracking.checkpoints import (
+    checkpoint_bytes,
+    load_chunk,
+    read_run_record,
+    save_chunk,
+)
 from studies.tracking.liveness import FolderLock, Heartbeat, lock_folder
 from studies.tracking.registry_file import RegistryUnusable
 from studies.tracking.store import RunStore
@@ -119,8 +124,8 @@ def run_plan(
 
 def _check_disk(plan: Plan, root: Path) -> None:
     """Refuse, before anything is written, a run whose checkpoints alone cannot fit on the
-    disk of ``root`` (:func:`studies.run.results.checkpoint_bytes`; results.nc and the figures
-    come on top)."""
+    disk of ``root`` (:func:`studies.tracking.checkpoints.checkpoint_bytes`; results.nc and
+    the figures come on top)."""
     needed = checkpoint_bytes(plan)
     existing = next(p for p in (root, *root.parents) if p.exists())
     free = shutil.disk_usage(existing).free

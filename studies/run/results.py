@@ -219,15 +219,6 @@ def curve_layout(plan: Plan, name: str) -> tuple[tuple[str, ...], type, dict[str
     return dims, np.float64, {"units": c.units, "long_name": c.long_name}
 
 
-def checkpoint_bytes(plan: Plan) -> int:
-    """Bytes the chunk checkpoints of ``plan`` hold once every chunk is in: each computed
-    point's responses and curve values, 8 bytes each, uncompressed (``chunks/`` of a run
-    folder, kept until ``results.nc`` is complete, so a run needs at least this much disk)."""
-    width = plan.scene.curve_coordinate(plan.settings).size if plan.definition.curves else 0
-    per_case = len(plan.responses) + len(plan.definition.curves) * width
-    return 8 * per_case * plan.cases
-
-
 def stored_values(values: np.ndarray, dtype: type) -> np.ndarray:
     """A response as stored: flags and status codes as int8 with -1 where not evaluated."""
     if dtype is np.int8:

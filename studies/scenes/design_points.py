@@ -148,14 +148,17 @@ class DesignPoints(Mapping[str, np.ndarray]):
         if chosen:
             digits = np.unravel_index(np.arange(first.size), counts)
             for name, digit in zip(chosen, digits, strict=True):
-                first += digit.astype(np.int64) * self.factors[name].codes.stride
+                first += digit * self.factors[name].codes.stride
         others = [f.codes for n, f in self.factors.items() if n not in chosen]
+        free: list[np.ndarray] = []  # offsets of the other factors' levels, made on first use
 
         def numbering(local: np.ndarray) -> np.ndarray:
-            free = np.zeros(1, dtype=np.int64)  # offsets of the other factors' levels
-            for codes in others:
-                free = np.add.outer(free, np.arange(codes.count) * codes.stride).ravel()
-            members = np.add.outer(first[np.asarray(local, dtype=np.int64)], free).ravel()
+            if not free:
+                offsets = np.zeros(1, dtype=np.int64)
+                for codes in others:
+                    offsets = np.add.outer(offsets, np.arange(codes.count) * codes.stride).ravel()
+                free.append(offsets)
+            members = np.add.outer(first[np.asarray(local, dtype=np.int64)], free[0]).ravel()
             return self._cases(np.sort(members))
 
         return self._values(first * self.cases, first), numbering

@@ -17,13 +17,16 @@ import json
 import zipfile
 import zlib
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from studies.common.errors import OutputsError, RunStateError
 from studies.scenes import SceneOutput
 from studies.tracking.records import RunRecord
+
+if TYPE_CHECKING:
+    from studies.define.plan import Plan
 
 CHECKPOINT_VERSION = 2  # 1: no meta arrays (before validation)
 REDO = "delete it and resume: its design points are computed again"
@@ -45,6 +48,15 @@ def save_chunk(path: Path, part: slice, out: SceneOutput) -> None:
     tmp = path.with_suffix(".tmp.npz")
     np.savez(tmp, **arrays)  # type: ignore[arg-type]
     tmp.replace(path)
+
+
+def checkpoint_bytes(plan: Plan) -> int:
+    """Bytes the chunk checkpoints of ``plan`` hold once every chunk is in: each computed
+    point's responses and curve values, 8 bytes each, uncompressed (``chunks/`` of a run
+    folder, kept until ``results.nc`` is complete, so a run needs at least this much disk)."""
+    width = plan.scene.curve_coordinate(plan.settings).size if plan.definition.curves else 0
+    per_case = len(plan.responses) + len(plan.definition.curves) * width
+    return 8 * per_case * plan.cases
 
 
 def load_chunk(

@@ -28,8 +28,8 @@ from studies import pipeline
 from studies.cli import EXIT_OUTPUT_ERROR, main
 from studies.define.plan import plan_text
 from studies.run import results_writer
-from studies.run.results import checkpoint_bytes
 from studies.run.runner import evaluate
+from studies.tracking.checkpoints import checkpoint_bytes
 from studies.tracking.store import RunStore
 
 STUDY = """

@@ -54,9 +54,9 @@ GRID_UNIT_DEG = 2.0
 CACHE_SIZE = 64
 SIDES = {"ahead": rocker.PAD_AHEAD, "behind": rocker.PAD_BEHIND}
 KEY_NAMES = tuple(p.name for p in PARAMETERS if p.kind != "vector")
+"""Parameters that fix the linkage (with the polydyne coefficients): the cache key."""
 LINKAGE_NAMES = tuple(p.name for p in PARAMETERS)
 """The parameters of the cam law and the rocker: all that the linkage checks read."""
-"""Parameters that fix the linkage (with the polydyne coefficients): the cache key."""
 
 # response -> (row of the linkage curves, reduction, factor to the response's units)
 _CURVE_ROWS: dict[str, tuple[int, float]] = {
