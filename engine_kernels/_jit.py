@@ -1,4 +1,4 @@
-"""The one place Numba options live.
+"""The one place Numba options live, and where Numba is first imported.
 
 Every kernel in ``engine_kernels`` is compiled through the decorators below, so caching,
 floating-point contraction and the parallel switch are set once:
@@ -11,6 +11,13 @@ floating-point contraction and the parallel switch are set once:
 ``fastmath={'contract'}`` only allows fused multiply-add; it never reorders sums or assumes
 away NaN/Inf, so kernels keep IEEE semantics for the physics checks that rely on them.
 
+Importing Numba and starting its compiler cost about a second, which a command that computes
+nothing (``--help``, ``check``, ``runs``) should not pay. A decorated function is therefore a
+:class:`Kernel` until the first kernel is called: then :func:`bind` imports Numba, makes every
+kernel's dispatcher and puts the dispatchers in place of the :class:`Kernel` objects (and
+Numba's ``prange`` in place of :data:`prange`) in the package's modules, so compiled code only
+ever sees Numba's own objects. A :class:`Kernel` held elsewhere forwards to its dispatcher.
+
 Numba's disk cache checks only the timestamp of the file that defines a function, not of the
 modules it calls (whose code it inlines). :func:`_drop_stale_cache` therefore clears the
 package's cache whenever any kernel source changes, so an edit can never be served stale.
@@ -18,16 +25,23 @@ package's cache whenever any kernel source changes, so an edit can never be serv
 
 from __future__ import annotations
 
+import functools
 import hashlib
+import importlib
 import os
+import sys
+import threading
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
-import numba
+import numpy as np
 
 FASTMATH = {"contract"}
 PARALLEL = os.environ.get("ENGINE_KERNELS_PARALLEL", "1") not in ("0", "false", "False", "")
 _PACKAGE = Path(__file__).resolve().parent
 _STAMP = "engine_kernels.sources.sha256"
+_OPTIONS: dict[str, Any] = {"fastmath": FASTMATH, "nogil": True}
 
 
 def _drop_stale_cache() -> None:
@@ -52,40 +66,156 @@ def _drop_stale_cache() -> None:
         return  # read-only install: Numba then falls back to its own cache location
 
 
-_drop_stale_cache()
+class prange:
+    """``range`` until :func:`bind` puts ``numba.prange`` in its place in every kernel module."""
+
+    def __new__(cls, *args: int) -> range:  # type: ignore[misc]
+        return range(*args)
 
 
-def jit(func):
+class Kernel:
+    """A kernel function and its Numba options; compiled through Numba once one is called.
+
+    ``py_func`` is the plain Python function (as on a Numba dispatcher). Calling the kernel, or
+    reading any other dispatcher attribute, binds Numba first (:func:`bind`).
+    """
+
+    def __init__(self, func: Callable[..., Any], options: dict[str, Any]) -> None:
+        functools.update_wrapper(self, func)
+        self.py_func = func
+        self.options = options
+        self.dispatcher: Any = None
+        _KERNELS.append(self)
+
+    def __call__(self, *args: Any) -> Any:
+        if self.dispatcher is None:
+            if _PLAIN.depth:
+                return self.py_func(*args)
+            bind()
+        return self.dispatcher(*args)
+
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("__") or name == "dispatcher":
+            raise AttributeError(name)
+        if self.dispatcher is None:
+            bind()
+        return getattr(self.dispatcher, name)
+
+    def __reduce__(self) -> tuple[Any, tuple[str, str]]:
+        return _kernel_named, (self.py_func.__module__, self.py_func.__qualname__)
+
+    def __repr__(self) -> str:
+        return f"<kernel {self.py_func.__module__}.{self.py_func.__qualname__}>"
+
+
+def _kernel_named(module: str, qualname: str) -> Any:
+    return getattr(importlib.import_module(module), qualname)
+
+
+class _Plain(threading.local):
+    depth = 0  # > 0 while call_small runs a kernel as plain Python in this thread
+
+
+_PLAIN = _Plain()
+INTERPRETED_WORK = 100_000
+"""Most inner evaluations :func:`call_small` runs as plain Python: about 0.75 s at the 7.5 µs an
+evaluation of a cam law takes there, less than starting Numba's compiler and loading a kernel."""
+
+
+def call_small(kernel: Any, work: int, *args: Any) -> Any:
+    """``kernel(*args)``, run as plain Python while Numba is not bound and ``work`` (a count of
+    the kernel's inner evaluations) is at most :data:`INTERPRETED_WORK`: a command that checks a
+    few cams or linkages then answers without starting Numba's compiler.
+
+    Python raises where compiled code gives NaN or ±inf (``math.sqrt(-1)``, ``x / 0``): such a
+    call is run again compiled, which overwrites every output, so the answer is the compiled
+    one up to the rounding of fused multiply-adds.
+    """
+    if _numba is None and work <= INTERPRETED_WORK:
+        _PLAIN.depth += 1
+        try:
+            with np.errstate(all="ignore"):
+                return kernel.py_func(*args)
+        except (ArithmeticError, ValueError, TypeError):
+            pass
+        finally:
+            _PLAIN.depth -= 1
+    return kernel(*args)
+
+
+_KERNELS: list[Kernel] = []
+_LOCK = threading.Lock()
+_numba: Any = None
+
+
+def bound() -> bool:
+    """True once Numba is imported and the kernels are its dispatchers."""
+    return _numba is not None
+
+
+def bind() -> None:
+    """Import Numba, make the dispatcher of every kernel defined so far, and put the
+    dispatchers (and ``numba.prange``) in place of their stand-ins in the kernel modules."""
+    global _numba  # noqa: PLW0603  (once per process, under the lock)
+    with _LOCK:
+        if _numba is not None:
+            return
+        _drop_stale_cache()
+        import numba  # noqa: PLC0415  (the point of this module: Numba on first use)
+
+        for kernel in _KERNELS:
+            kernel.dispatcher = numba.njit(**kernel.options)(kernel.py_func)
+        stand_ins = {id(prange): numba.prange}
+        for kernel in _KERNELS:
+            stand_ins[id(kernel)] = kernel.dispatcher
+        for name, module in list(sys.modules.items()):
+            if name.partition(".")[0] == __package__ and module is not None:
+                _replace_stand_ins(vars(module), stand_ins)
+        _numba = numba
+
+
+def _replace_stand_ins(namespace: dict[str, Any], stand_ins: dict[int, Any]) -> None:
+    """Put Numba's objects in place of the stand-ins (keyed by ``id``) in ``namespace``."""
+    for key, value in list(namespace.items()):
+        if id(value) in stand_ins:
+            namespace[key] = stand_ins[id(value)]
+
+
+def _decorate(func: Callable[..., Any], **options: Any) -> Any:
+    options = {**_OPTIONS, **options}
+    if _numba is not None:
+        return _numba.njit(**options)(func)
+    return Kernel(func, options)
+
+
+def jit(func: Callable[..., Any]) -> Any:
     """Compile a scalar kernel (no parallel loops), cached on disk."""
-    return numba.njit(cache=True, fastmath=FASTMATH, nogil=True)(func)
+    return _decorate(func, cache=True)
 
 
-def jit_inline(func):
+def jit_inline(func: Callable[..., Any]) -> Any:
     """Like :func:`jit`, but inlined into its callers at the Numba IR level.
 
     For small helpers inside lane (SIMD) loops: a call boundary there stops LLVM from
     vectorising the loop.
     """
-    return numba.njit(cache=True, fastmath=FASTMATH, nogil=True, inline="always")(func)
+    return _decorate(func, cache=True, inline="always")
 
 
-def jit_lanes(func):
+def jit_lanes(func: Callable[..., Any]) -> Any:
     """Like :func:`jit`, with NumPy's error model, for functions holding SIMD lane loops.
 
     Under Python's error model every float division checks its divisor and may raise, a
     branch out of the loop that stops LLVM from vectorising it; here ``x/0`` gives ±inf or
     NaN as IEEE says (a lane whose value is then discarded by a select needs no branch).
     """
-    return numba.njit(cache=True, fastmath=FASTMATH, nogil=True, error_model="numpy")(func)
+    return _decorate(func, cache=True, error_model="numpy")
 
 
-def batch(func):
+def batch(func: Callable[..., Any]) -> Any:
     """Compile a batch driver whose outer loop is ``prange`` over cases.
 
     Numba's disk cache does not key on the ``parallel`` flag, so the serial variant is never
     cached: otherwise a cached parallel build would silently serve ``ENGINE_KERNELS_PARALLEL=0``.
     """
-    return numba.njit(cache=PARALLEL, fastmath=FASTMATH, nogil=True, parallel=PARALLEL)(func)
-
-
-prange = numba.prange
+    return _decorate(func, cache=PARALLEL, parallel=PARALLEL)

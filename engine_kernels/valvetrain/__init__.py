@@ -42,7 +42,7 @@ from engine_kernels.valvetrain.valve.guard import (
     STEP_RATIO_TARGET,
     prepare_case,
     stability_substeps,
-    stability_substeps_batch,
+    stability_substeps_rows,
     valid_valve_parameters,
 )
 from engine_kernels.valvetrain.valve.jump import jump_speed
@@ -195,7 +195,7 @@ __all__ = [
     "prepare_case",
     "rk4_valve_step",
     "stability_substeps",
-    "stability_substeps_batch",
+    "stability_substeps_rows",
     "valid_valve_parameters",
     "valve_acceleration",
     "valve_coefficients",

@@ -17,6 +17,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from engine_kernels import call_small
 from engine_kernels.cam import kinematics as cb
 from engine_kernels.cam.lift_laws import LAW_POLYDYNE, LAW_SIX_SEGMENT, N_RISE_LAWS
 from studies.scenes.checks import distinct, take
@@ -89,13 +90,25 @@ def min_radii(
         params, shapes, coeffs = rows(some[first])
         params[:, cb.P_LIFT], params[:, cb.P_BASE_RADIUS] = 1.0, 0.0
         shape = np.empty(first.size)
-        cb.min_radius_of_curvature_batch(params, shapes, coeffs, angle_grid(step_deg), shape)
+        grid = angle_grid(step_deg)
+        call_small(
+            cb.min_radius_of_curvature_batch,
+            first.size * grid.size,
+            params,
+            shapes,
+            coeffs,
+            grid,
+            shape,
+        )
         out[some] = base[some] + lift[some] * shape[group]
     rest = np.flatnonzero(~scaled)
     step = scan_step_deg(rest.size, step_deg)
     if rest.size:
         radius = np.empty(rest.size)
-        cb.min_radius_of_curvature_batch(*rows(rest), angle_grid(step), radius)
+        grid = angle_grid(step)
+        call_small(
+            cb.min_radius_of_curvature_batch, rest.size * grid.size, *rows(rest), grid, radius
+        )
         out[rest] = radius
     if step == step_deg:
         return out, ""

@@ -13,8 +13,10 @@ from __future__ import annotations
 
 import math
 
-from engine_kernels._jit import batch, jit, prange
-from engine_kernels.valvetrain.rk4 import stable_substeps
+import numpy as np
+
+from engine_kernels._jit import jit
+from engine_kernels.valvetrain.rk4 import MAX_SUBSTEPS, stable_substeps
 from engine_kernels.valvetrain.valve.layout import (
     O_STATUS,
     O_STEP_RATIO,
@@ -77,17 +79,36 @@ def stability_substeps(params, grid_step):
     return stable_substeps(step, radius, STEP_RATIO_TARGET), step * radius
 
 
-@batch
-def stability_substeps_batch(rows, grid_steps, needed, ratio):
-    """:func:`stability_substeps` of every parameter row (the plan's check of a design).
+def stability_substeps_rows(rows, grid_steps):
+    """:func:`stability_substeps` of every parameter row, in NumPy (the plan's check of a
+    design: it runs before anything is compiled, on up to millions of rows at once).
 
-    rows      : 2-D array  Parameter rows (``P_*``), one per case.
+    rows      : 2-D array  Parameter rows (``P_*``), one per case; masses > 0.
     grid_steps: 1-D array  Grid step Δθ of each case [rad].
-    needed    : 1-D int64  Out: sub-steps per grid step of each case.
-    ratio     : 1-D array  Out: ``|h λ|_max`` of the full step of each case.
+    Returns the sub-steps per grid step (int64) and ``|h λ|_max`` of the full step per row.
     """
-    for i in prange(rows.shape[0]):
-        needed[i], ratio[i] = stability_substeps(rows[i], grid_steps[i])
+    mass = rows[:, P_MASS]
+    k, b = rows[:, P_DRIVE_STIFFNESS], rows[:, P_DRIVE_DAMPING]
+    ks, gamma = rows[:, P_SPRING_RATE], rows[:, P_EXTERNAL_DAMPING]
+    kz, bz = rows[:, P_SEAT_STIFFNESS], rows[:, P_SEAT_DAMPING]
+    radius = _oscillator_radii(mass, b + bz + gamma, k + kz + ks)
+    for damping, stiffness in ((b + gamma, k + ks), (bz + gamma, kz + ks), (gamma, ks)):
+        radius = np.maximum(radius, _oscillator_radii(mass, damping, stiffness))
+    with np.errstate(all="ignore"):  # a speed of 1e-300 rad/s needs more than any count
+        ratio = grid_steps / rows[:, P_SPEED] * radius
+        scaled = ratio / STEP_RATIO_TARGET
+        needed = np.where(scaled < MAX_SUBSTEPS, np.ceil(scaled), MAX_SUBSTEPS)
+        needed = np.where(scaled <= 1.0, 1, needed).astype(np.int64)
+    return needed, ratio
+
+
+def _oscillator_radii(mass, damping, stiffness):
+    """:func:`~engine_kernels.valvetrain.rk4.oscillator_spectral_radius` of arrays."""
+    with np.errstate(all="ignore"):  # IEEE results, as compiled: a tiny mass gives inf
+        discriminant = damping * damping - 4.0 * mass * stiffness
+        under = np.sqrt(stiffness / mass)
+        over = (damping + np.sqrt(discriminant)) / (2.0 * mass)
+    return np.where(discriminant < 0.0, under, over)
 
 
 @jit

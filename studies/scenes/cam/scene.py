@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from engine_kernels import call_small
 from engine_kernels.cam import kinematics as cb
 from engine_kernels.cam import lift_laws, multi_segment
 from engine_kernels.cam import loads as cam_loads
@@ -188,10 +189,11 @@ class CamScene(Scene[CamState]):
     def _distinct_problems(self, points: dict[str, np.ndarray]) -> list[str]:
         found: dict[str, list[np.ndarray]] = defaultdict(list)
         tables: dict[str, str | None] = {}
+        fitted = _fitted_widths(points)
         for problem, members in checked_groups(
             np.arange(len(points["law"])),
             [points[name] for name in CHECKED if name in points],
-            lambda i: self._point_problems(points, i, tables),
+            lambda i: self._point_problems(points, i, tables, fitted),
         ):
             found[problem].append(members)
         return [
@@ -200,16 +202,18 @@ class CamScene(Scene[CamState]):
         ]
 
     def _point_problems(
-        self, p: dict[str, np.ndarray], i: int, tables: dict[str, str | None]
+        self,
+        p: dict[str, np.ndarray],
+        i: int,
+        tables: dict[str, str | None],
+        fitted: tuple[np.ndarray, np.ndarray, np.ndarray],
     ) -> list[str]:
         law = p["law"][i]
         deg = np.rad2deg
         out = []
         if law == "six_segment":
-            widths = np.array([p[f"seg{k}_width"][i] for k in range(1, 7)])
-            shapes = np.array([SHAPE_CODES[p[f"seg{k}_shape"][i]] for k in range(1, 7)])
-            adjusted = np.empty(6)
-            if not multi_segment.segment_widths(widths, shapes, p["rise_angle"][i], adjusted):
+            widths, adjusted, fits = (values[i] for values in fitted)
+            if not fits:
                 out.append(
                     f"segment widths {np.round(deg(widths), 3).tolist()} deg cannot be fitted to "
                     f"the rise_angle = {deg(p['rise_angle'][i]):g} deg half-event: the fillet and segment 6 "
@@ -347,3 +351,20 @@ def _ramp_problems(height: float, width: float, velocity: float) -> list[str]:
 def _points_label(indices: list[int]) -> str:
     shown = ", ".join(str(i) for i in indices[:8]) + (" …" if len(indices) > 8 else "")
     return f"design point{'s' if len(indices) > 1 else ''} {shown}"
+
+
+def _fitted_widths(p: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Nominal and fitted segment widths [rad] of the points (n, 6) and whether they fit their
+    half-event, in one kernel call over the six-segment points (as plain Python for a few)."""
+    n = len(p["law"])
+    widths, adjusted, fits = np.zeros((n, 6)), np.zeros((n, 6)), np.ones(n, dtype=bool)
+    six = np.flatnonzero(p["law"] == "six_segment")
+    if six.size:
+        widths = np.stack([p[f"seg{k}_width"] for k in range(1, 7)], axis=1).astype(float)
+        shapes = np.stack([codes(p[f"seg{k}_shape"][six], SHAPE_CODES) for k in range(1, 7)], 1)
+        half = np.ascontiguousarray(p["rise_angle"][six], dtype=float)
+        out, ok = np.empty((six.size, 6)), np.empty(six.size, dtype=bool)
+        fit = multi_segment.segment_widths_batch
+        call_small(fit, six.size, np.ascontiguousarray(widths[six]), shapes, half, out, ok)
+        adjusted[six], fits[six] = out, ok
+    return widths, adjusted, fits

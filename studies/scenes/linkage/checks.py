@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+from engine_kernels import call_small
 from engine_kernels.cam import multi_segment
 from studies.scenes.cam_laws import polydyne_problems
 from studies.scenes.checks import LoopOrder, fixed, groups_of
@@ -123,7 +124,10 @@ def _six_segment_problems(p: dict[str, np.ndarray], six: np.ndarray, found: Loop
         out = np.empty((idx.size, multi_segment.N_SEGMENTS))
         ok = np.empty(idx.size, dtype=bool)
         half = np.ascontiguousarray(p["rise_angle"][idx], dtype=float)
-        multi_segment.segment_widths_batch(np.ascontiguousarray(widths[idx]), shapes, half, out, ok)
+        adjusted_widths = multi_segment.segment_widths_batch
+        call_small(
+            adjusted_widths, idx.size, np.ascontiguousarray(widths[idx]), shapes, half, out, ok
+        )
         adjusted[idx], fits[idx] = out, ok
     found.add(
         4,

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from engine_kernels import call_small
 from engine_kernels.cam import kinematics as cb
 from engine_kernels.cam import lift_laws, multi_segment
 from engine_kernels.valvetrain import rocker, rocker_batches
@@ -78,7 +79,8 @@ def nose_tappet_lifts(points: dict[str, np.ndarray], idx: np.ndarray) -> np.ndar
     """:func:`nose_tappet_lift` of design points ``idx`` in one kernel call [m]."""
     out = np.empty(len(idx))
     lift = np.ascontiguousarray(take(points["valve_lift"], idx), dtype=float)
-    rocker_batches.tappet_lift_for_valve_lift_batch(lift, geometry_rows(points, idx), out)
+    geometry = geometry_rows(points, idx)
+    call_small(rocker_batches.tappet_lift_for_valve_lift_batch, len(idx), lift, geometry, out)
     return out
 
 

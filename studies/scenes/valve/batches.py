@@ -216,7 +216,7 @@ def stability_problems(
     points: dict[str, np.ndarray], settings: dict[str, Any], steps: np.ndarray
 ) -> list[str]:
     """Points whose RK4 step [rad] (one per point) needs more sub-steps than
-    ``max_substeps`` (physics §4); checked by a compiled batch over blocks of points, so the
+    ``max_substeps`` (physics §4); checked in NumPy over blocks of points, so the
     parameter rows of a 10⁷-point design never sit in memory at once."""
     found = PointProblems()
     limit = int(settings["max_substeps"])
@@ -225,9 +225,7 @@ def stability_problems(
         part = slice(start, min(start + CHECK_BLOCK, runs))
         rows = valve_rows(points, part)
         block_steps = np.ascontiguousarray(steps[part], dtype=float)
-        needed = np.empty(rows.shape[0], dtype=np.int64)
-        ratio = np.empty(rows.shape[0])
-        valve.stability_substeps_batch(rows, block_steps, needed, ratio)
+        needed, ratio = valve.stability_substeps_rows(rows, block_steps)
         for i in np.flatnonzero(needed > limit):
             row, step = rows[i], block_steps[i]
             found.add(

@@ -13,14 +13,14 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy.integrate import OdeSolution, solve_ivp
-from scipy.interpolate import CubicHermiteSpline
-from scipy.optimize import brentq
 
 from engine_kernels import valvetrain as valve
+
+if TYPE_CHECKING:
+    from scipy.integrate import OdeSolution
 
 Excitation = Callable[[float | np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
 
@@ -65,6 +65,8 @@ def table_excitation(excitation: np.ndarray, table_step: float, table_start: flo
     then clipped at the lash take-up as the kernels do
     (:func:`engine_kernels.valvetrain.valve.model.lash_clip`): 0 wherever the interpolated Y ≤ 0.
     """
+    from scipy.interpolate import CubicHermiteSpline  # noqa: PLC0415  (scipy on use: a second)
+
     nodes = table_start + table_step * np.arange(excitation.shape[1])
     lift = CubicHermiteSpline(nodes, excitation[0], excitation[1])
     slope = CubicHermiteSpline(nodes, excitation[1], excitation[2])
@@ -146,6 +148,8 @@ def _missed_switch(
 
     if guard(low) < 0.0:
         return None
+    from scipy.optimize import brentq  # noqa: PLC0415  (on use, as above)
+
     root = brentq(guard, low, theta[first], xtol=XTOL, rtol=4 * np.finfo(float).eps)
     # step just past the root, so the restart is on the new side
     while guard(root) >= 0.0 and root < theta[first]:
@@ -174,6 +178,8 @@ def valve_reference(
     method     : ``"DOP853"`` or ``"Radau"``.
     rtol, atol : solver tolerances (atol in m and m/s).
     """
+    from scipy.integrate import solve_ivp  # noqa: PLC0415  (on use, as above)
+
     speed = params[valve.P_SPEED]
     mass = params[valve.P_MASS]
     k, b = params[valve.P_DRIVE_STIFFNESS], params[valve.P_DRIVE_DAMPING]
