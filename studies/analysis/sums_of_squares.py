@@ -24,6 +24,7 @@ RANK_TOLERANCE = 1e-9  # relative pivot below which a dummy column counts as dep
 # A sum of squares below this fraction of the total is round-off of a zero effect (an effect
 # the response does not have still leaves ~ε² of the total from the centred sums): reported 0.
 ROUND_OFF = 1e-12
+BLOCK = 1 << 20  # runs per block of the unbalanced normal equations
 
 
 def without_round_off(ss: np.ndarray, total: float) -> np.ndarray:
@@ -89,40 +90,61 @@ def _balanced(d: np.ndarray, terms: list[np.ndarray]) -> tuple[np.ndarray, np.nd
 
 
 def _dummies(terms: list[np.ndarray]) -> tuple[list[np.ndarray], list[np.ndarray]]:
-    """Per term: the levels present but the first (treatment coding) and re-coded levels
-    (-1 for the reference level, else the index of the level's dummy column)."""
-    present, recoded = [], []
+    """Per term: the levels present but the first (treatment coding) and the lookup from a
+    level to its dummy column (-1 for the reference level and for absent levels)."""
+    present, lookups = [], []
     for t in terms:
-        levels = np.unique(t)
+        levels = np.flatnonzero(np.bincount(t)) if t.min() >= 0 else np.unique(t) - t.min()
         lookup = np.full(int(levels.max()) + 1, -1, dtype=np.int32)
         lookup[levels[1:]] = np.arange(levels.size - 1)
         present.append(levels[1:])
-        recoded.append(lookup[t])
-    return present, recoded
+        lookups.append(lookup)
+    return present, lookups
 
 
 def normal_equations(
     d: np.ndarray, terms: list[np.ndarray]
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Gram matrix XᵀX, Xᵀd and the term of each column for intercept + treatment dummies,
-    from level counts and level sums (O(N) per pair of terms)."""
-    present, recoded = _dummies(terms)
+    from level counts and level sums (O(N) per pair of terms), accumulated over blocks of
+    :data:`BLOCK` runs so that the dummy codes of one block are held at a time."""
+    present, lookups = _dummies(terms)
+    shifts = [0 if t.min() >= 0 else int(t.min()) for t in terms]
     widths = [p.size for p in present]
     starts = np.concatenate([[1], 1 + np.cumsum(widths)])
     p = int(starts[-1])
     gram, rhs = np.zeros((p, p)), np.zeros(p)
     gram[0, 0], rhs[0] = d.size, d.sum()
     owner = np.concatenate([[-1], np.repeat(np.arange(len(terms)), widths)])
+    for first in range(0, d.size, BLOCK):
+        part = slice(first, first + BLOCK)
+        recoded = [
+            lookup[t[part] - shift] for lookup, t, shift in zip(lookups, terms, shifts, strict=True)
+        ]
+        _add_block(gram, rhs, d[part], recoded, widths, starts)
+    return gram, rhs, owner
+
+
+def _add_block(
+    gram: np.ndarray,
+    rhs: np.ndarray,
+    d: np.ndarray,
+    recoded: list[np.ndarray],
+    widths: list[int],
+    starts: np.ndarray,
+) -> None:
+    """Add one block's level counts, level sums and joint counts to ``gram`` and ``rhs``."""
     for a, (ca, wa) in enumerate(zip(recoded, widths, strict=True)):
         if wa == 0:
             continue
         sa = slice(starts[a], starts[a] + wa)
         keep = ca >= 0
         n_a, s_a = level_sums(ca[keep], d[keep], wa)
-        gram[0, sa] = gram[sa, 0] = n_a
-        gram[sa, sa] = np.diag(n_a)
-        rhs[sa] = s_a
-        for b in range(a + 1, len(terms)):
+        gram[0, sa] += n_a
+        gram[sa, 0] += n_a
+        gram[sa, sa] += np.diag(n_a)
+        rhs[sa] += s_a
+        for b in range(a + 1, len(recoded)):
             cb, wb = recoded[b], widths[b]
             if wb == 0:
                 continue
@@ -130,9 +152,8 @@ def normal_equations(
             combined = ca[both].astype(np.int64) * wb + cb[both]
             joint = np.bincount(combined, minlength=wa * wb).reshape(wa, wb)
             sb = slice(starts[b], starts[b] + wb)
-            gram[sa, sb] = joint
-            gram[sb, sa] = joint.T
-    return gram, rhs, owner
+            gram[sa, sb] += joint
+            gram[sb, sa] += joint.T
 
 
 def _sequential(d: np.ndarray, terms: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:

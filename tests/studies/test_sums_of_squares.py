@@ -20,6 +20,7 @@ from statsmodels.formula.api import ols
 from statsmodels.stats.anova import anova_lm
 
 from studies.analysis.analyze import anova
+from studies.analysis import sums_of_squares
 from studies.analysis.sums_of_squares import is_balanced, term_sums_of_squares
 from studies.define.designs import list_orthogonal_arrays
 from studies.define.designs.orthogonal_arrays import orthogonal_array
@@ -124,3 +125,22 @@ def test_large_offset_is_exact(replicates: int) -> None:
     exact_f = (between / 8) / ((exact_total - between) / (keep.sum() - 9))
     f = (ss[0] / 8) / ((total - ss[0]) / (keep.sum() - 9))
     assert f == pytest.approx(float(exact_f), rel=1e-9)
+
+
+def test_normal_equations_in_blocks_equal_the_dense_design_matrix(monkeypatch) -> None:
+    # Brute force: the intercept + treatment-dummy matrix X built densely, XᵀX and Xᵀd, against
+    # the level-sum accumulation over blocks of 1000 runs (a level absent from the data, and
+    # terms whose levels do not start at 0).
+    rng = np.random.default_rng(2611)
+    n = 5_300
+    terms = [rng.integers(0, 5, n), rng.integers(2, 7, n), np.where(rng.random(n) < 0.5, 0, 3)]
+    d = rng.normal(size=n)
+    monkeypatch.setattr(sums_of_squares, "BLOCK", 1000)
+    gram, rhs, owner = sums_of_squares.normal_equations(d, terms)
+    columns = [np.ones(n)]
+    for t in terms:
+        columns += [(t == level).astype(float) for level in np.unique(t)[1:]]
+    x = np.stack(columns, axis=1)
+    np.testing.assert_array_equal(gram, x.T @ x)  # counts: exact in any order
+    np.testing.assert_allclose(rhs, x.T @ d, rtol=1e-12, atol=1e-12 * np.abs(d).sum())
+    assert owner.tolist() == [-1, 0, 0, 0, 0, 1, 1, 1, 1, 2]
