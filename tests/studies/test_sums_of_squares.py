@@ -19,8 +19,8 @@ import xarray as xr
 from statsmodels.formula.api import ols
 from statsmodels.stats.anova import anova_lm
 
-from studies.analysis.analyze import anova
 from studies.analysis import sums_of_squares
+from studies.analysis.analyze import anova
 from studies.analysis.sums_of_squares import is_balanced, term_sums_of_squares
 from studies.define.designs import list_orthogonal_arrays
 from studies.define.designs.orthogonal_arrays import orthogonal_array
