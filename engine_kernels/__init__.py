@@ -4,7 +4,3 @@ Plain float/array-in, float/array-out functions in SI units (m, s, rad, N, Pa, k
 with Numba. This package never imports xarray, pandas or ``studies``: the study engine calls
 into it, never the other way round (enforced by the import contract in ``nox -s lint``).
 """
-
-from engine_kernels._jit import call_small
-
-__all__ = ["call_small"]

@@ -17,7 +17,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from engine_kernels import call_small
+from engine_kernels._jit import call_small
 from engine_kernels.cam import kinematics as cb
 from engine_kernels.cam.lift_laws import LAW_POLYDYNE, LAW_SIX_SEGMENT, N_RISE_LAWS
 from studies.scenes.checks import distinct, take

@@ -80,7 +80,8 @@ def test_plain_python_answers_equal_the_compiled_ones():
         f"""
         import json
         import numpy as np
-        from engine_kernels import _jit, call_small
+        from engine_kernels import _jit
+        from engine_kernels._jit import call_small
         from engine_kernels.cam import kinematics as cb
         from engine_kernels.valvetrain import rocker_batches
         from studies.scenes.cam_radius import angle_grid

@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from engine_kernels import call_small
+from engine_kernels._jit import call_small
 from engine_kernels.cam import multi_segment
 from studies.scenes.cam_laws import polydyne_problems
 from studies.scenes.checks import LoopOrder, fixed, groups_of
