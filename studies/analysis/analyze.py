@@ -61,6 +61,7 @@ import xarray as xr
 from studies.analysis import missing, prediction, taguchi
 from studies.analysis import optimum as analysis_optimum
 from studies.analysis.factorial import factorial, factorial_frame, grid_of
+from studies.analysis.filled_array import filled_variable
 from studies.analysis.grid_optimum import Grid
 from studies.analysis.statistics import (
     SENSES,
@@ -163,10 +164,15 @@ def analyze(
     attrs["optimum_basis"] = analysis_optimum.COMPUTED if grid else analysis_optimum.PREDICTED
     tables, optima, replaced = {}, {}, {}
     for name in analysed:
-        variable, beyond = _filled(out, base, view[name], ran, name, terms)
+        variable, filled = _filled(out, base, view[name], ran, name, terms)
         one = base.assign({name: variable})
-        if beyond is not None:
-            replaced[name] = variable
+        beyond = None if filled is None else filled.beyond
+        if filled is not None:  # the trade-off reads it again: lazily, where it can
+            rule = filled.rule if variable.dims == ("run",) else None
+            replaced[name] = (
+                variable if rule is None else filled_variable(view[name].variable, ran, rule)
+            )
+        del variable, filled
         out["varies"].loc[name] = int(taguchi.varies(one, name))
         tables[name] = anova(one, name, factors=terms, pool=pool)
         _range(out, one, name, terms, operating)
@@ -333,12 +339,11 @@ def _level_values(
 # --- per response ---------------------------------------------------------------------------
 def _filled(
     out: xr.Dataset, base: xr.Dataset, y: xr.DataArray, ran: np.ndarray, name: str, terms: list[str]
-) -> tuple[xr.Variable, np.ndarray | None]:
+) -> tuple[xr.Variable, missing.Filled | None]:
     """The values the analysis uses (runs without a finite value resolved by
     :mod:`studies.analysis.missing`), with the per-level counts of what was done written into ``out``.
     A bare Variable (no coordinates to compare and load on assignment; the view stays lazy),
-    and, when any value was resolved, which runs lie beyond every computed value
-    (``missing.Filled.beyond``), else None."""
+    and, when some value was not finite, how it was resolved (``missing.Filled``), else None."""
     variable = y.variable.copy(deep=False).load()
     values = variable.values.astype(float)
     if np.isfinite(values).all():
@@ -355,7 +360,7 @@ def _filled(
         filled.best_bound,
         filled.worst_bound,
     )
-    return xr.Variable(variable.dims, filled.values, variable.attrs), filled.beyond
+    return xr.Variable(variable.dims, filled.values, variable.attrs), filled
 
 
 def _range(

@@ -37,7 +37,8 @@ class Filled:
     ``values``: finite, or NaN where left out. ``left_out``: runs without a value that the
     analysis leaves out. ``bounded``: runs counted at ``best_bound`` or ``worst_bound`` (NaN when
     that bound was not used). ``beyond``: +1 where a run is better than every computed value
-    (counted at the best bound), -1 where it is worse than every one, 0 elsewhere."""
+    (counted at the best bound), -1 where it is worse than every one, 0 elsewhere. ``rule``
+    resolves any subset of the runs the same way (:class:`Rule`)."""
 
     values: np.ndarray
     left_out: np.ndarray
@@ -45,12 +46,63 @@ class Filled:
     best_bound: float
     worst_bound: float
     beyond: np.ndarray
+    rule: Rule | None = None  # how each run was resolved (None: no finite value)
 
 
 def none_means(y: xr.DataArray) -> str:
     """What a NaN of ``y`` means (its ``none_means`` attribute, else "unknown")."""
     meaning = str(y.attrs.get("none_means", DEFAULT))
     return meaning if meaning in NONE_MEANINGS else DEFAULT
+
+
+@dataclass(frozen=True)
+class Rule:
+    """How :func:`fill` resolves a response's runs, one run at a time: what a NaN means, the
+    sense, and the best and worst finite values seen over the whole design (so any subset of
+    runs is resolved as the whole response is)."""
+
+    meaning: str
+    sense: str
+    best: float
+    worst: float
+
+    def masks(self, y: np.ndarray, ran: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The runs of ``y`` counted at the best bound and at the worst bound."""
+        nan = np.isnan(y) & ran
+        if self.sense not in ("smaller", "larger"):  # not ranked: nothing is best or worst
+            nothing = np.zeros_like(nan)
+            return nothing, nothing
+        positive = (y == np.inf) & ran
+        negative = (y == -np.inf) & ran
+        to_best = (positive if self.sense == "larger" else negative) | (
+            nan if self.meaning == "best" else False
+        )
+        to_worst = (positive if self.sense == "smaller" else negative) | (
+            nan if self.meaning == "worst" else False
+        )
+        return to_best, to_worst
+
+    def apply(
+        self, y: np.ndarray, ran: np.ndarray, masks: tuple[np.ndarray, np.ndarray] | None = None
+    ) -> np.ndarray:
+        """The values of runs ``y`` (finite, bounded, or NaN where left out); ``ran`` of the
+        same runs; ``masks``: their :meth:`masks` when already made."""
+        y = np.asarray(y, dtype=float)
+        to_best, to_worst = self.masks(y, ran) if masks is None else masks
+        values = np.where(np.isfinite(y), y, np.nan)
+        values[to_best] = self.best
+        values[to_worst] = self.worst
+        return values
+
+
+def rule_of(y: np.ndarray, meaning: str, sense: str) -> Rule | None:
+    """The :class:`Rule` of a response's values ``y`` (all runs); None without a finite one."""
+    finite = y[np.isfinite(y)]
+    if not finite.size:
+        return None
+    low, high = float(finite.min()), float(finite.max())
+    best, worst = (low, high) if sense == "smaller" else (high, low)
+    return Rule(meaning if sense in ("smaller", "larger") else DEFAULT, sense, best, worst)
 
 
 def fill(y: np.ndarray, ran: np.ndarray, meaning: str, sense: str) -> Filled:
@@ -60,33 +112,22 @@ def fill(y: np.ndarray, ran: np.ndarray, meaning: str, sense: str) -> Filled:
     ``sense``: "smaller" or "larger" is better."""
     y = np.asarray(y, dtype=float)
     finite = np.isfinite(y)
-    if not finite.any():
+    rule = rule_of(y, meaning, sense)
+    if rule is None:
         left = ~finite
         none = np.zeros(y.shape, dtype=np.int8)
         return Filled(np.full(y.shape, np.nan), left, np.zeros_like(left), np.nan, np.nan, none)
-    low, high = float(y[finite].min()), float(y[finite].max())
-    best, worst = (low, high) if sense == "smaller" else (high, low)
-    nan = np.isnan(y) & ran
-    positive = (y == np.inf) & ran
-    negative = (y == -np.inf) & ran
-    if sense not in ("smaller", "larger"):  # not ranked: nothing is best or worst
-        positive = negative = np.zeros_like(nan)
-        meaning = DEFAULT
-    to_best = (positive if sense == "larger" else negative) | (nan if meaning == "best" else False)
-    to_worst = (positive if sense == "smaller" else negative) | (
-        nan if meaning == "worst" else False
-    )
-    values = np.where(finite, y, np.nan)
-    values[to_best] = best
-    values[to_worst] = worst
+    to_best, to_worst = rule.masks(y, ran)
+    values = rule.apply(y, ran, (to_best, to_worst))
     bounded = to_best | to_worst
     return Filled(
         values,
         ~finite & ~bounded,
         bounded,
-        best if to_best.any() else np.nan,
-        worst if to_worst.any() else np.nan,
+        rule.best if to_best.any() else np.nan,
+        rule.worst if to_worst.any() else np.nan,
         to_best.astype(np.int8) - to_worst.astype(np.int8),
+        rule,
     )
 
 

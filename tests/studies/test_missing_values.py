@@ -16,7 +16,9 @@ import pandas as pd
 import pytest
 import xarray as xr
 
+from studies.analysis import missing
 from studies.analysis.analyze import analyze
+from studies.analysis.filled_array import filled_variable
 from studies.define.plan import plan_study
 from studies.report.markdown_report import report_text
 from studies.report.plots import main_effects_figure
@@ -147,3 +149,27 @@ def test_the_trade_off_never_shows_a_bound_as_a_computed_value(reed: xr.Dataset)
     own = int(an["optimum_run"].sel(response=NAME).values[0])
     cells = ["no crossing up to order 3" if np.isnan(y[i]) else f"{y[i]:.4g}" for i in (own, run)]
     assert f"| {NAME} | larger | {cells[0]} | {cells[1]} |" in report
+
+
+@pytest.mark.parametrize("sense", ["smaller", "larger", "none"])
+@pytest.mark.parametrize("meaning", ["best", "worst", "unknown"])
+def test_lazily_filled_values_equal_the_filled_response_at_any_runs(
+    tmp_path: Path, sense: str, meaning: str
+) -> None:
+    # Reference: missing.fill over the whole response, then indexed; the lazy variable reads
+    # the stored file at the runs asked for (a slice, a scattered list, one run).
+    rng = np.random.default_rng(5)
+    y = rng.normal(size=2000)
+    y[rng.random(2000) < 0.2] = np.nan
+    y[rng.random(2000) < 0.05] = np.inf
+    y[rng.random(2000) < 0.05] = -np.inf
+    ran = rng.random(2000) < 0.9
+    xr.Dataset({"y": ("run", y)}).to_netcdf(tmp_path / "r.nc")
+    expected = missing.fill(y, ran, meaning, sense)
+    with xr.open_dataset(tmp_path / "r.nc", cache=False) as ds:
+        assert expected.rule is not None
+        lazy = filled_variable(ds["y"].variable, ran, expected.rule)
+        for runs in (slice(100, 700), rng.choice(2000, 50), [1999]):
+            got = lazy[runs].values
+            np.testing.assert_array_equal(got, expected.values[runs])
+        np.testing.assert_array_equal(lazy.values, expected.values)
