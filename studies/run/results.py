@@ -37,6 +37,7 @@ COMPRESSION = {"zlib": True, "complevel": COMPRESSION_LEVEL}
 CHUNK_CACHE_BYTES = 1 << 20
 NOT_EVALUATED: Final = -1  # stored value of a flag or status code at a point that did not run
 PASS_FAIL: Final = "not_evaluated fails passes"
+ORDER_BLOCK: Final = 1 << 20  # runs placed at once when a full factorial's grid order is made
 RUN_CHUNK: Final = 4096  # runs per netCDF chunk of a variable along run (coordinates too)
 NOISE: Final = "noise"  # the dimension of the noise cases of each design point
 NOISE_SUFFIX: Final = "_noise"  # <factor>_noise: a noise factor's value per run and case
@@ -267,11 +268,22 @@ def grid_order(ds: xr.Dataset) -> tuple[list[str], tuple[int, ...], np.ndarray]:
         msg = f"a grid view needs a full_factorial result, this one is {ds.attrs.get('design')!r}"
         raise StudyError(msg)
     factors = json.loads(ds.attrs["factors"])
-    codes = [ds[f"{f}_level"].values.astype(np.int64) for f in factors]
-    counts = tuple(int(c.max()) + 1 for c in codes)
-    flat = np.ravel_multi_index(codes, counts)
+    flat: np.ndarray = np.zeros(ds.sizes["run"], dtype=np.int64)  # C-order cell of each run
+    counts: tuple[int, ...] = ()
+    for f in factors:  # one factor's codes in memory at a time
+        codes = ds[f"{f}_level"].values
+        count = int(codes.max()) + 1 if codes.size else 0
+        if codes.size and codes.min() < 0:
+            msg = f"the full factorial is incomplete: {f} has runs without a level"
+            raise StudyError(msg)
+        flat *= count
+        flat += codes
+        counts += (count,)
+        del codes
     order = np.full(int(np.prod(counts)), -1, dtype=np.int64)
-    order[flat] = np.arange(flat.size)
+    for start in range(0, flat.size, ORDER_BLOCK):
+        stop = min(start + ORDER_BLOCK, flat.size)
+        order[flat[start:stop]] = np.arange(start, stop)
     if flat.size != order.size or (order < 0).any():
         msg = f"the full factorial is incomplete: {flat.size} runs for {order.size} grid cells"
         raise StudyError(msg)
