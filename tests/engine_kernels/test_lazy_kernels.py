@@ -91,12 +91,7 @@ def test_plain_python_answers_equal_the_compiled_ones():
         call_small(rocker_batches.tappet_lift_for_valve_lift_batch, 4, lifts[:3], geometry[:3],
                    nose[:3])
         first_bound = _jit.bound()
-        params = np.zeros((3, cb.N_PARAMS))
-        params[:, cb.P_LAW] = [0, 1, 2]
-        params[:, cb.P_CAM_SPEED] = 1.0
-        params[:, cb.P_BASE_RADIUS] = 0.02
-        params[:, cb.P_LIFT] = 0.008
-        params[:, cb.P_RISE_ANGLE] = np.radians(70.0)
+        params = np.array({params.tolist()})
         shapes = np.zeros((3, 6), dtype=np.int64)
         radius = np.empty(3)
         grid = angle_grid(0.5)
