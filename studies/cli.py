@@ -34,9 +34,9 @@ from studies.common.errors import (
     EXIT_STUDY_ERROR,
     EngineError,
     StudyError,
+    StudyFileError,
 )
 from studies.common.text_safety import TerminalText, printable_dataset
-from studies.define.definition import StudyFileError, catalog_names, read_study
 from studies.tracking.registry_file import REGISTRY, RegistryUnusable, unusable
 from studies.tracking_cli import add_commands, check_mlflow, track_run
 
@@ -247,6 +247,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
         _report(result)
         track_run(args, Path(result.folder), result.record.run_id)
         return 0
+    from studies.define.definition import catalog_names  # numpy: not for --help
+
     names = catalog_names() if args.all else [args.study]
     plans = [plan_study(n) for n in names]
     check_mlflow(args)
@@ -348,6 +350,8 @@ def _warn(plan: Plan) -> int:
 
 
 def _cmd_list(_: argparse.Namespace) -> int:
+    from studies.define.definition import catalog_names, read_study  # as above
+
     for name in catalog_names():
         definition, _problems = read_study(name)
         desc = definition.description.splitlines()[0] if definition else ""

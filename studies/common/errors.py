@@ -47,3 +47,14 @@ class OutputsError(EngineError, OSError):
     """The outputs folder, the registry or a run's files cannot be read or written as needed."""
 
     exit_code = EXIT_OUTPUT_ERROR
+
+
+class StudyFileError(StudyError):
+    """A study that cannot run; ``problems`` lists every reason, one sentence each."""
+
+    def __init__(self, source: str, problems: list[str]) -> None:
+        self.source = source
+        self.problems = problems
+        lines = "\n".join(f"  - {p}" for p in problems)
+        n = len(problems)
+        super().__init__(f"study {source} has {n} problem{'s' if n != 1 else ''}:\n{lines}")

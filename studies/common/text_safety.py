@@ -19,8 +19,6 @@ import unicodedata
 from typing import TYPE_CHECKING, TextIO
 from urllib.parse import quote
 
-import numpy as np
-
 if TYPE_CHECKING:
     import xarray as xr
 
@@ -54,6 +52,8 @@ def printable(text: str, keep: str = "") -> str:
 def printable_dataset(ds: xr.Dataset) -> xr.Dataset:
     """``ds`` with control characters dropped from every text attribute and text coordinate
     (a results file from elsewhere: its text reaches figures, tables and the terminal)."""
+    import numpy as np  # noqa: PLC0415  (on use: the CLI imports this module for --help)
+
     ds.attrs = {k: printable(v, "\n\t") if isinstance(v, str) else v for k, v in ds.attrs.items()}
     for name in list(ds.variables):
         variable = ds[name]

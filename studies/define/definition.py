@@ -58,7 +58,7 @@ from studies.common.bounded_files import (
     InputFileError,
     read_bounded_text,
 )
-from studies.common.errors import StudyError
+from studies.common.errors import StudyFileError
 from studies.define.noise import Noise, parse_limits, parse_noise
 from studies.define.sampling import parse_sampling
 from studies.define.values import Factor, ValueParser, suggest
@@ -75,17 +75,6 @@ NAME_PATTERN = re.compile(r"[A-Za-z0-9_-]+")  # whole names only: used with full
 MAX_NAME_LENGTH = 64  # the name is a folder name; file systems allow 255 bytes
 MAX_NESTING = 10  # arrays/tables inside each other; a study needs 4 (factors.x.levels = [...])
 SHORT_KEY = 60  # characters of a key path shown in a message
-
-
-class StudyFileError(StudyError):
-    """A study that cannot run; ``problems`` lists every reason, one sentence each."""
-
-    def __init__(self, source: str, problems: list[str]) -> None:
-        self.source = source
-        self.problems = problems
-        lines = "\n".join(f"  - {p}" for p in problems)
-        n = len(problems)
-        super().__init__(f"study {source} has {n} problem{'s' if n != 1 else ''}:\n{lines}")
 
 
 @dataclass(frozen=True)
