@@ -25,6 +25,7 @@ package's cache whenever any kernel source changes, so an edit can never be serv
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import importlib
@@ -132,15 +133,13 @@ def call_small(kernel: Any, work: int, *args: Any) -> Any:
     one up to the rounding of fused multiply-adds.
     """
     if _numba is None and work <= INTERPRETED_WORK:
-        _PLAIN.depth += 1
-        try:
-            with np.errstate(all="ignore"):
+        with contextlib.suppress(ArithmeticError, ValueError, TypeError), np.errstate(all="ignore"):
+            _PLAIN.depth += 1
+            try:
                 return kernel.py_func(*args)
-        except (ArithmeticError, ValueError, TypeError):
-            pass
-        finally:
-            _PLAIN.depth -= 1
-    return kernel(*args)
+            finally:
+                _PLAIN.depth -= 1
+    return kernel(*args)  # compiled: Numba bound, much work, or plain Python raised above
 
 
 _KERNELS: list[Kernel] = []
