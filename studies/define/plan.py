@@ -175,9 +175,10 @@ def full_factorial_size_problem(
     Checked from the level counts alone, before anything is allocated. The estimate per design
     point (``BYTES_PER_FACTOR`` per factor for its levels, values and analysis, plus
     ``BYTES_PER_RESPONSE`` per response) is 368 bytes for the 10⁷-point valve study of
-    ``bench study`` (4 factors, 9 responses), whose whole run peaked at 2.6 GB, 260 bytes a
-    point, on 2026-11-27 (its analysis holds O(N) temporaries; the plan no longer stores a
-    value per point); ``ENGINE_STUDIES_MAX_POINTS`` overrides the limit. The message
+    ``bench study`` (4 factors, 9 responses), whose whole run peaked at 1.33 GB, 133 bytes a
+    point, on 2026-11-27 at 5e75680 (the results layout and the analysis still hold O(N)
+    arrays; the plan no longer stores a value per point); ``ENGINE_STUDIES_MAX_POINTS``
+    overrides the limit. The message
     also estimates the compute time from the scene's ``seconds_per_point``.
     """
     runs = math.prod(counts.values())

@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from engine_kernels.cam import lift_laws
+from engine_kernels._jit import call_small
+from engine_kernels.cam import lift_laws, multi_segment
 from studies.scenes.base import Parameter
 
 LAWS = (
@@ -165,3 +166,22 @@ def polydyne_problems(c: np.ndarray) -> list[str]:
             )
         ]
     return []
+
+
+def fitted_widths(
+    p: dict[str, np.ndarray], six: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Nominal and fitted segment widths [rad] of the points (n, 6) and whether they fit their
+    half-event (physics §2), the points ``six`` (indices) being six-segment cams: one kernel
+    call over those (as plain Python for a few, :func:`engine_kernels._jit.call_small`)."""
+    n = len(p["law"])
+    widths, adjusted, fits = np.zeros((n, 6)), np.zeros((n, 6)), np.ones(n, dtype=bool)
+    if six.size:
+        widths = np.stack([p[f"seg{k}_width"] for k in range(1, 7)], axis=1).astype(float)
+        shapes = np.stack([codes(p[f"seg{k}_shape"][six], SHAPE_CODES) for k in range(1, 7)], 1)
+        half = np.ascontiguousarray(p["rise_angle"][six], dtype=float)
+        out, ok = np.empty((six.size, 6)), np.empty(six.size, dtype=bool)
+        fit = multi_segment.segment_widths_batch
+        call_small(fit, six.size, np.ascontiguousarray(widths[six]), shapes, half, out, ok)
+        adjusted[six], fits[six] = out, ok
+    return widths, adjusted, fits

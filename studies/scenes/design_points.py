@@ -16,6 +16,7 @@ FactorialCodes`) and the noise values:
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -150,15 +151,17 @@ class DesignPoints(Mapping[str, np.ndarray]):
             for name, digit in zip(chosen, digits, strict=True):
                 first += digit * self.factors[name].codes.stride
         others = [f.codes for n, f in self.factors.items() if n not in chosen]
-        free: list[np.ndarray] = []  # offsets of the other factors' levels, made on first use
+
+        @functools.cache
+        def free() -> np.ndarray:
+            """Offsets of the other factors' levels, made on first use."""
+            offsets = np.zeros(1, dtype=np.int64)
+            for codes in others:
+                offsets = np.add.outer(offsets, np.arange(codes.count) * codes.stride).ravel()
+            return offsets
 
         def numbering(local: np.ndarray) -> np.ndarray:
-            if not free:
-                offsets = np.zeros(1, dtype=np.int64)
-                for codes in others:
-                    offsets = np.add.outer(offsets, np.arange(codes.count) * codes.stride).ravel()
-                free.append(offsets)
-            members = np.add.outer(first[np.asarray(local, dtype=np.int64)], free[0]).ravel()
+            members = np.add.outer(first[np.asarray(local, dtype=np.int64)], free()).ravel()
             return self._cases(np.sort(members))
 
         return self._values(first * self.cases, first), numbering

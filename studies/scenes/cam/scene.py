@@ -19,7 +19,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from engine_kernels._jit import call_small
 from engine_kernels.cam import kinematics as cb
 from engine_kernels.cam import lift_laws, multi_segment
 from engine_kernels.cam import loads as cam_loads
@@ -33,7 +32,13 @@ from studies.scenes.cam.parameters import (
     RESPONSES,
     SETTINGS,
 )
-from studies.scenes.cam_laws import LAW_CODES, SHAPE_CODES, codes, polydyne_problems
+from studies.scenes.cam_laws import (
+    LAW_CODES,
+    SHAPE_CODES,
+    codes,
+    fitted_widths,
+    polydyne_problems,
+)
 from studies.scenes.cam_radius import HALF_TURN_DEG, turn_deg
 from studies.scenes.checks import checked_groups, numbered, on_distinct
 from studies.scenes.state import RunState
@@ -189,7 +194,7 @@ class CamScene(Scene[CamState]):
     def _distinct_problems(self, points: dict[str, np.ndarray]) -> list[str]:
         found: dict[str, list[np.ndarray]] = defaultdict(list)
         tables: dict[str, str | None] = {}
-        fitted = _fitted_widths(points)
+        fitted = fitted_widths(points, np.flatnonzero(points["law"] == "six_segment"))
         for problem, members in checked_groups(
             np.arange(len(points["law"])),
             [points[name] for name in CHECKED if name in points],
@@ -351,20 +356,3 @@ def _ramp_problems(height: float, width: float, velocity: float) -> list[str]:
 def _points_label(indices: list[int]) -> str:
     shown = ", ".join(str(i) for i in indices[:8]) + (" …" if len(indices) > 8 else "")
     return f"design point{'s' if len(indices) > 1 else ''} {shown}"
-
-
-def _fitted_widths(p: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Nominal and fitted segment widths [rad] of the points (n, 6) and whether they fit their
-    half-event, in one kernel call over the six-segment points (as plain Python for a few)."""
-    n = len(p["law"])
-    widths, adjusted, fits = np.zeros((n, 6)), np.zeros((n, 6)), np.ones(n, dtype=bool)
-    six = np.flatnonzero(p["law"] == "six_segment")
-    if six.size:
-        widths = np.stack([p[f"seg{k}_width"] for k in range(1, 7)], axis=1).astype(float)
-        shapes = np.stack([codes(p[f"seg{k}_shape"][six], SHAPE_CODES) for k in range(1, 7)], 1)
-        half = np.ascontiguousarray(p["rise_angle"][six], dtype=float)
-        out, ok = np.empty((six.size, 6)), np.empty(six.size, dtype=bool)
-        fit = multi_segment.segment_widths_batch
-        call_small(fit, six.size, np.ascontiguousarray(widths[six]), shapes, half, out, ok)
-        adjusted[six], fits[six] = out, ok
-    return widths, adjusted, fits

@@ -13,11 +13,9 @@ import math
 
 import numpy as np
 
-from engine_kernels._jit import call_small
-from engine_kernels.cam import multi_segment
-from studies.scenes.cam_laws import polydyne_problems
+from studies.scenes.cam_laws import fitted_widths, polydyne_problems
 from studies.scenes.checks import LoopOrder, fixed, groups_of
-from studies.scenes.linkage.tappet import nose_tappet_lifts, shape_codes
+from studies.scenes.linkage.tappet import nose_tappet_lifts
 
 MM = 1e3
 MAX_EVENT_HALF_DEG = 150.0
@@ -115,20 +113,7 @@ def _nose_problems(
 
 
 def _six_segment_problems(p: dict[str, np.ndarray], six: np.ndarray, found: LoopOrder) -> None:
-    idx = np.flatnonzero(six)
-    widths = np.stack([p[f"seg{k}_width"] for k in range(1, 7)], axis=1).astype(float)
-    adjusted = np.zeros_like(widths)
-    fits = np.ones(six.size, dtype=bool)
-    if idx.size:
-        shapes = shape_codes(p, idx)
-        out = np.empty((idx.size, multi_segment.N_SEGMENTS))
-        ok = np.empty(idx.size, dtype=bool)
-        half = np.ascontiguousarray(p["rise_angle"][idx], dtype=float)
-        adjusted_widths = multi_segment.segment_widths_batch
-        call_small(
-            adjusted_widths, idx.size, np.ascontiguousarray(widths[idx]), shapes, half, out, ok
-        )
-        adjusted[idx], fits[idx] = out, ok
+    widths, adjusted, fits = fitted_widths(p, np.flatnonzero(six))
     found.add(
         4,
         six & ~fits,
