@@ -40,7 +40,8 @@ def _install_once(session: nox.Session, python: Path, target: str) -> None:
     stamp = python.parent.parent / f"installed-{target.strip('.[]') or 'core'}.sha256"
     if stamp.exists() and stamp.read_text(encoding="utf-8") == digest:
         return
-    session.run(str(python), "-m", "pip", "install", "--quiet", "-e", target, external=True)
+    # run_install: also under --install-only (a skipped install must not write the stamp)
+    session.run_install(str(python), "-m", "pip", "install", "--quiet", "-e", target, external=True)
     stamp.write_text(digest, encoding="utf-8")
 
 

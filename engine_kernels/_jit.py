@@ -32,7 +32,7 @@ import importlib
 import os
 import sys
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -115,12 +115,43 @@ def _kernel_named(module: str, qualname: str) -> Any:
 
 class _Plain(threading.local):
     depth = 0  # > 0 while call_small runs a kernel as plain Python in this thread
+    left: int | None = None  # evaluations left inside without_compiler(); None outside it
 
 
 _PLAIN = _Plain()
 INTERPRETED_WORK = 100_000
 """Most inner evaluations :func:`call_small` runs as plain Python: about 0.75 s at the 7.5 µs an
 evaluation of a cam law takes there, less than starting Numba's compiler and loading a kernel."""
+QUICK_WORK = 120_000
+"""Inner evaluations :func:`without_compiler` allows in all: about 0.4 s of plain Python at the
+3.3 µs an evaluation of the six-segment cam law takes there (the analytic laws: 1.7-2 µs)."""
+
+
+class CompilerNeeded(RuntimeError):
+    """Raised inside :func:`without_compiler` by a kernel call that would start Numba's compiler
+    or exceed the plain-Python budget; ``work`` is the call's count of inner evaluations (0: a
+    direct kernel call, whose work is not counted)."""
+
+    def __init__(self, work: int) -> None:
+        super().__init__(f"a kernel call of {work} evaluations needs the compiler")
+        self.work = work
+
+
+@contextlib.contextmanager
+def without_compiler(budget: int = QUICK_WORK) -> Iterator[None]:
+    """Within: :func:`call_small` runs at most ``budget`` inner evaluations in all (in this
+    thread), as plain Python while Numba is not bound; a call beyond that, one that Python
+    cannot finish where compiled code gives NaN or ±inf, and any call that would bind Numba
+    raise :class:`CompilerNeeded`. A command that must answer at once (``check``) says what it
+    left unchecked instead of starting the compiler. Nested, it draws on the outer budget."""
+    outer = _PLAIN.left
+    start = budget if outer is None else min(budget, outer)
+    _PLAIN.left = start
+    try:
+        yield
+    finally:
+        spent = start - _PLAIN.left
+        _PLAIN.left = None if outer is None else outer - spent
 
 
 def call_small(kernel: Any, work: int, *args: Any) -> Any:
@@ -132,14 +163,36 @@ def call_small(kernel: Any, work: int, *args: Any) -> Any:
     call is run again compiled, which overwrites every output, so the answer is the compiled
     one up to the rounding of fused multiply-adds.
     """
+    if _PLAIN.left is not None:
+        return _within_budget(kernel, work, args)
     if _numba is None and work <= INTERPRETED_WORK:
         with contextlib.suppress(ArithmeticError, ValueError, TypeError), np.errstate(all="ignore"):
-            _PLAIN.depth += 1
-            try:
-                return kernel.py_func(*args)
-            finally:
-                _PLAIN.depth -= 1
+            return _plain(kernel, args)
     return kernel(*args)  # compiled: Numba bound, much work, or plain Python raised above
+
+
+def _within_budget(kernel: Any, work: int, args: tuple[Any, ...]) -> Any:
+    """:func:`call_small` inside :func:`without_compiler`."""
+    left = _PLAIN.left
+    assert left is not None
+    if work > left:
+        raise CompilerNeeded(work)
+    _PLAIN.left = left - work
+    if _numba is not None:
+        return kernel(*args)  # already compiled in this process: no compiler to start
+    try:
+        with np.errstate(all="ignore"):
+            return _plain(kernel, args)
+    except (ArithmeticError, ValueError, TypeError) as exc:
+        raise CompilerNeeded(work) from exc
+
+
+def _plain(kernel: Any, args: tuple[Any, ...]) -> Any:
+    _PLAIN.depth += 1
+    try:
+        return kernel.py_func(*args)
+    finally:
+        _PLAIN.depth -= 1
 
 
 _KERNELS: list[Kernel] = []
@@ -156,6 +209,8 @@ def bind() -> None:
     """Import Numba, make the dispatcher of every kernel defined so far, and put the
     dispatchers (and ``numba.prange``) in place of their stand-ins in the kernel modules."""
     global _numba  # noqa: PLW0603  (once per process, under the lock)
+    if _numba is None and _PLAIN.left is not None:
+        raise CompilerNeeded(0)
     with _LOCK:
         if _numba is not None:
             return

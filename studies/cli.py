@@ -157,6 +157,12 @@ def _parser() -> argparse.ArgumentParser:
 
     check = sub.add_parser("check", help="validate a study without running it")
     check.add_argument("study")
+    check.add_argument(
+        "--full",
+        action="store_true",
+        help="also draw the samples that need scipy.stats and make the checks that need the "
+        "compiler (a second or more; `run` makes them before computing anyway)",
+    )
     check.set_defaults(func=_cmd_check)
 
     lst = sub.add_parser("list", help="list the shipped studies")
@@ -327,26 +333,60 @@ def _default_outputs() -> Path:
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
+    from engine_kernels._jit import CompilerNeeded, without_compiler
+
+    if args.full:
+        return _check(args)
+    try:
+        with without_compiler():
+            return _check(args)
+    except CompilerNeeded:  # a check outside the scene's point checks calls a kernel
+        args.full = True
+        return _check(args)
+
+
+def _check(args: argparse.Namespace) -> int:
     from studies.define.plan import noise_label, plan_study
 
-    plan = plan_study(args.study)
+    plan = plan_study(args.study, quick=not args.full)
     d = plan.definition
+    unchecked = list(plan.unchecked)
+    advice = _advice(plan, None if args.full else unchecked) if plan.drawn else []
     noise = f" x {plan.noise_cases} noise cases ({noise_label(d)})" if d.noise else ""
     print(
-        f"{d.name}: OK — scene {d.scene}, design {plan.design.name}, {plan.runs} runs{noise}, "
-        f"stages {', '.join(plan.stages)}"
+        f"{d.name}: OK{' as far as checked here' if unchecked else ''} — scene {d.scene}, "
+        f"design {plan.design.name}, {plan.runs} runs{noise}, stages {', '.join(plan.stages)}"
     )
-    _warn(plan)
+    for line in advice:
+        print(f"warning: {d.name}: {line}", file=sys.stderr)
+    for line in unchecked:
+        print(f"not checked here, `check --full` and `run` check it: {line}")
     return 0
 
 
 def _warn(plan: Plan) -> int:
     """Print the design points that will run but give no value or an infinite one (the
     scene's advice); return how many warnings."""
-    lines = plan.scene.point_warnings(plan.points, plan.settings)
+    lines = _advice(plan)
     for line in lines:
         print(f"warning: {plan.definition.name}: {line}", file=sys.stderr)
     return len(lines)
+
+
+def _advice(plan: Plan, unchecked: list[str] | None = None) -> list[str]:
+    """The scene's advice on the points; ``unchecked`` (a quick check): start no compiler, and
+    if the advice needs it, say so there instead."""
+    if unchecked is None:
+        return plan.scene.point_warnings(plan.points, plan.settings)
+    from engine_kernels._jit import CompilerNeeded, without_compiler
+    from studies.define.plan import needs
+
+    try:
+        with without_compiler():
+            return plan.scene.point_warnings(plan.points, plan.settings)
+    except CompilerNeeded as exc:
+        unchecked.append(f"the scene's advice on the points, e.g. concave cams ({needs(exc)})")
+        return []
 
 
 def _cmd_list(_: argparse.Namespace) -> int:

@@ -33,12 +33,12 @@ NORMAL_REACH = 6.0  # standard deviations of a normal distribution that must sta
 def deviation(distribution: str, spread: float, u: np.ndarray) -> np.ndarray:
     """The deviation from the nominal at unit-cube points ``u`` (inverse CDF): ``spread`` is
     the sd of a normal, the half width of a uniform or symmetric triangular distribution."""
+    if distribution == "uniform":
+        return (2.0 * u - 1.0) * spread
     from scipy import stats  # noqa: PLC0415  (on use: reading a study must not import scipy)
 
     if distribution == "normal":
         return stats.norm.ppf(u) * spread
-    if distribution == "uniform":
-        return (2.0 * u - 1.0) * spread
     return stats.triang.ppf(u, 0.5, loc=-spread, scale=2.0 * spread)
 
 

@@ -284,6 +284,16 @@ def noise_table(noise: Noise) -> dict[str, np.ndarray]:
     return out
 
 
+def noise_needs_stats(noise: Noise | None) -> bool:
+    """Whether drawing the noise cases imports scipy.stats: a Sobol' or Latin hypercube sample,
+    or a normal or triangular distribution's inverse CDF."""
+    if noise is None or not noise.sampled:
+        return False
+    return noise.type != "random" or any(
+        f.distribution in ("normal", "triangular") for f in noise.factors if not f.levels
+    )
+
+
 def _array_levels(name: str) -> int:
     """The level count of a distribution's column in ``name``: 3 when the array has 3-level
     columns (L9, L18, L27), else its most common level count."""

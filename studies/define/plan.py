@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from engine_kernels._jit import CompilerNeeded, without_compiler
 from studies.common.errors import StudyError
 from studies.define import designs
 from studies.define.definition import (
@@ -27,8 +28,8 @@ from studies.define.definition import (
     parse_study,
     read_study,
 )
-from studies.define.noise import noise_table, noisy, range_problems
-from studies.define.sampling import SAMPLING_DESIGNS, sampled_levels
+from studies.define.noise import noise_needs_stats, noise_table, noisy, range_problems
+from studies.define.sampling import SAMPLING_DESIGNS, sample_runs, sampled_levels
 from studies.scenes import Scene, get_scene
 from studies.scenes.base import short
 from studies.scenes.design_points import DesignPoints, Factor
@@ -37,6 +38,7 @@ BYTES_PER_FACTOR = 48
 BYTES_PER_RESPONSE = 16
 MEMORY_SHARE = 0.8  # of the available memory a study may plan to use
 MAX_POINTS_VARIABLE = "ENGINE_STUDIES_MAX_POINTS"
+STATS_COST = "drawing it imports scipy.stats, about 1 s"
 
 
 @dataclass(frozen=True)
@@ -54,6 +56,8 @@ class Plan:
     max_chunk: int = sys.maxsize  # design points per chunk that fit the memory (settings)
     noise_cases: int = 1  # noise cases per design point (1 without [noise])
     noise_values: dict[str, np.ndarray] = field(default_factory=dict)  # runs × cases, units
+    unchecked: tuple[str, ...] = ()  # what a quick plan left to `run` (plan_study(quick=True))
+    drawn: bool = True  # False: a quick plan's sampling design, whose points are placeholders
 
     @property
     def runs(self) -> int:
@@ -71,10 +75,14 @@ class Plan:
         return np.asarray(factor.levels)[self.design.levels[name][part]]
 
 
-def plan_study(name_or_path: str | Path) -> Plan:
-    """Read, validate and plan a catalogue study or a TOML file (StudyError if not runnable)."""
+def plan_study(name_or_path: str | Path, *, quick: bool = False) -> Plan:
+    """Read, validate and plan a catalogue study or a TOML file (StudyError if not runnable).
+
+    ``quick`` (``check`` without ``--full``): draw no sample that needs ``scipy.stats`` (a
+    second to import) and start no compiler; what that leaves unchecked is in
+    :attr:`Plan.unchecked`, and such a plan is for reporting only, never for running."""
     definition, problems = read_study(name_or_path)
-    return _plan(definition, problems, str(find_study(name_or_path)))
+    return _plan(definition, problems, str(find_study(name_or_path)), quick)
 
 
 def plan_text(text: str, source: str = "<string>") -> Plan:
@@ -83,13 +91,22 @@ def plan_text(text: str, source: str = "<string>") -> Plan:
     return _plan(definition, problems, source)
 
 
-def _plan(definition: StudyDefinition | None, problems: list[str], source: str) -> Plan:
+def _plan(
+    definition: StudyDefinition | None, problems: list[str], source: str, quick: bool = False
+) -> Plan:
     if definition is None or (problems and not definition.factors):
         raise StudyFileError(source, problems)
     scene = get_scene(definition.scene)
+    unchecked: list[str] = []  # quick: whether or not scipy.stats is imported, same answer
+    drawn = not (quick and definition.design in SAMPLING_DESIGNS)
     design = None
     try:
-        if definition.design in SAMPLING_DESIGNS:
+        if not drawn:
+            design = _undrawn(definition)
+            unchecked.append(
+                f"the {definition.design} sample of {design.runs} design points ({STATS_COST})"
+            )
+        elif definition.design in SAMPLING_DESIGNS:
             definition, design = _sampled(definition)
         else:
             design = _design(definition)
@@ -97,12 +114,17 @@ def _plan(definition: StudyDefinition | None, problems: list[str], source: str) 
         problems = problems + exc.problems
     if design is None or problems:
         raise StudyFileError(source, problems)
-    points, noise_values, noise_problems = _noisy_points(
-        scene, definition, _points(scene, definition, design)
+    draw = not (quick and noise_needs_stats(definition.noise))
+    points, cases, noise_values, noise_problems = _noisy_points(
+        scene, definition, _points(scene, definition, design), draw
     )
     if noise_problems:
         raise StudyFileError(source, noise_problems)
-    cases = design.runs * (next(iter(noise_values.values())).shape[1] if noise_values else 1)
+    if not draw:
+        unchecked.append(
+            f"the noise cases, a {noise_label(definition)} ({STATS_COST}); the design points "
+            "were checked at their nominal values"
+        )
     settings = {
         s.name: s.to_si(definition.settings[s.name])
         if s.kind == "number"
@@ -110,11 +132,12 @@ def _plan(definition: StudyDefinition | None, problems: list[str], source: str) 
         for s in scene.settings
     }
     asked, curves = list(definition.responses), list(definition.curves)
-    max_chunk, work_problem = settings_fit(scene, definition, settings, cases)
+    max_chunk, work_problem = settings_fit(scene, definition, settings, design.runs * cases)
     if work_problem:
         raise StudyFileError(source, [work_problem])
-    point_problems = scene.check_points(points, settings)
-    point_problems += scene.request_problems(settings, asked, curves)
+    point_problems = scene.request_problems(settings, asked, curves)
+    if drawn:
+        point_problems = _checked_points(scene, points, settings, quick, unchecked) + point_problems
     if point_problems:
         raise StudyFileError(source, point_problems)
     stages = scene.stages_to_run(settings, asked, curves)
@@ -131,9 +154,33 @@ def _plan(definition: StudyDefinition | None, problems: list[str], source: str) 
         tuple(stages),
         tuple(stored),
         max_chunk,
-        cases // design.runs,
+        cases,
         noise_values,
+        tuple(unchecked),
+        drawn,
     )
+
+
+def _checked_points(
+    scene: Scene, points: DesignPoints, settings: dict[str, Any], quick: bool, unchecked: list[str]
+) -> list[str]:
+    """The scene's problems with the points; ``quick``: [] with a line in ``unchecked`` when
+    checking them needs the compiler (or more plain-Python work than a quick plan allows)."""
+    if not quick:
+        return scene.check_points(points, settings)
+    try:
+        with without_compiler():
+            return scene.check_points(points, settings)
+    except CompilerNeeded as exc:
+        unchecked.append(f"the scene's checks of the points ({needs(exc)})")
+        return []
+
+
+def needs(exc: CompilerNeeded) -> str:
+    """What a check left to the compiler would cost, for an ``unchecked`` line."""
+    if exc.work:
+        return f"{exc.work:,} kernel evaluations: they need the compiler, about 1 s"
+    return "a compiled kernel: it needs the compiler, about 1 s"
 
 
 def settings_fit(
@@ -329,40 +376,55 @@ def _sampled(d: StudyDefinition) -> tuple[StudyDefinition, designs.Design]:
     return replace(d, factors=factors), designs.Design(d.design, tuple(named), named)
 
 
+def _undrawn(d: StudyDefinition) -> designs.Design:
+    """A sampling design's size without its sample (a quick plan): every run at level 0 of
+    each factor's written levels (a range's ends, a distribution's nominal), values that no
+    check reads."""
+    runs = sample_runs(d.design, d.samples, len(d.factors), d.second_order)
+    zeros = np.broadcast_to(np.int32(0), (runs,))
+    return designs.Design(
+        d.design, tuple(f.name for f in d.factors), {f.name: zeros for f in d.factors}
+    )
+
+
 def _linear(lo: float, hi: float) -> Callable[[np.ndarray], np.ndarray]:
     """The uniform range [lo, hi] at unit-cube points."""
     return lambda u: lo + (hi - lo) * u
 
 
 def _noisy_points(
-    scene: Scene, d: StudyDefinition, points: DesignPoints
-) -> tuple[DesignPoints, dict[str, np.ndarray], list[str]]:
-    """The points of every design point × noise case (design point major), the noise
-    factors' values (runs × cases, parameter units) and why the noise cannot run ([] if it
-    can). Without [noise]: the points unchanged."""
+    scene: Scene, d: StudyDefinition, points: DesignPoints, draw: bool = True
+) -> tuple[DesignPoints, int, dict[str, np.ndarray], list[str]]:
+    """The points of every design point × noise case (design point major), the noise cases
+    per design point, the noise factors' values (runs × cases, parameter units) and why the
+    noise cannot run ([] if it can). Without [noise], or not ``draw``n (a quick plan's sample
+    that needs scipy.stats): the points unchanged, and the noise checked without its values."""
     if d.noise is None:
-        return points, {}, []
+        return points, 1, {}, []
     if d.design in ("sweep", *SAMPLING_DESIGNS):
         msg = f"[noise] needs an orthogonal array or a full factorial, not a {d.design} design"
-        return points, {}, [msg]
+        return points, 1, {}, [msg]
     try:
-        table = noise_table(d.noise)
+        table = noise_table(d.noise) if draw else {}
     except designs.DesignError as exc:
-        return points, {}, [f"[noise] {p}" for p in exc.problems]
-    cases = next(iter(table.values())).size
+        return points, 1, {}, [f"[noise] {p}" for p in exc.problems]
+    cases = next(iter(table.values())).size if draw else d.noise.samples
     runs = points.runs
     size_problem = full_factorial_size_problem({"design points": runs, "noise cases": cases}, 1)
     if size_problem:
-        return points, {}, [size_problem.replace("full factorial of", "noise study of", 1)]
+        return points, 1, {}, [size_problem.replace("full factorial of", "noise study of", 1)]
     values, problems = {}, []
     for f in d.noise.factors:
         p = scene.parameter(f.name)
         assert p is not None
         nominal = np.asarray(points[f.name], dtype=float) / p.to_si(1.0)
         problems += range_problems(d.noise, p, np.unique(nominal), p.units)
-        values[f.name] = noisy(f, nominal, table[f.name])
+        if draw:
+            values[f.name] = noisy(f, nominal, table[f.name])
     if problems:
-        return points, {}, problems
+        return points, 1, {}, problems
+    if not draw:
+        return points, cases, {}, []
     noise = {
         name: v.reshape(-1) * scene.parameter(name).to_si(1.0)  # type: ignore[union-attr]
         for name, v in values.items()
@@ -370,7 +432,7 @@ def _noisy_points(
     noisy_points = DesignPoints(
         runs, points.fixed, points.factors, noise, cases=cases, order=points.order
     )
-    return noisy_points, values, []
+    return noisy_points, cases, values, []
 
 
 def noise_label(d: StudyDefinition) -> str:

@@ -87,6 +87,13 @@ def _bad_samples(kind: str, samples: Any, problems: list[str]) -> int:
     return 0
 
 
+def sample_runs(kind: str, n: int, d: int, second_order: bool = False) -> int:
+    """The runs of a ``kind`` design of ``n`` (base) samples over ``d`` factors."""
+    if kind == "saltelli":
+        return n * (2 * d + 2 if second_order else d + 2)
+    return n
+
+
 def saltelli_unit(n: int, d: int, seed: int, second_order: bool = False) -> np.ndarray:
     """Saltelli's N (D + 2) (or N (2D + 2)) × D points in the unit cube, in SALib's order
     (module docstring)."""
@@ -94,7 +101,7 @@ def saltelli_unit(n: int, d: int, seed: int, second_order: bool = False) -> np.n
 
     base = qmc.Sobol(2 * d, scramble=True, rng=np.random.default_rng(seed)).random(n)
     a, b = base[:, :d], base[:, d:]
-    step = 2 * d + 2 if second_order else d + 2
+    step = sample_runs("saltelli", 1, d, second_order)
     out = np.empty((n, step, d))
     out[:, 0] = a
     for i in range(d):

@@ -12,8 +12,11 @@ from contextvars import ContextVar
 
 import numpy as np
 
+from engine_kernels._jit import CompilerNeeded
 from studies.scenes.design_points import DesignPoints, Numbering
 
+LATER_ADVICE = "`check --full` finds the rise angle that makes it convex"
+"""The advice of a quick ``check`` whose budget the bisection would exceed."""
 LISTED_RANGES = 12
 """A message names at most this many ranges of design points, then counts them all."""
 _NUMBERING: ContextVar[Numbering | None] = ContextVar("numbering", default=None)
@@ -221,3 +224,13 @@ def more_concave_line(
         f"{rest.size} more concave cams at {count} more design points (smallest radius of "
         f"curvature {radius_mm[rest].min():.3g} … {radius_mm[rest].max():.3g} mm): {consequence}"
     )
+
+
+def convex_advice(cams: list[int], find: Callable[[], list[str]]) -> dict[int, str]:
+    """``find()``'s advice per cam of ``cams`` (where each becomes convex), or, when a quick
+    ``check`` cannot afford the bisection (:func:`engine_kernels._jit.without_compiler`),
+    where to get it."""
+    try:
+        return dict(zip(cams, find(), strict=True))
+    except CompilerNeeded:
+        return dict.fromkeys(cams, LATER_ADVICE)

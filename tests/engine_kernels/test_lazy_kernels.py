@@ -108,3 +108,39 @@ def test_plain_python_answers_equal_the_compiled_ones():
     np.testing.assert_allclose(got["radius"], radius, rtol=1e-12)
     # plain Python for the valid calls; the unreachable lift raised there and ran compiled
     assert got["bound"] == [False, False, True]
+
+
+def test_without_compiler_spends_one_budget_and_never_binds_numba():
+    # Witness: the counts asked for (the budget is a sum of them) and sys.modules.
+    out = run_fresh(
+        f"""
+        import sys
+        import numpy as np
+        from engine_kernels import _jit
+        from engine_kernels._jit import CompilerNeeded, call_small, without_compiler
+        from engine_kernels.valvetrain import rocker_batches
+        kernel = rocker_batches.tappet_lift_for_valve_lift_batch
+        lifts, out = np.array([0.005]), np.empty(1)
+        geometry = np.array([{GEOMETRY_MM}]) / 1e3
+        seen = []
+        def attempt(work):
+            try:
+                call_small(kernel, work, lifts, geometry, out)
+                seen.append(work)
+            except CompilerNeeded as exc:
+                seen.append(-exc.work)
+        with without_compiler(10):
+            attempt(4)
+            with without_compiler(100):  # nested: draws on the outer 6 left
+                attempt(5)
+                attempt(2)
+            attempt(1)  # 10 - 4 - 5 = 1 left
+            attempt(1)
+            try:
+                kernel(lifts, geometry, out)
+            except CompilerNeeded as exc:
+                seen.append(("direct", exc.work))
+        print(seen, _jit.bound(), "numba" in sys.modules)
+        """
+    )
+    assert out.strip().splitlines()[-1] == "[4, 5, -2, 1, -1, ('direct', 0)] False False"

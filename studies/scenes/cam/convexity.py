@@ -18,7 +18,13 @@ import numpy as np
 from studies.scenes import cam_radius
 from studies.scenes.cam.scene import kernel_inputs
 from studies.scenes.cam_laws import LAW_CODES, codes
-from studies.scenes.checks import PointProblems, distinct, more_concave_line, take_points
+from studies.scenes.checks import (
+    PointProblems,
+    convex_advice,
+    distinct,
+    more_concave_line,
+    take_points,
+)
 
 if TYPE_CHECKING:
     from studies.scenes.base import Scene
@@ -55,7 +61,7 @@ def concave_cams(
     concave = np.flatnonzero(radius <= 0.0)
     listed = concave[:LISTED_CAMS]
     advised = [int(g) for g in listed if str(shapes["law"][g]) not in NO_ADVICE]
-    advice = dict(zip(advised, _convex_from(scene, shapes, advised, settings), strict=True))
+    advice = convex_advice(advised, lambda: _convex_from(scene, shapes, advised, settings))
     found = PointProblems()
     for g in listed:
         law = str(shapes["law"][g])
@@ -129,7 +135,7 @@ def _convex_from(
 
     def convex(beta_deg: np.ndarray) -> np.ndarray:
         some["rise_angle"] = np.radians(beta_deg)
-        return _min_radius(scene, some, settings) > 0.0
+        return _min_radii(scene, some, settings)[0] > 0.0
 
     low = np.degrees(np.asarray(shapes["rise_angle"][groups], dtype=float))
     high = np.full(len(groups), top)

@@ -21,7 +21,7 @@ from engine_kernels.cam import lift_laws, multi_segment
 from engine_kernels.valvetrain import rocker, rocker_batches
 from studies.scenes import cam_radius
 from studies.scenes.cam_laws import LAW_CODES, SHAPE_CODES, codes
-from studies.scenes.checks import PointProblems, more_concave_line, take
+from studies.scenes.checks import PointProblems, convex_advice, more_concave_line, take
 
 HALF_TURN_DEG = 180.0
 ADVICE_STEP_DEG = 0.5
@@ -156,7 +156,7 @@ def concave_linkages(
     members = {int(g): np.flatnonzero(linkage == g) for g in listed}
     laws = np.asarray(points["law"])[first[listed]].astype(str)
     advised = [int(g) for g, law in zip(listed, laws, strict=True) if law != "six_segment"]
-    advice = dict(zip(advised, _convex_from(points, first[advised]), strict=True))
+    advice = convex_advice(advised, lambda: _convex_from(points, first[advised]))
     found = PointProblems()
     for g, law in zip(listed.tolist(), laws.tolist(), strict=True):
         i = int(first[g])
