@@ -122,6 +122,9 @@ _PLAIN = _Plain()
 INTERPRETED_WORK = 100_000
 """Most inner evaluations :func:`call_small` runs as plain Python: about 0.75 s at the 7.5 µs an
 evaluation of a cam law takes there, less than starting Numba's compiler and loading a kernel."""
+QUICK_COMBINATIONS = 4_000_000
+"""Distinct combinations a check examines inside :func:`without_compiler` (NumPy grouping of
+4·10⁶ rows: about 0.5 s)."""
 QUICK_WORK = 120_000
 """Inner evaluations :func:`without_compiler` allows in all: about 0.4 s of plain Python at the
 3.3 µs an evaluation of the six-segment cam law takes there (the analytic laws: 1.7-2 µs)."""
@@ -132,9 +135,27 @@ class CompilerNeeded(RuntimeError):
     or exceed the plain-Python budget; ``work`` is the call's count of inner evaluations (0: a
     direct kernel call, whose work is not counted)."""
 
-    def __init__(self, work: int) -> None:
+    def __init__(self, work: int, combinations: bool = False) -> None:
         super().__init__(f"a kernel call of {work} evaluations needs the compiler")
         self.work = work
+        self.combinations = combinations  # work counts distinct combinations to examine
+
+
+def claim_combinations(count: int) -> None:
+    """Inside :func:`without_compiler`, raise :class:`CompilerNeeded` at once if a check would
+    examine more than :data:`QUICK_COMBINATIONS` distinct combinations (their grouping alone
+    takes O(count log count) time)."""
+    if _PLAIN.left is not None and count > QUICK_COMBINATIONS:
+        raise CompilerNeeded(count, combinations=True)
+
+
+def claim(work: int) -> None:
+    """Inside :func:`without_compiler`, raise :class:`CompilerNeeded` at once if ``work``
+    evaluations exceed what is left: a caller about to prepare the inputs of that many (O(work)
+    time and memory) learns first that it will not be allowed to evaluate them."""
+    left = _PLAIN.left
+    if left is not None and work > left:
+        raise CompilerNeeded(work)
 
 
 @contextlib.contextmanager

@@ -178,6 +178,8 @@ def _checked_points(
 
 def needs(exc: CompilerNeeded) -> str:
     """What a check left to the compiler would cost, for an ``unchecked`` line."""
+    if exc.combinations:
+        return f"{exc.work:,} distinct combinations: more than a quick check examines"
     if exc.work:
         return f"{exc.work:,} kernel evaluations: they need the compiler, about 1 s"
     return "a compiled kernel: it needs the compiler, about 1 s"

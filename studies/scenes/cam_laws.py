@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from engine_kernels._jit import call_small
+from engine_kernels._jit import call_small, claim
 from engine_kernels.cam import lift_laws, multi_segment
 from studies.scenes.base import Parameter
 
@@ -177,6 +177,7 @@ def fitted_widths(
     n = len(p["law"])
     widths, adjusted, fits = np.zeros((n, 6)), np.zeros((n, 6)), np.ones(n, dtype=bool)
     if six.size:
+        claim(six.size)
         widths = np.stack([p[f"seg{k}_width"] for k in range(1, 7)], axis=1).astype(float)
         shapes = np.stack([codes(p[f"seg{k}_shape"][six], SHAPE_CODES) for k in range(1, 7)], 1)
         half = np.ascontiguousarray(p["rise_angle"][six], dtype=float)

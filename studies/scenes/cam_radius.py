@@ -17,7 +17,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from engine_kernels._jit import call_small
+from engine_kernels._jit import call_small, claim
 from engine_kernels.cam import kinematics as cb
 from engine_kernels.cam.lift_laws import LAW_POLYDYNE, LAW_SIX_SEGMENT, N_RISE_LAWS
 from studies.scenes.checks import distinct, take
@@ -103,6 +103,7 @@ def min_radii(
         out[some] = base[some] + lift[some] * shape[group]
     rest = np.flatnonzero(~scaled)
     step = scan_step_deg(rest.size, step_deg)
+    claim(rest.size * angle_grid(step).size)
     if rest.size:
         radius = np.empty(rest.size)
         grid = angle_grid(step)

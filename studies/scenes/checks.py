@@ -12,7 +12,7 @@ from contextvars import ContextVar
 
 import numpy as np
 
-from engine_kernels._jit import CompilerNeeded
+from engine_kernels._jit import CompilerNeeded, claim_combinations
 from studies.scenes.design_points import DesignPoints, Numbering
 
 LATER_ADVICE = "`check --full` finds the rise angle that makes it convex"
@@ -30,6 +30,7 @@ def on_distinct(
     to the study's (:meth:`DesignPoints.distinct`). A plain dict of columns is checked whole."""
     if not isinstance(points, DesignPoints):
         return check(dict(points))
+    claim_combinations(points.combinations_bound(names))
     values, numbering = points.distinct(names)
     token = _NUMBERING.set(numbering)
     try:

@@ -17,6 +17,7 @@ FactorialCodes`) and the noise values:
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -132,6 +133,15 @@ class DesignPoints(Mapping[str, np.ndarray]):
                 del self._distinct[next(iter(self._distinct))]
             self._distinct[key] = self._combinations(names)
         return self._distinct[key]
+
+    def combinations_bound(self, names: Sequence[str]) -> int:
+        """At most how many distinct combinations of ``names`` :meth:`distinct` finds, from the
+        level counts alone (O(factors))."""
+        varying = [n for n in self.order if n in names and (n in self.factors or n in self.noise)]
+        if any(n in self.noise for n in varying):
+            return self.n
+        levels = math.prod(len(self.factors[n].levels) for n in varying)
+        return min(levels, self.runs)
 
     def _combinations(self, names: Sequence[str]) -> tuple[dict[str, np.ndarray], Numbering]:
         varying = [n for n in self.order if n in names and (n in self.factors or n in self.noise)]

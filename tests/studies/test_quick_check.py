@@ -62,19 +62,33 @@ def many_cams(tmp_path: Path) -> Path:
     return path
 
 
+def many_linkages(tmp_path: Path) -> Path:
+    """1.2·10⁷ distinct valve linkages (rise angle × lash): more combinations than a quick
+    check groups."""
+    levels = [[60 + i / 128 for i in range(4000)], [0.05 + i / 16384 for i in range(3000)]]
+    path = tmp_path / "many_linkages.toml"
+    path.write_text(
+        'name = "many_linkages"\nscene = "valve"\nresponses = ["max_tappet_lift"]\n'
+        f"[factors.rise_angle]\nlevels = {levels[0]}\n[factors.lash]\nlevels = {levels[1]}\n"
+    )
+    return path
+
+
 @pytest.mark.parametrize(
     ("study", "left_out"),
     [
         ("ohc125_robust", "the noise cases, a sobol sample of 32"),
         (str(CORPUS / "crank_sobol_sample.toml"), "the sobol sample of 16 design points"),
         ("many_cams", "the scene's advice on the points, e.g. concave cams"),
+        ("many_linkages", "the scene's checks of the points (12,000,000 distinct combinations"),
     ],
-    ids=["sobol-noise", "sobol-design", "8000-cams"],
+    ids=["sobol-noise", "sobol-design", "8000-cams", "1.2e7-linkages"],
 )
 def test_a_quick_check_draws_no_sample_starts_no_compiler_and_says_what_it_left(
     study: str, left_out: str, tmp_path: Path
 ) -> None:
-    path = str(many_cams(tmp_path)) if study == "many_cams" else study
+    made = {"many_cams": many_cams, "many_linkages": many_linkages}
+    path = str(made[study](tmp_path)) if study in made else study
     done = check_fresh(path)
     assert done.returncode == 0, done.stderr
     lines = done.stdout.splitlines()

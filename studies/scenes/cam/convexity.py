@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from engine_kernels._jit import claim
 from studies.scenes import cam_radius
 from studies.scenes.cam.scene import kernel_inputs
 from studies.scenes.cam_laws import LAW_CODES, codes
@@ -55,6 +56,7 @@ def concave_cams(
     """A warning per concave cam (the first :data:`LISTED_CAMS`), naming its design points, and
     one line counting the rest; O(N) grouping, then one kernel call over the distinct cam
     shapes and one per bisection step of the advice."""
+    claim(len(points["law"]))  # a quick check: no O(cams) preparation beyond its budget
     first, shape = _distinct(points)
     shapes = take_points(points, first)
     radius, scanned = _min_radii(scene, shapes, settings)

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from engine_kernels._jit import call_small
+from engine_kernels._jit import call_small, claim
 from engine_kernels.cam import kinematics as cb
 from engine_kernels.cam import lift_laws, multi_segment
 from engine_kernels.valvetrain import rocker, rocker_batches
@@ -77,6 +77,7 @@ def nose_tappet_lift(points: dict[str, np.ndarray], i: int) -> float:
 
 def nose_tappet_lifts(points: dict[str, np.ndarray], idx: np.ndarray) -> np.ndarray:
     """:func:`nose_tappet_lift` of design points ``idx`` in one kernel call [m]."""
+    claim(len(idx))
     out = np.empty(len(idx))
     lift = np.ascontiguousarray(take(points["valve_lift"], idx), dtype=float)
     geometry = geometry_rows(points, idx)
