@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import errno
 import json
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Final
 
@@ -83,45 +85,73 @@ def run_dims(plan: Plan) -> tuple[str, ...]:
     return ("run", NOISE) if plan.definition.noise is not None else ("run",)
 
 
-def layout(plan: Plan, attrs: dict[str, Any]) -> xr.Dataset:
-    """Coordinates and global attributes of a run's results, without its responses."""
+@dataclass(frozen=True)
+class RunCoordinate:
+    """A coordinate with a value per design point (or per point and noise case): its values
+    are made for a block of runs at a time (:func:`run_coordinates`)."""
+
+    name: str
+    dims: tuple[str, ...]
+    dtype: np.dtype
+    attrs: dict[str, Any]
+    values: Callable[[slice], np.ndarray]  # the values of the runs ``part``
+
+
+def run_coordinates(plan: Plan) -> list[RunCoordinate]:
+    """The numeric coordinates along ``run``, in the order of the results file: the run
+    number, the noise factors' values, each factor's value and level index, the empty and
+    interaction columns' level indices."""
     d, scene, design = plan.definition, plan.scene, plan.design
-    coords: dict[str, Any] = {"run": ("run", np.arange(plan.runs), {"long_name": "design point"})}
-    if d.noise is not None:
-        coords[NOISE] = (NOISE, np.arange(plan.noise_cases), {"long_name": "noise case"})
+
+    def codes(name: str) -> Callable[[slice], np.ndarray]:
+        return lambda part: np.asarray(design.levels[name][part]).astype(np.int32)
+
+    def factor(name: str) -> Callable[[slice], np.ndarray]:
+        return lambda part: np.asarray(plan.factor_values(name, part))
+
+    def noise(values: np.ndarray) -> Callable[[slice], np.ndarray]:
+        return lambda part: values[part]
+
+    def run(part: slice) -> np.ndarray:
+        return np.arange(*part.indices(plan.runs))
+
+    out = [RunCoordinate("run", ("run",), np.dtype(np.int64), {"long_name": "design point"}, run)]
     for name, values in plan.noise_values.items():
         param = scene.parameter(name)
         assert param is not None
-        coords[f"{name}{NOISE_SUFFIX}"] = (
-            ("run", NOISE),
-            values,
-            {"units": param.units, "long_name": f"{param.long_name} under noise"},
-        )
+        long_name = f"{param.long_name} under noise"
+        attrs = {"units": param.units, "long_name": long_name}
+        dims = ("run", NOISE)
+        out.append(RunCoordinate(f"{name}{NOISE_SUFFIX}", dims, values.dtype, attrs, noise(values)))
     for f in d.factors:
         param = scene.parameter(f.name)
-        long_name = param.long_name if param else f.name
-        coords[f.name] = (
-            "run",
-            plan.factor_values(f.name),
-            {"units": f.units, "long_name": long_name, "role": f.role},
-        )
-        coords[f"{f.name}_level"] = (
-            "run",
-            design.levels[f.name].astype(np.int32),
-            {"units": "1", "long_name": f"level index of {f.name}"},
-        )
+        attrs = {"units": f.units, "long_name": param.long_name if param else f.name}
+        dtype = np.asarray(f.levels).dtype
+        out.append(RunCoordinate(f.name, ("run",), dtype, attrs | {"role": f.role}, factor(f.name)))
+        attrs = {"units": "1", "long_name": f"level index of {f.name}"}
+        int32 = np.dtype(np.int32)
+        out.append(RunCoordinate(f"{f.name}_level", ("run",), int32, attrs, codes(f.name)))
     for e in design.error_columns:
-        coords[f"{e}_level"] = (
-            "run",
-            design.levels[e].astype(np.int32),
-            {"units": "1", "long_name": f"empty array column {e} (error)"},
-        )
+        attrs = {"units": "1", "long_name": f"empty array column {e} (error)"}
+        out.append(RunCoordinate(f"{e}_level", ("run",), np.dtype(np.int32), attrs, codes(e)))
     for name, (a, b) in design.interactions.items():
-        coords[f"{name}_level"] = (
-            "run",
-            design.levels[name].astype(np.int32),
-            {"units": "1", "long_name": f"interaction column {a} x {b}"},
-        )
+        attrs = {"units": "1", "long_name": f"interaction column {a} x {b}"}
+        out.append(RunCoordinate(f"{name}_level", ("run",), np.dtype(np.int32), attrs, codes(name)))
+    return out
+
+
+def layout(plan: Plan, attrs: dict[str, Any], per_run: bool = True) -> xr.Dataset:
+    """Coordinates and global attributes of a run's results, without its responses; without
+    the numeric coordinates along ``run`` unless ``per_run`` (the writer adds those block by
+    block: :class:`studies.run.results_writer.ResultsWriter`)."""
+    d, scene, design = plan.definition, plan.scene, plan.design
+    every = run_coordinates(plan)
+    kept = every if per_run else [c for c in every if not numeric(c.dtype)]
+    whole = {c.name: (c.dims, c.values(slice(None)), c.attrs) for c in kept}
+    coords: dict[str, Any] = {"run": whole.pop("run")} if "run" in whole else {}
+    if d.noise is not None:
+        coords[NOISE] = (NOISE, np.arange(plan.noise_cases), {"long_name": "noise case"})
+    coords |= whole
     for label, values in design.labels.items():
         coords[label] = ("run", values.astype(str), {"long_name": label.replace("_", " ")})
     if d.curves:
@@ -162,6 +192,11 @@ def layout(plan: Plan, attrs: dict[str, Any]) -> xr.Dataset:
         **global_attributes(attrs),
     }
     return ds
+
+
+def numeric(dtype: np.dtype) -> bool:
+    """Whether values of ``dtype`` are stored as numbers (compressed, chunked along run)."""
+    return dtype.kind in "fiu"
 
 
 def global_attributes(attrs: dict[str, Any]) -> dict[str, Any]:
