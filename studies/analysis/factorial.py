@@ -50,7 +50,7 @@ def factorial(out: xr.Dataset, one: xr.Dataset, name: str, grid: GridOrder) -> N
     """Main, two-factor and remainder SS and Sobol indices of a response that is finite in
     every run of a complete full factorial (otherwise the grid has holes: left NaN)."""
     factors, counts, order = grid
-    y = one[name].values.astype(float)[order]
+    y = np.asarray(one[name].values, dtype=float)[order]  # one copy: the grid order
     if not np.isfinite(y).all():
         return
     i = out.indexes["response"].get_loc(name)

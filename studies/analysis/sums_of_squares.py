@@ -33,9 +33,11 @@ def without_round_off(ss: np.ndarray, total: float) -> np.ndarray:
 
 
 def centred(y: np.ndarray) -> np.ndarray:
-    """``y`` minus its mean, by two passes (the second corrects the first mean's rounding)."""
+    """``y`` minus its mean, by two passes (the second corrects the first mean's rounding),
+    in one new array (the second pass in place: the same numbers, half the memory)."""
     d = y - y.mean()
-    return d - d.mean()
+    d -= d.mean()
+    return d
 
 
 def level_sums(

@@ -14,7 +14,8 @@ import itertools
 import numpy as np
 import pytest
 
-from studies.analysis.sensitivity import decompose
+from studies.analysis.sensitivity import decompose, squares
+from studies.analysis.sums_of_squares import BLOCK
 
 A, B = 7.0, 0.1  # Ishigami constants
 VARIANCE = A**2 / 8 + B * np.pi**4 / 5 + B**2 * np.pi**8 / 18 + 0.5
@@ -92,3 +93,16 @@ def test_ishigami_grid_agrees_with_a_saltelli_monte_carlo_estimate() -> None:
         ):
             error = terms.std(ddof=1) / np.sqrt(n)
             assert abs(terms.mean() - estimate) <= 4 * error + discretisation
+
+
+def test_sums_of_squares_by_slabs_equal_the_whole_array_sums() -> None:
+    # Reference: the sums over the whole array (what squares() does below BLOCK values);
+    # above it, slabs are summed separately: equal to the last bits (1e-12 relative).
+    d = np.random.default_rng(7).normal(3.0, 2.0, (70, 60, 300))
+    assert d.size > BLOCK
+    assert squares(d) == pytest.approx(float(np.sum(d * d)), rel=1e-12)
+    for axis in range(d.ndim):
+        whole = float(np.sum((d - d.mean(axis=axis, keepdims=True)) ** 2))
+        assert squares(d, axis) == pytest.approx(whole, rel=1e-12)
+    small = d[:5, :5, :5]
+    assert squares(small, 1) == float(np.sum((small - small.mean(axis=1, keepdims=True)) ** 2))
