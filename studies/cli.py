@@ -380,9 +380,10 @@ def _advice(plan: Plan, unchecked: list[str] | None = None) -> list[str]:
         return plan.scene.point_warnings(plan.points, plan.settings)
     from engine_kernels._jit import CompilerNeeded, without_compiler
     from studies.define.plan import needs
+    from studies.scenes.checks import at_nominal_values
 
     try:
-        with without_compiler():
+        with without_compiler(), at_nominal_values() if plan.nominal else contextlib.nullcontext():
             return plan.scene.point_warnings(plan.points, plan.settings)
     except CompilerNeeded as exc:
         unchecked.append(f"the scene's advice on the points, e.g. concave cams ({needs(exc)})")

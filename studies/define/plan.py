@@ -8,6 +8,7 @@ plan is clean.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import sys
@@ -32,6 +33,7 @@ from studies.define.noise import noise_needs_stats, noise_table, noisy, range_pr
 from studies.define.sampling import SAMPLING_DESIGNS, sample_runs, sampled_levels
 from studies.scenes import Scene, get_scene
 from studies.scenes.base import short
+from studies.scenes.checks import at_nominal_values
 from studies.scenes.design_points import DesignPoints, Factor
 
 BYTES_PER_FACTOR = 48
@@ -58,6 +60,7 @@ class Plan:
     noise_values: dict[str, np.ndarray] = field(default_factory=dict)  # runs × cases, units
     unchecked: tuple[str, ...] = ()  # what a quick plan left to `run` (plan_study(quick=True))
     drawn: bool = True  # False: a quick plan's sampling design, whose points are placeholders
+    nominal: bool = False  # True: a quick plan's noise study, its points the nominal values
 
     @property
     def runs(self) -> int:
@@ -137,7 +140,9 @@ def _plan(
         raise StudyFileError(source, [work_problem])
     point_problems = scene.request_problems(settings, asked, curves)
     if drawn:
-        point_problems = _checked_points(scene, points, settings, quick, unchecked) + point_problems
+        with contextlib.nullcontext() if draw else at_nominal_values():
+            found = _checked_points(scene, points, settings, quick, unchecked)
+        point_problems = found + point_problems
     if point_problems:
         raise StudyFileError(source, point_problems)
     stages = scene.stages_to_run(settings, asked, curves)
@@ -158,6 +163,7 @@ def _plan(
         noise_values,
         tuple(unchecked),
         drawn,
+        not draw,
     )
 
 

@@ -7,7 +7,8 @@ bad fixed value gives one message instead of one per run.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Mapping, Sequence
+import contextlib
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from contextvars import ContextVar
 
 import numpy as np
@@ -20,6 +21,30 @@ LATER_ADVICE = "`check --full` finds the rise angle that makes it convex"
 LISTED_RANGES = 12
 """A message names at most this many ranges of design points, then counts them all."""
 _NUMBERING: ContextVar[Numbering | None] = ContextVar("numbering", default=None)
+_CASES: ContextVar[int] = ContextVar("cases", default=1)  # noise cases per design point
+_NOMINAL: ContextVar[bool] = ContextVar("nominal", default=False)
+
+
+@contextlib.contextmanager
+def per_noise_case(cases: int) -> Iterator[None]:
+    """Within: the points checked are design point major computed points, ``cases`` noise
+    cases a design point, and the messages name design points and noise cases."""
+    token = _CASES.set(cases)
+    try:
+        yield
+    finally:
+        _CASES.reset(token)
+
+
+@contextlib.contextmanager
+def at_nominal_values() -> Iterator[None]:
+    """Within: the points checked are the design points at their nominal values (a quick
+    check of a noise study, its noise cases not drawn), and the messages say so."""
+    token = _NOMINAL.set(True)
+    try:
+        yield
+    finally:
+        _NOMINAL.reset(token)
 
 
 def on_distinct(
@@ -34,7 +59,8 @@ def on_distinct(
     values, numbering = points.distinct(names)
     token = _NUMBERING.set(numbering)
     try:
-        return check(values)
+        with per_noise_case(points.cases):
+            return check(values)
     finally:
         _NUMBERING.reset(token)
 
@@ -49,11 +75,28 @@ def numbered(indices: np.ndarray) -> np.ndarray:
 def point_list(indices: Iterable[int] | np.ndarray) -> str:
     """``design point 3`` or ``design points 0–4, 7`` (0-based run indices, ranges merged; the
     first LISTED_RANGES ranges, then the count). Inside :func:`on_distinct` the indices are
-    combinations, numbered back to design points here."""
+    combinations, numbered back to design points here; under noise, to design points and
+    noise cases ("design point 2 (all 4 noise cases)", "design point 2 (noise case 1)")."""
     idx = np.unique(
         np.fromiter(indices, dtype=np.int64) if not isinstance(indices, np.ndarray) else indices
     )
     idx = numbered(idx)
+    cases = _CASES.get()
+    if _NOMINAL.get():
+        return f"{_ranges(idx)} at {'its' if idx.size == 1 else 'their'} nominal values"
+    if cases == 1:
+        return _ranges(idx)
+    design, case = np.divmod(idx, cases)  # computed points are design point major
+    designs, counts = np.unique(design, return_counts=True)
+    if (counts == cases).all():
+        return f"{_ranges(designs)} (all {cases} noise cases)"
+    shown = [f"{d} (noise case {c})" for d, c in zip(design[:LISTED_RANGES], case, strict=False)]
+    more = f", … ({idx.size} in all)" if idx.size > LISTED_RANGES else ""
+    return f"design point{'s' if designs.size > 1 else ''} {', '.join(shown)}{more}"
+
+
+def _ranges(idx: np.ndarray) -> str:
+    """``design point 3`` or ``design points 0–4, 7`` of sorted distinct indices."""
     breaks = np.flatnonzero(np.diff(idx) != 1)
     shown = breaks[: LISTED_RANGES - 1]
     starts = idx[np.r_[0, shown + 1]].tolist()

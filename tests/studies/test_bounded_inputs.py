@@ -181,7 +181,7 @@ def test_a_lift_table_that_is_not_a_regular_file_is_refused(
     study = tmp_path / "table.toml"
     study.write_text(f'{HEAD}[parameters]\nlaw = "table"\nlift_table = "{table}"\n{SPEED}')
     problem = one_line(capsys, main(["check", str(study)]))
-    assert problem == f"design points 0, 1: lift_table = {table!r}: no such file"
+    assert problem == f"design points 0–1: lift_table = {table!r}: no such file"
 
 
 def test_a_huge_lift_table_is_refused_by_its_cap(

@@ -309,12 +309,12 @@ def keys_of(value: Any) -> set[str]:
     return {value} if isinstance(value, str) and value else set()
 
 
-def check(text: str, folder: Path) -> tuple[int, str, str]:
+def check(text: str, folder: Path, *options: str) -> tuple[int, str, str]:
     study = folder / "fuzz.toml"
     study.write_text(text, encoding="utf-8")
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(["check", str(study)])
+        code = main(["check", *options, str(study)])
     return code, out.getvalue(), err.getvalue()
 
 
@@ -360,6 +360,37 @@ def test_check_answers_every_study_file_with_ok_or_readable_problems(
                 # (unless the drawn study was refused before it was broken, e.g. by settings
                 # that are each allowed but not together: jump_speed_high below _low)
                 assert any(key in line for key in offending for line in problems), err
+
+        property_()
+
+
+@pytest.mark.parametrize("scene", SCENES)
+def test_a_quick_check_says_nothing_the_full_check_contradicts(
+    scene: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Reference: ``check --full`` (what ``run`` checks before computing) on the same file.
+    Every problem the quick check reports, the full one reports (but those it found at a noise
+    study's nominal values, which it says: the full check sees the noise cases instead);
+    where the quick check left nothing out, both answers are the same, word for word."""
+    monkeypatch.setenv("ENGINE_STUDIES_MAX_POINTS", str(MAX_POINTS))
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+
+        @settings(FUZZ, max_examples=min(FUZZ.max_examples, 40))
+        @given(study=study_document(scene))
+        def property_(study: tuple[dict[str, Any], list[str], dict[str, Any]]) -> None:
+            text = toml_text(study[0])
+            code, out, err = check(text, folder)
+            full_code, full_out, full_err = check(text, folder, "--full")
+            partial = "\nnot checked here, " in out
+            nominal = " nominal values: " in out + err
+            event(f"exit {code}/{full_code}{', partial' if partial else ''}")
+            if code != 0 and not nominal:
+                problems = {line for line in err.splitlines() if line.startswith("  - ")}
+                assert full_code == code
+                assert problems <= set(full_err.splitlines()), (err, full_err)
+            elif not (partial or nominal):
+                assert (full_code, full_out, full_err) == (code, out, err)
 
         property_()
 

@@ -123,3 +123,22 @@ def test_quick_and_full_checks_agree_where_the_quick_one_leaves_nothing_out(
     full = capsys.readouterr()
     assert UNCHECKED not in quick.out
     assert (quick.out, quick.err) == (full.out, full.err)
+
+
+def test_problems_of_a_noise_study_name_design_points_and_noise_cases(
+    tmp_path: Path, capsys
+) -> None:
+    # One design point, 4 noise cases on the cam speed; its rise angle of 1 deg leaves the
+    # six-segment widths unfittable whatever the speed. Was (full check): "design points 0, 1,
+    # 2, 3", the computed points, in a study of one design point.
+    path = tmp_path / "one_point.toml"
+    text = find_study("isac_l9").read_text().split("[factors.seg2_width]")[0]
+    text = text.replace('type = "L9"\nerror_columns = ["D"]', 'type = "full_factorial"')
+    text = re.sub(r"\nrise_angle = .*", "\nrise_angle = 1.0", text)
+    text += '[factors.seg2_width]\nlevels = [9.0]\nunits = "deg"\n\n[noise]\ntype = "sobol"\n'
+    text += 'samples = 4\n\n[noise.cam_speed]\ndistribution = "uniform"\nhalf_width = 10\n'
+    path.write_text(text + "relative = true\n")
+    assert main(["check", "--full", str(path)]) == 2
+    assert "  - design point 0 (all 4 noise cases): segment widths" in capsys.readouterr().err
+    assert main(["check", str(path)]) == 2
+    assert "  - design point 0 at its nominal values: segment widths" in capsys.readouterr().err

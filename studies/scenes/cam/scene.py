@@ -40,7 +40,7 @@ from studies.scenes.cam_laws import (
     polydyne_problems,
 )
 from studies.scenes.cam_radius import HALF_TURN_DEG, turn_deg
-from studies.scenes.checks import checked_groups, numbered, on_distinct
+from studies.scenes.checks import checked_groups, on_distinct, point_list
 from studies.scenes.state import RunState
 
 if TYPE_CHECKING:
@@ -201,10 +201,7 @@ class CamScene(Scene[CamState]):
             lambda i: self._point_problems(points, i, tables, fitted),
         ):
             found[problem].append(members)
-        return [
-            f"{_points_label(np.sort(numbered(np.concatenate(idx))).tolist())}: {msg}"
-            for msg, idx in found.items()
-        ]
+        return [f"{point_list(np.concatenate(idx))}: {msg}" for msg, idx in found.items()]
 
     def _point_problems(
         self,
@@ -351,8 +348,3 @@ def _ramp_problems(height: float, width: float, velocity: float) -> list[str]:
             )
         ]
     return []
-
-
-def _points_label(indices: list[int]) -> str:
-    shown = ", ".join(str(i) for i in indices[:8]) + (" …" if len(indices) > 8 else "")
-    return f"design point{'s' if len(indices) > 1 else ''} {shown}"
