@@ -1,7 +1,8 @@
 """Command line: ``python -m studies COMMAND``.
 
 run STUDY|--all        validate, run and record a study (catalogue name or TOML path)
-check STUDY            validate only: list every problem, run nothing
+check STUDY [--full]   validate only, run nothing: at once, naming what it left to --full;
+                       --full: every check run makes before computing
 list                   the shipped studies
 scenes [NAME]          document scenes: parameters, settings, responses, curves (units)
 analyze RESULTS.nc     range analysis + ANOVA tables and main-effect plots beside the file
