@@ -122,6 +122,8 @@ _PLAIN = _Plain()
 INTERPRETED_WORK = 100_000
 """Most inner evaluations :func:`call_small` runs as plain Python: about 0.75 s at the 7.5 µs an
 evaluation of a cam law takes there, less than starting Numba's compiler and loading a kernel."""
+EVALUATIONS = "kernel evaluations"
+COMBINATIONS = "distinct combinations"
 QUICK_COMBINATIONS = 4_000_000
 """Distinct combinations a check examines inside :func:`without_compiler` (NumPy grouping of
 4·10⁶ rows: about 0.5 s)."""
@@ -135,10 +137,10 @@ class CompilerNeeded(RuntimeError):
     or exceed the plain-Python budget; ``work`` is the call's count of inner evaluations (0: a
     direct kernel call, whose work is not counted)."""
 
-    def __init__(self, work: int, combinations: bool = False) -> None:
-        super().__init__(f"a kernel call of {work} evaluations needs the compiler")
+    def __init__(self, work: int, what: str = EVALUATIONS) -> None:
+        super().__init__(f"{work} {what}: more than a quick check may take on")
         self.work = work
-        self.combinations = combinations  # work counts distinct combinations to examine
+        self.what = what  # what ``work`` counts
 
 
 def claim_combinations(count: int) -> None:
@@ -146,16 +148,17 @@ def claim_combinations(count: int) -> None:
     examine more than :data:`QUICK_COMBINATIONS` distinct combinations (their grouping alone
     takes O(count log count) time)."""
     if _PLAIN.left is not None and count > QUICK_COMBINATIONS:
-        raise CompilerNeeded(count, combinations=True)
+        raise CompilerNeeded(count, COMBINATIONS)
 
 
-def claim(work: int) -> None:
+def claim(work: int, what: str = EVALUATIONS) -> None:
     """Inside :func:`without_compiler`, raise :class:`CompilerNeeded` at once if ``work``
-    evaluations exceed what is left: a caller about to prepare the inputs of that many (O(work)
-    time and memory) learns first that it will not be allowed to evaluate them."""
+    (kernel evaluations, or ``what`` else: items each needing at least one) exceeds the
+    evaluations left: a caller about to prepare the inputs of that many (O(work) time and
+    memory) learns first that it will not be allowed to evaluate them."""
     left = _PLAIN.left
     if left is not None and work > left:
-        raise CompilerNeeded(work)
+        raise CompilerNeeded(work, what)
 
 
 @contextlib.contextmanager

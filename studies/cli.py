@@ -381,14 +381,22 @@ def _advice(plan: Plan, unchecked: list[str] | None = None) -> list[str]:
         return plan.scene.point_warnings(plan.points, plan.settings)
     from engine_kernels._jit import CompilerNeeded, without_compiler
     from studies.define.plan import needs
-    from studies.scenes.checks import at_nominal_values
+    from studies.scenes.checks import Left, at_nominal_values, each_check_alone, reading
 
+    left: Left = []
     try:
-        with without_compiler(), at_nominal_values() if plan.nominal else contextlib.nullcontext():
-            return plan.scene.point_warnings(plan.points, plan.settings)
+        with (
+            without_compiler(),
+            each_check_alone(left),
+            at_nominal_values() if plan.nominal else contextlib.nullcontext(),
+        ):
+            lines = plan.scene.point_warnings(plan.points, plan.settings)
     except CompilerNeeded as exc:
         unchecked.append(f"the scene's advice on the points, e.g. concave cams ({needs(exc)})")
         return []
+    advice = "the scene's advice (e.g. concave cams) from"
+    unchecked += [f"{advice} {reading(n)} ({needs(e)})" for n, e in left]
+    return lines
 
 
 def _cmd_list(_: argparse.Namespace) -> int:

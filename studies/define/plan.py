@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from engine_kernels._jit import CompilerNeeded, without_compiler
+from engine_kernels._jit import EVALUATIONS, CompilerNeeded, without_compiler
 from studies.common.errors import StudyError
 from studies.define import designs
 from studies.define.definition import (
@@ -33,7 +33,7 @@ from studies.define.noise import noise_needs_stats, noise_table, noisy, range_pr
 from studies.define.sampling import SAMPLING_DESIGNS, sample_runs, sampled_levels
 from studies.scenes import Scene, get_scene
 from studies.scenes.base import short
-from studies.scenes.checks import at_nominal_values
+from studies.scenes.checks import Left, at_nominal_values, each_check_alone, reading
 from studies.scenes.design_points import DesignPoints, Factor
 
 BYTES_PER_FACTOR = 48
@@ -174,20 +174,23 @@ def _checked_points(
     checking them needs the compiler (or more plain-Python work than a quick plan allows)."""
     if not quick:
         return scene.check_points(points, settings)
+    left: Left = []
     try:
-        with without_compiler():
-            return scene.check_points(points, settings)
+        with without_compiler(), each_check_alone(left):
+            found = scene.check_points(points, settings)
     except CompilerNeeded as exc:
         unchecked.append(f"the scene's checks of the points ({needs(exc)})")
         return []
+    unchecked += [f"the scene's checks that read {reading(n)} ({needs(e)})" for n, e in left]
+    return found
 
 
 def needs(exc: CompilerNeeded) -> str:
     """What a check left to the compiler would cost, for an ``unchecked`` line."""
-    if exc.combinations:
-        return f"{exc.work:,} distinct combinations: more than a quick check examines"
-    if exc.work:
+    if exc.what == EVALUATIONS and exc.work:
         return f"{exc.work:,} kernel evaluations: they need the compiler, about 1 s"
+    if exc.work:
+        return f"{exc.work:,} {exc.what}: more than a quick check takes on"
     return "a compiled kernel: it needs the compiler, about 1 s"
 
 

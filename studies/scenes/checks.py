@@ -25,6 +25,28 @@ _CASES: ContextVar[int] = ContextVar("cases", default=1)  # noise cases per desi
 _NOMINAL: ContextVar[bool] = ContextVar("nominal", default=False)
 
 
+Left = list[tuple[tuple[str, ...], CompilerNeeded]]
+_LEFT: ContextVar[Left | None] = ContextVar("left", default=None)
+
+
+@contextlib.contextmanager
+def each_check_alone(left: Left) -> Iterator[None]:
+    """Within (a quick ``check``): a check run by :func:`on_distinct` that needs the compiler
+    or more work than allowed (:class:`engine_kernels._jit.CompilerNeeded`) is left out and
+    recorded in ``left`` with the parameters it reads; the other checks go on."""
+    token = _LEFT.set(left)
+    try:
+        yield
+    finally:
+        _LEFT.reset(token)
+
+
+def reading(names: Sequence[str]) -> str:
+    """The parameters a check reads, for a message (the first four, then a count)."""
+    shown = ", ".join(names[:4])
+    return shown + (f" and {len(names) - 4} more" if len(names) > 4 else "")
+
+
 @contextlib.contextmanager
 def per_noise_case(cases: int) -> Iterator[None]:
     """Within: the points checked are design point major computed points, ``cases`` noise
@@ -55,14 +77,21 @@ def on_distinct(
     to the study's (:meth:`DesignPoints.distinct`). A plain dict of columns is checked whole."""
     if not isinstance(points, DesignPoints):
         return check(dict(points))
-    claim_combinations(points.combinations_bound(names))
-    values, numbering = points.distinct(names)
-    token = _NUMBERING.set(numbering)
+    left = _LEFT.get()
     try:
-        with per_noise_case(points.cases):
-            return check(values)
-    finally:
-        _NUMBERING.reset(token)
+        claim_combinations(points.combinations_bound(names))
+        values, numbering = points.distinct(names)
+        token = _NUMBERING.set(numbering)
+        try:
+            with per_noise_case(points.cases):
+                return check(values)
+        finally:
+            _NUMBERING.reset(token)
+    except CompilerNeeded as exc:
+        if left is None:
+            raise
+        left.append((tuple(names), exc))
+        return []
 
 
 def numbered(indices: np.ndarray) -> np.ndarray:

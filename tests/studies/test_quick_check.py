@@ -79,8 +79,8 @@ def many_linkages(tmp_path: Path) -> Path:
     [
         ("ohc125_robust", "the noise cases, a sobol sample of 32"),
         (str(CORPUS / "crank_sobol_sample.toml"), "the sobol sample of 16 design points"),
-        ("many_cams", "the scene's advice on the points, e.g. concave cams"),
-        ("many_linkages", "the scene's checks of the points (12,000,000 distinct combinations"),
+        ("many_cams", "the scene's advice (e.g. concave cams) from law, base_radius"),
+        ("many_linkages", "the scene's checks that read law, valve_lift, rise_angle"),
     ],
     ids=["sobol-noise", "sobol-design", "8000-cams", "1.2e7-linkages"],
 )

@@ -56,7 +56,7 @@ def concave_cams(
     """A warning per concave cam (the first :data:`LISTED_CAMS`), naming its design points, and
     one line counting the rest; O(N) grouping, then one kernel call over the distinct cam
     shapes and one per bisection step of the advice."""
-    claim(len(points["law"]))  # a quick check: no O(cams) preparation beyond its budget
+    claim(len(points["law"]), "distinct cam shapes")  # a quick check: no O(cams) preparation
     first, shape = _distinct(points)
     shapes = take_points(points, first)
     radius, scanned = _min_radii(scene, shapes, settings)
