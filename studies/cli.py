@@ -379,24 +379,15 @@ def _advice(plan: Plan, unchecked: list[str] | None = None) -> list[str]:
     if the advice needs it, say so there instead."""
     if unchecked is None:
         return plan.scene.point_warnings(plan.points, plan.settings)
-    from engine_kernels._jit import CompilerNeeded, without_compiler
-    from studies.define.plan import needs
-    from studies.scenes.checks import Left, at_nominal_values, each_check_alone, reading
+    from studies.define.plan import quickly
+    from studies.scenes.checks import at_nominal_values
 
-    left: Left = []
-    try:
-        with (
-            without_compiler(),
-            each_check_alone(left),
-            at_nominal_values() if plan.nominal else contextlib.nullcontext(),
-        ):
-            lines = plan.scene.point_warnings(plan.points, plan.settings)
-    except CompilerNeeded as exc:
-        unchecked.append(f"the scene's advice on the points, e.g. concave cams ({needs(exc)})")
-        return []
-    advice = "the scene's advice (e.g. concave cams) from"
-    unchecked += [f"{advice} {reading(n)} ({needs(e)})" for n, e in left]
-    return lines
+    whole = "the scene's advice on the points, e.g. concave cams"
+    each = "the scene's advice (e.g. concave cams) from"
+    with at_nominal_values() if plan.nominal else contextlib.nullcontext():
+        return quickly(
+            lambda: plan.scene.point_warnings(plan.points, plan.settings), whole, each, unchecked
+        )
 
 
 def _cmd_list(_: argparse.Namespace) -> int:

@@ -174,14 +174,24 @@ def _checked_points(
     checking them needs the compiler (or more plain-Python work than a quick plan allows)."""
     if not quick:
         return scene.check_points(points, settings)
+    whole, each = "the scene's checks of the points", "the scene's checks that read"
+    return quickly(lambda: scene.check_points(points, settings), whole, each, unchecked)
+
+
+def quickly(
+    check: Callable[[], list[str]], whole: str, each: str, unchecked: list[str]
+) -> list[str]:
+    """``check()`` without the compiler: each of its checks that would need it is left out
+    alone and named in ``unchecked`` ("``each`` <what it reads> (<cost>)"), or all of it
+    ("``whole`` (<cost>)") when the call needing it is outside :func:`on_distinct`."""
     left: Left = []
     try:
         with without_compiler(), each_check_alone(left):
-            found = scene.check_points(points, settings)
+            found = check()
     except CompilerNeeded as exc:
-        unchecked.append(f"the scene's checks of the points ({needs(exc)})")
+        unchecked.append(f"{whole} ({needs(exc)})")
         return []
-    unchecked += [f"the scene's checks that read {reading(n)} ({needs(e)})" for n, e in left]
+    unchecked += [f"{each} {reading(n)} ({needs(e)})" for n, e in left]
     return found
 
 
