@@ -76,6 +76,7 @@ from studies.analysis.uncertainty.noise_statistics import robust_statistics
 from studies.analysis.uncertainty.sample_statistics import sample_analysis
 from studies.analysis.uncertainty.sobol_indices import sobol_analysis
 from studies.analysis.uncertainty.violation_map import with_violation_maps
+from studies.common.blocks import blocks, compact_codes, finite_summary, level_count, run_slices
 from studies.define.sampling import SAMPLING_DESIGNS
 from studies.run.results import NOT_EVALUATED, PASS_FAIL, is_status, write_netcdf
 
@@ -89,16 +90,18 @@ INTERACTION_COLUMNS = ("SS", "dof", "F", "P", "contribution")
 def presence(ds: xr.Dataset, responses: Sequence[str]) -> tuple[list[str], np.ndarray]:
     """The responses with a finite value in some run, and the runs with a value (finite or
     ±inf; for flags and status codes anything but -1 "not evaluated") in some response: the
-    others did not run. Reads each response once."""
+    others did not run. Reads each response once, a block of runs at a time."""
     present, any_value = [], np.zeros(ds.sizes["run"], dtype=bool)
     for r in responses:
-        values = ds[r].values
-        integer = values.dtype.kind == "i"
-        has = values != NOT_EVALUATED if integer else ~np.isnan(values)
-        finite = has if integer else np.isfinite(values)
-        if finite.any():
+        seen = False
+        for part in run_slices(ds.sizes["run"]):
+            values = np.asarray(ds[r].variable[part])
+            integer = values.dtype.kind == "i"
+            has = values != NOT_EVALUATED if integer else ~np.isnan(values)
+            seen = seen or bool((has if integer else np.isfinite(values)).any())
+            any_value[part] |= has.reshape(values.shape[0], -1).any(axis=1)
+        if seen:
             present.append(r)
-        any_value |= has.reshape(values.shape[0], -1).any(axis=1)
     return present, any_value
 
 
@@ -150,12 +153,18 @@ def analyze(
     terms = taguchi.model_terms(view)
     operating = prediction.operating_factors(view)
     models = [f for f in json.loads(view.attrs.get("model_factors", "[]")) if f in operating]
-    # The level codes once in memory, then one response at a time: a 10⁷-run result is never
-    # held whole.
+    # One response at a time, over the level codes held compactly (1 byte per run and term
+    # up to 127 levels); factor values are read where used: a 10⁷-run result is never held
+    # whole.
     base = view.drop_vars(list(view.data_vars))
     base = base.assign_coords(
-        {f"{t}_level": base[f"{t}_level"].variable.copy(deep=False).load() for t in terms}
-    )  # the level codes stay in memory (4 B per run and term); factor values are read on use
+        {
+            f"{t}_level": base[f"{t}_level"].variable.copy(
+                data=compact_codes(base[f"{t}_level"].variable)
+            )
+            for t in terms
+        }
+    )
     out = _frame(base, view, analysed, terms, operating, models)
     order = grid_of(base) if design == "full_factorial" else None
     grid = None if order is None else Grid(*order, operating)
@@ -217,7 +226,7 @@ def _frame(
     operating: list[str],
     models: list[str],
 ) -> xr.Dataset:
-    nlevels = max(int(base[f"{t}_level"].max()) + 1 for t in terms) if terms else 1
+    nlevels = max(level_count(base[f"{t}_level"].variable) for t in terms) if terms else 1
     pairs = list(taguchi.interaction_pairs(view))
     sources = [*terms, "error", "total"]
     nan = np.nan
@@ -303,11 +312,12 @@ def _frame(
 
 
 def _level_runs(base: xr.Dataset, terms: list[str], nlevels: int) -> np.ndarray:
-    """Runs at each level of each term (O(N), ``bincount``)."""
-    return np.array(
-        [np.bincount(base[f"{t}_level"].values, minlength=nlevels)[:nlevels] for t in terms],
-        dtype=np.int64,
-    ).reshape(len(terms), nlevels)
+    """Runs at each level of each term (O(N), ``bincount`` a block of runs at a time)."""
+    counts = np.zeros((len(terms), nlevels), dtype=np.int64)
+    for i, t in enumerate(terms):
+        for codes in blocks(base[f"{t}_level"].variable):
+            counts[i] += np.bincount(codes, minlength=nlevels)[:nlevels]
+    return counts
 
 
 def _role(view: xr.Dataset, term: str, operating: list[str], models: list[str]) -> str:
@@ -345,15 +355,15 @@ def _filled(
     A bare Variable (no coordinates to compare and load on assignment; the view stays lazy),
     and, when some value was not finite, how it was resolved (``missing.Filled``), else None."""
     variable = y.variable.copy(deep=False).load()
-    values = variable.values.astype(float)
-    if np.isfinite(values).all():
+    values = np.asarray(variable.values, dtype=float)
+    if finite_summary(values).count == values.size:
         return variable, None
     sense = str(y.attrs.get("better", "smaller"))
     filled = missing.fill(values, ran, missing.none_means(y), sense)
     i = out.indexes["response"].get_loc(name)
     nlevels = out.sizes["level"]
     for j, t in enumerate(terms):
-        codes = base[f"{t}_level"].values
+        codes = base[f"{t}_level"].variable
         out["left_out"].values[i, j] = missing.per_level(filled.left_out, codes, nlevels)
         out["bounded"].values[i, j] = missing.per_level(filled.bounded, codes, nlevels)
     out["best_bound"].values[i], out["worst_bound"].values[i] = (
@@ -378,8 +388,7 @@ def _range(
     chosen = [ranked and t not in operating and t in taguchi.factor_names(view) for t in terms]
     best = np.where(np.asarray(chosen) & (ra["R"].values > 0), ra["best_level"].values, -1)
     out["best_level"].loc[at] = best
-    y = view[name].values.astype(float)
-    out["grand_mean"].loc[at] = float(np.mean(y[np.isfinite(y)]))
+    out["grand_mean"].loc[at] = finite_summary(view[name].variable).mean
 
 
 def _anova(out: xr.Dataset, table: Any, name: str) -> None:

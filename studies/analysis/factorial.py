@@ -8,15 +8,16 @@ import numpy as np
 import xarray as xr
 
 from studies.analysis.sensitivity import decompose
-from studies.run.results import grid_order
+from studies.run.results import grid_cells
 
-GridOrder = tuple[list[str], tuple[int, ...], np.ndarray]
+GridOrder = tuple[list[str], tuple[int, ...], np.ndarray | None]
 
 
 def grid_of(base: xr.Dataset) -> GridOrder | None:
-    """Factors, level counts and grid order of a complete full factorial (None otherwise)."""
+    """Factors, level counts and grid order (None: the runs are in grid order) of a complete
+    full factorial (None otherwise)."""
     try:
-        return grid_order(base)
+        return grid_cells(base)
     except ValueError:
         return None
 
@@ -50,7 +51,8 @@ def factorial(out: xr.Dataset, one: xr.Dataset, name: str, grid: GridOrder) -> N
     """Main, two-factor and remainder SS and Sobol indices of a response that is finite in
     every run of a complete full factorial (otherwise the grid has holes: left NaN)."""
     factors, counts, order = grid
-    y = np.asarray(one[name].values, dtype=float)[order]  # one copy: the grid order
+    y = np.asarray(one[name].values, dtype=float)
+    y = y if order is None else y[order]  # a copy only when the runs are not in grid order
     if not np.isfinite(y).all():
         return
     i = out.indexes["response"].get_loc(name)

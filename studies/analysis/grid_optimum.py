@@ -23,12 +23,13 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from studies.analysis.sums_of_squares import ROUND_OFF
+from studies.common.blocks import finite_summary, rows_per_block, run_slices
 
 SIDES = ("below", "above")
 TIE_BLOCK = 1 << 20  # tied rows whose level codes are made at once (8 MB a factor)
@@ -61,13 +62,15 @@ class Grid:
     """The runs of a complete full factorial as control combinations × operating conditions.
 
     ``order``: the grid order of :func:`studies.run.results.grid_order` (run index of each grid
-    cell, factors in ``factors`` order, last factor fastest)."""
+    cell, factors in ``factors`` order, last factor fastest), or None when each run is at its
+    own cell (:func:`studies.run.results.grid_cells`): then the runs of a block of rows are
+    computed when read, and no table of all runs is held."""
 
     def __init__(
         self,
         factors: Sequence[str],
         counts: Sequence[int],
-        order: np.ndarray,
+        order: np.ndarray | None,
         operating: Sequence[str],
     ) -> None:
         self.control = [f for f in factors if f not in operating]
@@ -75,9 +78,42 @@ class Grid:
         index = {f: i for i, f in enumerate(factors)}
         self.control_counts = tuple(int(counts[index[f]]) for f in self.control)
         self.operating_counts = tuple(int(counts[index[f]]) for f in self.operating)
-        perm = [index[f] for f in (*self.control, *self.operating)]
-        grid = np.asarray(order).reshape(tuple(counts)).transpose(perm)
-        self.runs = grid.reshape(math.prod(self.control_counts), math.prod(self.operating_counts))
+        self.shape = (math.prod(self.control_counts), math.prod(self.operating_counts))
+        strides = [math.prod(int(c) for c in counts[i + 1 :]) for i in range(len(counts))]
+        self._strides = (
+            [strides[index[f]] for f in self.control],
+            [strides[index[f]] for f in self.operating],
+        )
+        self._runs = None
+        if order is not None:
+            perm = [index[f] for f in (*self.control, *self.operating)]
+            self._runs = (
+                np.asarray(order).reshape(tuple(counts)).transpose(perm).reshape(self.shape)
+            )
+
+    @property
+    def runs(self) -> np.ndarray:
+        """The run of every cell of :meth:`table` (O(N): :meth:`rows` reads a block of rows)."""
+        return self.rows(slice(None))
+
+    def rows(self, part: slice) -> np.ndarray:
+        """The runs of the rows ``part`` of :meth:`table` (rows × conditions)."""
+        if self._runs is not None:
+            return self._runs[part]
+        rows = np.arange(*part.indices(self.shape[0]))
+        cell = np.zeros((rows.size, self.shape[1]), dtype=np.int64)
+        for counts, strides, at, axis in (
+            (self.control_counts, self._strides[0], rows, 0),
+            (self.operating_counts, self._strides[1], np.arange(self.shape[1]), 1),
+        ):
+            codes = np.unravel_index(at, counts) if counts else ()
+            for c, stride in zip(codes, strides, strict=True):
+                cell += np.expand_dims(c * stride, 1 - axis)
+        return cell
+
+    def row(self, row: int) -> np.ndarray:
+        """The runs of one row of :meth:`table` (one per condition)."""
+        return self.rows(slice(row, row + 1))[0]
 
     def conditions(self) -> list[dict[str, int]]:
         """The operating-level combinations, in the column order of :meth:`table`."""
@@ -104,34 +140,22 @@ class Grid:
         combination missing a condition is not chosen); None if none is complete. ``beyond``
         (per run, :attr:`studies.analysis.missing.Filled.beyond`): +1 where the run's value is a bound
         it is better than, -1 one it is worse than."""
-        values = self.table(y)
-        signed = values if sense == "smaller" else -values
-        with np.errstate(invalid="ignore"):
-            mean = signed.mean(axis=1)
+        y = np.asarray(y, dtype=float)
+        mean, bounds, best_values, best_runs = self._rows(y, sense, beyond)
         if not np.isfinite(mean).any():
             return None
-        row, ties, rule = self._tie_break(mean, self._best(mean, beyond))
+        row, ties, rule = self._tie_break(mean, self._best(mean, bounds))
         codes = np.unravel_index(row, self.control_counts) if self.control else ()
         levels = {f: int(c) for f, c in zip(self.control, codes, strict=True)}
-        best_values = np.full(values.shape[1], np.nan)
-        best_runs = np.full(values.shape[1], -1, dtype=np.int64)
-        for j in range(values.shape[1]):
-            column = signed[:, j]
-            if np.isfinite(column).any():
-                k = int(np.nanargmin(column))
-                best_values[j], best_runs[j] = values[k, j], self.runs[k, j]
-        sign = 1.0 if sense == "smaller" else -1.0
+        unsigned = mean * (1.0 if sense == "smaller" else -1.0)
         neighbours = {
-            f: (
-                self._neighbour(mean * sign, levels, f, -1),
-                self._neighbour(mean * sign, levels, f, 1),
-            )
+            f: (self._neighbour(unsigned, levels, f, -1), self._neighbour(unsigned, levels, f, 1))
             for f in self.control
         }
         return GridOptimum(
             levels,
-            values[row].copy(),  # a copy: a view would keep the whole table alive
-            self.runs[row].copy(),
+            y[self.row(row)],
+            self.row(row),
             best_values,
             best_runs,
             neighbours,
@@ -139,22 +163,65 @@ class Grid:
             rule,
         )
 
-    def _best(self, mean: np.ndarray, beyond: np.ndarray | None) -> np.ndarray:
+    def _rows(
+        self, y: np.ndarray, sense: str, beyond: np.ndarray | None
+    ) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray] | None, np.ndarray, np.ndarray]:
+        """One pass over :meth:`table`, a block of rows at a time: each control combination's
+        signed mean over the conditions (the smaller the better), its runs counted at a worse
+        and at a better bound (when ``beyond`` is given), and each condition's best value and
+        its run (the first of equals)."""
+        rows, conditions = self.shape
+        mean = np.empty(rows)
+        bounds = None if beyond is None else (np.empty(rows, np.int32), np.empty(rows, np.int32))
+        best_signed = np.full(conditions, np.inf)
+        best_values = np.full(conditions, np.nan)
+        best_runs = np.full(conditions, -1, dtype=np.int64)
+        for part in run_slices(rows, rows_per_block(conditions)):
+            runs = self.rows(part)
+            values = y[runs]
+            signed = values if sense == "smaller" else -values
+            with np.errstate(invalid="ignore"):
+                mean[part] = signed.mean(axis=1)
+            if bounds is not None:
+                seen = np.asarray(beyond)[runs]
+                bounds[0][part], bounds[1][part] = (seen < 0).sum(axis=1), (seen > 0).sum(axis=1)
+            # each condition's first smallest value (nanargmin), later blocks only if smaller
+            k = np.argmin(np.where(np.isnan(signed), np.inf, signed), axis=0)
+            columns = np.arange(conditions)
+            found = signed[k, columns]
+            better = np.isfinite(signed).any(axis=0) & (found < best_signed)
+            best_signed[better] = found[better]
+            best_values[better] = values[k, columns][better]
+            best_runs[better] = runs[k, columns][better]
+        return mean, bounds, best_values, best_runs
+
+    def _best(self, mean: np.ndarray, bounds: tuple[np.ndarray, np.ndarray] | None) -> np.ndarray:
         """The control combinations that share the first place in the order of the module
         docstring (a mask): fewest worst-bound runs, then most best-bound runs, then the best
-        mean. O(N), one pass per key (no sort: only the first place is needed)."""
-        finite = np.isfinite(mean)
+        mean. O(rows), one pass per key (no sort: only the first place is needed), each pass
+        a block of rows at a time (minima and maxima: exact in any order)."""
+        seen = finite_summary(mean)
         # Means within round-off of the best are ties, as in the range analysis (R = 0).
-        best = np.min(mean[finite])
-        tolerance = ROUND_OFF * np.max(np.abs(mean[finite]))
-        chosen = finite.copy()
-        if beyond is not None:
-            bounds = np.asarray(beyond)[self.runs]
-            worse, better = (bounds < 0).sum(axis=1), (bounds > 0).sum(axis=1)
-            chosen &= worse == worse[chosen].min()
-            chosen &= better == better[chosen].max()
-        near = np.where(mean <= best + tolerance, best, mean)
-        return chosen & (near == near[chosen].min())
+        best, tolerance = seen.low, ROUND_OFF * seen.largest
+        chosen = np.isfinite(mean)
+        parts = list(run_slices(mean.size))
+
+        def keep(key_of: Callable[[slice], np.ndarray], smallest: bool) -> None:
+            """Keep the chosen rows whose key is the smallest (largest) among them."""
+            extreme = min if smallest else max
+            found = [
+                k.min() if smallest else k.max() for p in parts if (k := key_of(p)[chosen[p]]).size
+            ]
+            target = extreme(found)
+            for p in parts:
+                chosen[p] &= key_of(p) == target
+
+        if bounds is not None:
+            worse, better = bounds
+            keep(lambda p: worse[p], smallest=True)
+            keep(lambda p: better[p], smallest=False)
+        keep(lambda p: np.where(mean[p] <= best + tolerance, best, mean[p]), smallest=True)
+        return chosen
 
     def _tie_break(self, mean: np.ndarray, first: np.ndarray) -> tuple[int, int, str]:
         """The best-ranked row, the number of rows sharing its rank and the rule that chose:
@@ -183,9 +250,15 @@ class Grid:
             score[start : start + block.size] = sum(
                 (effect[c] for effect, c in zip(effects, codes, strict=True)), np.zeros(block.size)
             )
-        if not np.isfinite(score).any() or (score == np.nanmin(score)).sum() == tied.size:
+        if not np.isfinite(score).any():
             return int(tied[0]), int(tied.size), "grid order"
-        return int(tied[int(np.nanargmin(score))]), int(tied.size), "main effects"
+        # Scores within round-off of the best are equal (as the means are): a choice made by
+        # the last bits would depend on the order of a sum, and say "main effects" falsely.
+        with np.errstate(invalid="ignore"):
+            near = score <= np.nanmin(score) + ROUND_OFF * np.nanmax(np.abs(score))
+        if near.all():
+            return int(tied[0]), int(tied.size), "grid order"
+        return int(tied[int(np.argmax(near))]), int(tied.size), "main effects"
 
     def _neighbour(
         self, mean: np.ndarray, levels: Mapping[str, int], factor: str, step: int
@@ -194,5 +267,5 @@ class Grid:
         if not 0 <= level < self.control_counts[self.control.index(factor)]:
             return math.nan, -1
         row = self.combination({**levels, factor: level})
-        run = int(self.runs[row, 0]) if self.runs.shape[1] == 1 else -1
+        run = int(self.row(row)[0]) if self.shape[1] == 1 else -1
         return float(mean[row]), run

@@ -21,10 +21,12 @@ in any response) are always left out.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import xarray as xr
 
+from studies.common.blocks import run_slices
 from studies.scenes.base import NONE_MEANINGS
 
 DEFAULT = "unknown"
@@ -131,9 +133,13 @@ def fill(y: np.ndarray, ran: np.ndarray, meaning: str, sense: str) -> Filled:
     )
 
 
-def per_level(mask: np.ndarray, codes: np.ndarray, nlevels: int) -> np.ndarray:
-    """How many runs of ``mask`` fall at each level of a factor (O(N), ``bincount``)."""
-    return np.bincount(codes[mask], minlength=nlevels)[:nlevels]
+def per_level(mask: np.ndarray, codes: Any, nlevels: int) -> np.ndarray:
+    """How many runs of ``mask`` fall at each level of a factor (O(N), ``bincount`` a block
+    of runs at a time; ``codes`` may be read lazily)."""
+    counts = np.zeros(nlevels, dtype=np.int64)
+    for part in run_slices(len(codes)):
+        counts += np.bincount(np.asarray(codes[part])[mask[part]], minlength=nlevels)[:nlevels]
+    return counts
 
 
 def nothing_to_analyse(y: xr.DataArray) -> str:

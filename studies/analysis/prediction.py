@@ -40,6 +40,7 @@ from studies.analysis.taguchi import (
     model_terms,
     number,
 )
+from studies.common.blocks import level_count
 from studies.common.errors import StudyError
 
 
@@ -189,7 +190,7 @@ def conditions(ds: xr.Dataset) -> list[dict[str, int]]:
     """Every combination of the operating factors' levels (last factor fastest); one empty
     condition when there is no operating factor."""
     names = operating_factors(ds)
-    counts = [range(int(ds[f"{f}_level"].max()) + 1) for f in names]
+    counts = [range(level_count(ds[f"{f}_level"].variable)) for f in names]
     return [dict(zip(names, combo, strict=True)) for combo in itertools.product(*counts)]
 
 

@@ -25,7 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from studies.analysis.sums_of_squares import BLOCK, centred, without_round_off
+from studies.analysis.sums_of_squares import centred, without_round_off
+from studies.common.blocks import BLOCK
 
 
 @dataclass(frozen=True)

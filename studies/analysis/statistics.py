@@ -26,11 +26,12 @@ from scipy import special
 
 from studies.analysis.sums_of_squares import (
     ROUND_OFF,
-    centred,
-    level_sums,
+    Centred,
+    level_sums_in_blocks,
     term_sums_of_squares,
     without_round_off,
 )
+from studies.common.blocks import level_count, run_slices
 from studies.common.errors import StudyError
 from studies.define.plan import first_runs
 
@@ -108,9 +109,9 @@ def _level_table(
     """Levels of ``f`` with a finite response, their mean response and the factor's value
     there (NaN where it has none; ``known``: the values per level, else read from ``ds``);
     O(N) by ``bincount``."""
-    codes = ds[f"{f}_level"].values
-    n = int(codes.max()) + 1
-    counts, sums = level_sums(codes, y.values, n, finite)
+    codes = ds[f"{f}_level"].variable  # read a block of runs at a time
+    n = level_count(codes)
+    counts, sums = level_sums_in_blocks(codes, np.asarray(y.values), n, finite)
     present = np.flatnonzero(counts)
     k = sums[present] / counts[present]
     value = np.full(present.size, np.nan)
@@ -239,9 +240,11 @@ def anova(
         raise StudyError(msg)
     y_da, finite = _response(ds, response)
     complete = bool(finite.all())
-    y = y_da.values.astype(float) if complete else y_da.values.astype(float)[finite]
-    codes = {
-        f: ds[f"{f}_level"].values if complete else ds[f"{f}_level"].values[finite] for f in names
+    y = np.asarray(y_da.values, dtype=float)  # no copy of a float response
+    y = y if complete else y[finite]
+    codes = {  # complete: read a block of runs at a time; else the finite runs' codes
+        f: ds[f"{f}_level"].variable if complete else _kept(ds[f"{f}_level"].variable, finite)
+        for f in names
     }
     if pool is None and "pool" in ds.attrs:
         pool = json.loads(ds.attrs["pool"])
@@ -257,7 +260,7 @@ def anova(
         return {f: (float(s), int(n)) for f, s, n in zip(order, ss, dof, strict=True)}
 
     terms = fit(pooled)
-    ss_total, dof_total = float(np.sum(centred(y) ** 2)), y.size - 1
+    ss_total, dof_total = Centred(y).squares(), y.size - 1
     notes = []
     if finite.sum() < finite.size:
         notes.append(
@@ -314,6 +317,11 @@ def anova(
         "note": " ".join(notes),
     }
     return table
+
+
+def _kept(codes: xr.Variable, keep: np.ndarray) -> np.ndarray:
+    """The codes of the runs ``keep`` selects, gathered a block of runs at a time."""
+    return np.concatenate([np.asarray(codes[part])[keep[part]] for part in run_slices(len(codes))])
 
 
 def sweep_runs(ds: xr.Dataset, factor: str) -> xr.Dataset:

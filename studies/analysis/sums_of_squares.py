@@ -16,15 +16,17 @@ part (10¹² Pa + a small effect) costs no digits.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Iterator, Sequence
+from typing import Any
 
 import numpy as np
+
+from studies.common.blocks import run_slices
 
 RANK_TOLERANCE = 1e-9  # relative pivot below which a dummy column counts as dependent
 # A sum of squares below this fraction of the total is round-off of a zero effect (an effect
 # the response does not have still leaves ~ε² of the total from the centred sums): reported 0.
 ROUND_OFF = 1e-12
-BLOCK = 1 << 20  # runs per block of the unbalanced normal equations
 
 
 def without_round_off(ss: np.ndarray, total: float) -> np.ndarray:
@@ -40,6 +42,42 @@ def centred(y: np.ndarray) -> np.ndarray:
     return d
 
 
+class Centred:
+    """:func:`centred` of ``y`` one block of :data:`studies.common.blocks.BLOCK` runs at a time: the two means over
+    the blocks, then each block's values ``(y - m1) - m2`` on request — the numbers of
+    :func:`centred` bit for bit when ``y`` is one block (else its means differ in the last
+    bits), without an array as large as ``y``."""
+
+    def __init__(self, y: np.ndarray) -> None:
+        self.y, self.size = y, y.size
+        self.first = _block_sum(y[part] for part in run_slices(y.size)) / y.size
+        self.second = _block_sum(y[part] - self.first for part in run_slices(y.size)) / y.size
+
+    def block(self, part: slice) -> np.ndarray:
+        d = self.y[part] - self.first
+        d -= self.second
+        return d
+
+    def blocks(self) -> Iterator[tuple[slice, np.ndarray]]:
+        for part in run_slices(self.size):
+            yield part, self.block(part)
+
+    def sum(self) -> float:
+        return _block_sum(d for _, d in self.blocks())
+
+    def dot(self) -> float:
+        """Σ d² as ``d @ d`` (a block at a time)."""
+        return sum((float(d @ d) for _, d in self.blocks()), 0.0)
+
+    def squares(self) -> float:
+        """Σ d² as ``np.sum(d ** 2)`` (a block at a time)."""
+        return _block_sum(d**2 for _, d in self.blocks())
+
+
+def _block_sum(parts: Iterable[np.ndarray]) -> float:
+    return sum((float(np.sum(p)) for p in parts), 0.0)
+
+
 def level_sums(
     codes: np.ndarray, y: np.ndarray, levels: int, finite: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -52,39 +90,76 @@ def level_sums(
     return n, np.bincount(codes, weights=np.where(finite, y, 0.0), minlength=levels)
 
 
-def is_balanced(terms: Sequence[np.ndarray]) -> bool:
-    """True if every pair of terms has proportional frequencies (orthogonal main effects)."""
-    total = terms[0].size if terms else 0
-    counts = [np.bincount(t) for t in terms]
-    for a in range(len(terms)):
-        for b in range(a + 1, len(terms)):
-            width = counts[b].size
-            combined = terms[a].astype(np.int64) * width + terms[b]
-            joint = np.bincount(combined, minlength=counts[a].size * width)
-            expected = np.outer(counts[a], counts[b]) / total
-            if not np.array_equal(joint.reshape(counts[a].size, width), expected):
-                return False
+def level_sums_in_blocks(
+    codes: Any, y: np.ndarray, levels: int, finite: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`level_sums` a block of runs at a time (``codes`` may be read lazily): the
+    same numbers for one block, the blocks' sums added for more."""
+    n, s = np.zeros(levels), np.zeros(levels)
+    for part in run_slices(len(codes)):
+        n_part, s_part = level_sums(
+            np.asarray(codes[part]), y[part], levels, None if finite is None else finite[part]
+        )
+        n += n_part
+        s += s_part
+    return n, s
+
+
+def _levels(codes: Any) -> int:
+    return max((int(np.max(codes[part])) + 1 for part in run_slices(len(codes))), default=0)
+
+
+def is_balanced(terms: Sequence[Any]) -> bool:
+    """True if every pair of terms has proportional frequencies (orthogonal main effects).
+    Counts accumulated over blocks of runs (exact; the codes may be read lazily)."""
+    total = len(terms[0]) if terms else 0
+    widths = [_levels(t) for t in terms]
+    counts = [np.zeros(w, dtype=np.int64) for w in widths]
+    pairs = [(a, b) for a in range(len(terms)) for b in range(a + 1, len(terms))]
+    joints = {(a, b): np.zeros(widths[a] * widths[b], dtype=np.int64) for a, b in pairs}
+    for part in run_slices(total):
+        codes = [np.asarray(t[part]) for t in terms]
+        for i, c in enumerate(codes):
+            counts[i] += np.bincount(c, minlength=widths[i])
+        for a, b in pairs:
+            joints[a, b] += np.bincount(
+                codes[a].astype(np.int64) * widths[b] + codes[b], minlength=joints[a, b].size
+            )
+    for a, b in pairs:
+        expected = np.outer(counts[a], counts[b]) / total
+        if not np.array_equal(joints[a, b].reshape(widths[a], widths[b]), expected):
+            return False
     return True
 
 
 def term_sums_of_squares(
-    y: np.ndarray, terms: Sequence[np.ndarray]
+    y: np.ndarray, terms: Sequence[Any]
 ) -> tuple[np.ndarray, np.ndarray, float]:
     """Type I sums of squares and dof of ``terms`` in order, and the total SS of ``y``.
 
-    ``y`` holds finite values only; each term is an integer code vector of the same length.
+    ``y`` holds finite values only; each term is an integer code vector of the same length
+    (an array, or a variable read lazily: balanced terms are read a block of runs at a time).
+    The centred response is made a block of runs at a time (:class:`Centred`).
     """
-    d = centred(np.asarray(y, dtype=float))
-    total = float(d @ d)
-    codes = [np.asarray(t) for t in terms]
-    ss, dof = _balanced(d, codes) if is_balanced(codes) else _sequential(d, codes)
+    d = Centred(np.asarray(y, dtype=float))
+    total = d.dot()
+    codes = list(terms)
+    if is_balanced(codes):
+        ss, dof = _balanced(d, codes)
+    else:
+        ss, dof = _sequential(d, [np.asarray(t) for t in codes])
     return without_round_off(ss, total), dof, total
 
 
-def _balanced(d: np.ndarray, terms: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+def _balanced(d: Centred, terms: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     ss, dof = np.zeros(len(terms)), np.zeros(len(terms), dtype=np.int64)
     for i, t in enumerate(terms):
-        n, s = level_sums(t, d, int(t.max()) + 1)
+        levels = _levels(t)
+        n, s = np.zeros(levels), np.zeros(levels)
+        for part, block in d.blocks():
+            n_part, s_part = level_sums(np.asarray(t[part]), block, levels)
+            n += n_part
+            s += s_part
         seen = n > 0
         ss[i] = float(np.sum(s[seen] ** 2 / n[seen]))
         dof[i] = int(seen.sum()) - 1
@@ -105,11 +180,11 @@ def _dummies(terms: list[np.ndarray]) -> tuple[list[np.ndarray], list[np.ndarray
 
 
 def normal_equations(
-    d: np.ndarray, terms: list[np.ndarray]
+    d: Centred, terms: list[np.ndarray]
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Gram matrix XᵀX, Xᵀd and the term of each column for intercept + treatment dummies,
     from level counts and level sums (O(N) per pair of terms), accumulated over blocks of
-    :data:`BLOCK` runs so that the dummy codes of one block are held at a time."""
+    :data:`studies.common.blocks.BLOCK` runs so that the dummy codes of one block are held at a time."""
     present, lookups = _dummies(terms)
     shifts = [0 if t.min() >= 0 else int(t.min()) for t in terms]
     widths = [p.size for p in present]
@@ -118,12 +193,11 @@ def normal_equations(
     gram, rhs = np.zeros((p, p)), np.zeros(p)
     gram[0, 0], rhs[0] = d.size, d.sum()
     owner = np.concatenate([[-1], np.repeat(np.arange(len(terms)), widths)])
-    for first in range(0, d.size, BLOCK):
-        part = slice(first, first + BLOCK)
+    for part, block in d.blocks():
         recoded = [
             lookup[t[part] - shift] for lookup, t, shift in zip(lookups, terms, shifts, strict=True)
         ]
-        _add_block(gram, rhs, d[part], recoded, widths, starts)
+        _add_block(gram, rhs, block, recoded, widths, starts)
     return gram, rhs, owner
 
 
@@ -158,7 +232,7 @@ def _add_block(
             gram[sb, sa] += joint.T
 
 
-def _sequential(d: np.ndarray, terms: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+def _sequential(d: Centred, terms: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     gram, rhs, owner = normal_equations(d, terms)
     z, independent = _cholesky_solve(gram, rhs)
     ss = np.array([float(np.sum(z[owner == i] ** 2)) for i in range(len(terms))])

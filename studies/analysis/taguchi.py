@@ -31,6 +31,7 @@ import pandas as pd
 import xarray as xr
 
 from studies.analysis.statistics import anova, f_survival
+from studies.common.blocks import finite_summary, level_count
 from studies.common.errors import StudyError
 from studies.define.plan import first_runs
 from studies.run.results import NOISE
@@ -83,9 +84,8 @@ def observation_dim(y: xr.DataArray) -> str | None:
 
 def varies(ds: xr.Dataset, response: str) -> bool:
     """Whether ``response`` takes more than one value (relative spread above round-off)."""
-    y = ds[response].values.astype(float)
-    y = y[np.isfinite(y)]
-    return y.size > 1 and float(np.ptp(y)) > VARIATION_TOLERANCE * float(np.abs(y).max())
+    seen = finite_summary(ds[response].variable)  # a block of runs at a time
+    return seen.count > 1 and seen.high - seen.low > VARIATION_TOLERANCE * seen.largest
 
 
 def sn_responses(ds: xr.Dataset, responses: Sequence[str]) -> list[str]:
@@ -219,11 +219,11 @@ def plain(value: Any) -> Any:
 
 def level_values(ds: xr.Dataset, factor: str) -> dict[int, Any]:
     """Level index → the factor's physical value (level number + 1 when it has none)."""
-    levels = ds[f"{factor}_level"].values
-    first = first_runs(levels, int(levels.max()) + 1)
+    levels = ds[f"{factor}_level"].variable  # read a block of runs at a time
+    first = first_runs(levels, level_count(levels))
     present = np.flatnonzero(first >= 0)
     runs = first[present]  # the factor's values are read at these runs only
-    values = ds[factor].isel(run=runs).values if factor in ds.coords else levels[runs] + 1
+    values = ds[factor].isel(run=runs).values if factor in ds.coords else present + 1
     return {int(lv): plain(v) for lv, v in zip(present, values, strict=True)}
 
 

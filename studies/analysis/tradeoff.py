@@ -87,7 +87,7 @@ def tradeoff(
     for r in responses:
         sense = str(ds[r].attrs.get("better", "smaller"))
         if grid is not None:
-            runs = grid.runs[grid.combination(levels)]  # read at these runs only
+            runs = grid.row(grid.combination(levels))  # read at these runs only
             values = ds[r].isel(run=runs).values.astype(float)
             half = np.nan
         else:

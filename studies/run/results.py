@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import errno
 import json
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,6 +28,7 @@ import netCDF4
 import numpy as np
 import xarray as xr
 
+from studies.common.blocks import finite_summary, run_slices
 from studies.common.errors import StudyError
 from studies.define.plan import Plan, first_runs, noise_label
 from studies.run.runner import Evaluation
@@ -300,29 +302,46 @@ def netcdf_write_error(exc: RuntimeError, path: Path) -> OSError:
 def grid_order(ds: xr.Dataset) -> tuple[list[str], tuple[int, ...], np.ndarray]:
     """Factors, level counts and the run at each grid cell (C order) of a complete full
     factorial; ValueError for any other design or an incomplete one."""
+    factors, counts, order = grid_cells(ds)
+    return factors, counts, np.arange(math.prod(counts)) if order is None else order
+
+
+def grid_cells(ds: xr.Dataset) -> tuple[list[str], tuple[int, ...], np.ndarray | None]:
+    """:func:`grid_order`, with None for the order when every run is at its own grid cell
+    already (a full factorial as this engine writes it): no array of all runs is made then,
+    the codes are read a block of runs at a time."""
     if ds.attrs.get("design") != "full_factorial":
         msg = f"a grid view needs a full_factorial result, this one is {ds.attrs.get('design')!r}"
         raise StudyError(msg)
     factors = json.loads(ds.attrs["factors"])
-    flat: np.ndarray = np.zeros(ds.sizes["run"], dtype=np.int64)  # C-order cell of each run
+    runs = ds.sizes["run"]
+    codes = [ds[f"{f}_level"].variable for f in factors]
     counts: tuple[int, ...] = ()
-    for f in factors:  # one factor's codes in memory at a time
-        codes = ds[f"{f}_level"].values
-        count = int(codes.max()) + 1 if codes.size else 0
-        if codes.size and codes.min() < 0:
+    for f, c in zip(factors, codes, strict=True):
+        seen = finite_summary(c)
+        if seen.count and seen.low < 0:
             msg = f"the full factorial is incomplete: {f} has runs without a level"
             raise StudyError(msg)
-        flat *= count
-        flat += codes
-        counts += (count,)
-        del codes
-    order = np.full(int(np.prod(counts)), -1, dtype=np.int64)
-    for start in range(0, flat.size, ORDER_BLOCK):
-        stop = min(start + ORDER_BLOCK, flat.size)
-        order[flat[start:stop]] = np.arange(start, stop)
-    if flat.size != order.size or (order < 0).any():
-        msg = f"the full factorial is incomplete: {flat.size} runs for {order.size} grid cells"
-        raise StudyError(msg)
+        counts += (int(seen.high) + 1 if seen.count else 0,)
+    incomplete = f"the full factorial is incomplete: {runs} runs for {math.prod(counts)} grid cells"
+    if runs != math.prod(counts):
+        raise StudyError(incomplete)
+
+    def cells(part: slice) -> np.ndarray:  # the C-order cell of each run of a block
+        flat = np.zeros(part.stop - part.start, dtype=np.int64)
+        for c, count in zip(codes, counts, strict=True):
+            flat *= count
+            flat += np.asarray(c[part])
+        return flat
+
+    parts = list(run_slices(runs))
+    if all(np.array_equal(cells(p), np.arange(p.start, p.stop)) for p in parts):
+        return factors, counts, None
+    order = np.full(runs, -1, dtype=np.int64)
+    for part in parts:
+        order[cells(part)] = np.arange(part.start, part.stop)
+    if (order < 0).any():
+        raise StudyError(incomplete)
     return factors, counts, order
 
 

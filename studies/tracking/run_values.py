@@ -18,8 +18,7 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
+from studies.common.blocks import finite_summary
 from studies.common.units import UNITS, si_unit, to_si
 from studies.define.definition import StudyDefinition, parse_study
 from studies.scenes import Parameter, get_scene
@@ -111,12 +110,9 @@ def response_values(results: Path) -> list[Value]:
         for name in names:
             if name not in ds or ds[name].dims != ("run",) or ds[name].dtype.kind != "f":
                 continue
-            stored = ds[name].values
-            finite = stored[np.isfinite(stored)]
+            seen = finite_summary(ds[name].variable)  # a block of runs at a time
             units = str(ds[name].attrs.get("units", ""))
-            summaries = (
-                (finite.min(), finite.mean(), finite.max()) if finite.size else (math.nan,) * 3
-            )
+            summaries = (seen.low, seen.mean, seen.high) if seen.count else (math.nan,) * 3
             for summary, x in zip(SUMMARIES, summaries, strict=True):
                 rows.append(value("response", f"{name}.{summary}", float(x), units))
         return rows

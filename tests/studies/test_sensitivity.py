@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from studies.analysis.sensitivity import decompose, squares
-from studies.analysis.sums_of_squares import BLOCK
+from studies.common.blocks import BLOCK
 
 A, B = 7.0, 0.1  # Ishigami constants
 VARIANCE = A**2 / 8 + B * np.pi**4 / 5 + B**2 * np.pi**8 / 18 + 0.5

@@ -22,6 +22,7 @@ from statsmodels.stats.anova import anova_lm
 from studies.analysis import sums_of_squares
 from studies.analysis.analyze import anova
 from studies.analysis.sums_of_squares import is_balanced, term_sums_of_squares
+from studies.common import blocks
 from studies.define.designs import list_orthogonal_arrays
 from studies.define.designs.orthogonal_arrays import orthogonal_array
 
@@ -78,7 +79,12 @@ def test_every_catalogue_array_matches_statsmodels(name: str, dropped: int) -> N
 
 @pytest.mark.parametrize("counts", [(3, 4), (2, 3, 4), (3, 2, 2, 3), (2, 3, 2, 2, 3)])
 @pytest.mark.parametrize("dropped", [0, 5])
-def test_full_factorials_match_statsmodels(counts: tuple[int, ...], dropped: int) -> None:
+@pytest.mark.parametrize("block", [None, 7])  # 7: the sums accumulated over blocks of runs
+def test_full_factorials_match_statsmodels(
+    counts: tuple[int, ...], dropped: int, block: int | None, monkeypatch
+) -> None:
+    if block:
+        monkeypatch.setattr(blocks, "BLOCK", block)
     rng = np.random.default_rng(len(counts) * 10 + dropped)
     levels = np.array(list(itertools.product(*(range(c) for c in counts))))
     # additive effects, an interaction and noise, so no sum of squares is trivially zero
@@ -88,7 +94,10 @@ def test_full_factorials_match_statsmodels(counts: tuple[int, ...], dropped: int
     assert_matches(levels, y, len(counts))
 
 
-def test_unbalanced_terms_are_detected() -> None:
+@pytest.mark.parametrize("block", [None, 2])
+def test_unbalanced_terms_are_detected(block: int | None, monkeypatch) -> None:
+    if block:
+        monkeypatch.setattr(blocks, "BLOCK", block)
     full = np.array(list(itertools.product(range(3), range(3))))
     assert is_balanced([full[:, 0], full[:, 1]])
     assert not is_balanced([full[1:, 0], full[1:, 1]])
@@ -135,8 +144,9 @@ def test_normal_equations_in_blocks_equal_the_dense_design_matrix(monkeypatch) -
     n = 5_300
     terms = [rng.integers(0, 5, n), rng.integers(2, 7, n), np.where(rng.random(n) < 0.5, 0, 3)]
     d = rng.normal(size=n)
-    monkeypatch.setattr(sums_of_squares, "BLOCK", 1000)
-    gram, rhs, owner = sums_of_squares.normal_equations(d, terms)
+    d -= d.mean()
+    monkeypatch.setattr(blocks, "BLOCK", 1000)
+    gram, rhs, owner = sums_of_squares.normal_equations(sums_of_squares.Centred(d), terms)
     columns = [np.ones(n)]
     for t in terms:
         columns += [(t == level).astype(float) for level in np.unique(t)[1:]]
