@@ -156,15 +156,7 @@ def analyze(
     # One response at a time, over the level codes held compactly (1 byte per run and term
     # up to 127 levels); factor values are read where used: a 10⁷-run result is never held
     # whole.
-    base = view.drop_vars(list(view.data_vars))
-    base = base.assign_coords(
-        {
-            f"{t}_level": base[f"{t}_level"].variable.copy(
-                data=compact_codes(base[f"{t}_level"].variable)
-            )
-            for t in terms
-        }
-    )
+    base = with_compact_codes(view.drop_vars(list(view.data_vars)))
     out = _frame(base, view, analysed, terms, operating, models)
     order = grid_of(base) if design == "full_factorial" else None
     grid = None if order is None else Grid(*order, operating)
@@ -183,7 +175,9 @@ def analyze(
             )
         del variable, filled
         out["varies"].loc[name] = int(taguchi.varies(one, name))
-        tables[name] = anova(one, name, factors=terms, pool=pool)
+        tables[name] = anova(
+            one, name, factors=terms, pool=pool, balanced=True if grid is not None else None
+        )
         _range(out, one, name, terms, operating)
         _anova(out, tables[name], name)
         if str(view[name].attrs.get("better")) != UNRANKED:
@@ -210,6 +204,16 @@ def analyze(
         "model_factors": json.dumps(models),
     }
     return out
+
+
+def with_compact_codes(ds: xr.Dataset) -> xr.Dataset:
+    """``ds`` with every ``<name>_level`` coordinate on ``run`` in memory as compact codes
+    (:func:`studies.common.blocks.compact_codes`: 1 byte per run up to 127 levels), read a
+    block of runs at a time."""
+    levels = [c for c in ds.coords if str(c).endswith("_level") and ds[c].dims == ("run",)]
+    return ds.assign_coords(
+        {c: ds[c].variable.copy(data=compact_codes(ds[c].variable)) for c in levels}
+    )
 
 
 def write_analysis_nc(an: xr.Dataset, folder: Path) -> Path:

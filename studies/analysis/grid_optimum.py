@@ -29,10 +29,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from studies.analysis.sums_of_squares import ROUND_OFF
-from studies.common.blocks import finite_summary, rows_per_block, run_slices
+from studies.common.blocks import FiniteSummary, finite_summary, rows_per_block, run_slices
 
 SIDES = ("below", "above")
-TIE_BLOCK = 1 << 20  # tied rows whose level codes are made at once (8 MB a factor)
 
 
 @dataclass(frozen=True)
@@ -84,12 +83,13 @@ class Grid:
             [strides[index[f]] for f in self.control],
             [strides[index[f]] for f in self.operating],
         )
+        perm = [index[f] for f in (*self.control, *self.operating)]
         self._runs = None
         if order is not None:
-            perm = [index[f] for f in (*self.control, *self.operating)]
             self._runs = (
                 np.asarray(order).reshape(tuple(counts)).transpose(perm).reshape(self.shape)
             )
+        self._in_row_order = order is None and perm == sorted(perm)  # rows are run ranges
 
     @property
     def runs(self) -> np.ndarray:
@@ -100,7 +100,11 @@ class Grid:
         """The runs of the rows ``part`` of :meth:`table` (rows × conditions)."""
         if self._runs is not None:
             return self._runs[part]
-        rows = np.arange(*part.indices(self.shape[0]))
+        first, stop, _ = part.indices(self.shape[0])
+        if self._in_row_order:  # operating factors last: row r holds runs r·n … r·n + n - 1
+            n = self.shape[1]
+            return np.arange(first * n, max(first, stop) * n).reshape(-1, n)
+        rows = np.arange(first, stop)
         cell = np.zeros((rows.size, self.shape[1]), dtype=np.int64)
         for counts, strides, at, axis in (
             (self.control_counts, self._strides[0], rows, 0),
@@ -228,37 +232,55 @@ class Grid:
         among exact ties, the one whose levels have the best main effects (mean of ``mean``
         over each factor's level, summed), so a flat optimum agrees with the range analysis
         instead of the grid order."""
-        tied = np.flatnonzero(first)
-        if tied.size == 1:
-            return int(tied[0]), 1, ""
-        if not self.control:
-            return int(tied[0]), int(tied.size), "grid order"
-        grid = mean.reshape(self.control_counts)
-        finite = np.isfinite(grid)
-        filled = np.where(finite, grid, 0.0)
-        effects = []
-        for axis, _ in enumerate(self.control):
-            others = tuple(a for a in range(len(self.control)) if a != axis)
-            total = filled.sum(axis=others)
-            count = finite.sum(axis=others)
-            effects.append(np.where(count > 0, total / np.maximum(count, 1), np.nan))
-        del grid, finite, filled
-        score = np.empty(tied.size)
-        for start in range(0, tied.size, TIE_BLOCK):  # the level codes of a block of rows
-            block = tied[start : start + TIE_BLOCK]
-            codes = np.unravel_index(block, self.control_counts)
-            score[start : start + block.size] = sum(
-                (effect[c] for effect, c in zip(effects, codes, strict=True)), np.zeros(block.size)
+        ties = int(np.count_nonzero(first))
+        if ties == 1 or not self.control:
+            return int(np.argmax(first)), ties, "" if ties == 1 else "grid order"
+        effects = self._main_effects(mean)
+        parts = [p for p in run_slices(mean.size) if first[p].any()]
+
+        def scores(part: slice) -> tuple[np.ndarray, np.ndarray]:
+            """The tied rows of a block and their summed main effects."""
+            rows = part.start + np.flatnonzero(first[part])
+            codes = np.unravel_index(rows, self.control_counts)
+            score = sum(
+                (effect[c] for effect, c in zip(effects, codes, strict=True)), np.zeros(rows.size)
             )
-        if not np.isfinite(score).any():
-            return int(tied[0]), int(tied.size), "grid order"
+            return rows, score
+
+        seen = FiniteSummary()
+        for part in parts:
+            seen.add(scores(part)[1])
+        if not seen.count:
+            return int(np.argmax(first)), ties, "grid order"
         # Scores within round-off of the best are equal (as the means are): a choice made by
         # the last bits would depend on the order of a sum, and say "main effects" falsely.
-        with np.errstate(invalid="ignore"):
-            near = score <= np.nanmin(score) + ROUND_OFF * np.nanmax(np.abs(score))
-        if near.all():
-            return int(tied[0]), int(tied.size), "grid order"
-        return int(tied[int(np.argmax(near))]), int(tied.size), "main effects"
+        limit = seen.low + ROUND_OFF * seen.largest
+        near = [(rows, score <= limit) for rows, score in map(scores, parts)]
+        if sum(int(n.sum()) for _, n in near) == ties:
+            return int(np.argmax(first)), ties, "grid order"
+        row = next(int(rows[np.argmax(n)]) for rows, n in near if n.any())
+        return row, ties, "main effects"
+
+    def _main_effects(self, mean: np.ndarray) -> list[np.ndarray]:
+        """Per control factor, the mean of the finite row means at each of its levels (NaN
+        where none), summed over slabs of about a block of rows along the first factor."""
+        grid = mean.reshape(self.control_counts)
+        sums = [np.zeros(n) for n in self.control_counts]
+        counts = [np.zeros(n) for n in self.control_counts]
+        step = rows_per_block(grid[0].size)
+        for start in range(0, self.control_counts[0], step):
+            slab = grid[start : start + step]
+            finite = np.isfinite(slab)
+            filled = np.where(finite, slab, 0.0)
+            for axis in range(slab.ndim):
+                others = tuple(a for a in range(slab.ndim) if a != axis)
+                part = slice(start, start + slab.shape[0]) if axis == 0 else slice(None)
+                sums[axis][part] += filled.sum(axis=others)
+                counts[axis][part] += finite.sum(axis=others)
+        return [
+            np.where(n > 0, total / np.maximum(n, 1), np.nan)
+            for total, n in zip(sums, counts, strict=True)
+        ]
 
     def _neighbour(
         self, mean: np.ndarray, levels: Mapping[str, int], factor: str, step: int

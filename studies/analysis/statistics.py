@@ -218,6 +218,7 @@ def anova(
     factors: Sequence[str] | None = None,
     error: Sequence[str] | None = None,
     pool: Sequence[str] | None = None,
+    balanced: bool | None = None,
 ) -> pd.DataFrame:
     """ANOVA table of ``response``, indexed by source: each factor, "error", "total".
 
@@ -231,6 +232,8 @@ def anova(
     keep their SS, dof and contribution, with F and P NaN; the error row includes them.
     ``df.attrs``: "response", "units" (of the response; SS in units²), "error_columns",
     "pooled" (list) and "note" (a sentence on pooling or dropped runs, else "").
+    ``balanced``: whether the factors are balanced when every run has a value (True for a
+    complete full factorial, by construction), else None: counted from the codes.
     """
     names = _factor_names(ds, factors)
     errors = _error_names(ds, error)
@@ -256,7 +259,9 @@ def anova(
 
     def fit(pooled: list[str]) -> dict[str, tuple[float, int]]:
         order = [f for f in names if f not in pooled] + pooled
-        ss, dof, _ = term_sums_of_squares(y, [codes[f] for f in order])
+        ss, dof, _ = term_sums_of_squares(
+            y, [codes[f] for f in order], balanced if complete else None
+        )
         return {f: (float(s), int(n)) for f, s, n in zip(order, ss, dof, strict=True)}
 
     terms = fit(pooled)

@@ -133,18 +133,19 @@ def is_balanced(terms: Sequence[Any]) -> bool:
 
 
 def term_sums_of_squares(
-    y: np.ndarray, terms: Sequence[Any]
+    y: np.ndarray, terms: Sequence[Any], balanced: bool | None = None
 ) -> tuple[np.ndarray, np.ndarray, float]:
     """Type I sums of squares and dof of ``terms`` in order, and the total SS of ``y``.
 
     ``y`` holds finite values only; each term is an integer code vector of the same length
     (an array, or a variable read lazily: balanced terms are read a block of runs at a time).
-    The centred response is made a block of runs at a time (:class:`Centred`).
+    The centred response is made a block of runs at a time (:class:`Centred`). ``balanced``:
+    known (e.g. a complete full factorial), else None: :func:`is_balanced` counts it.
     """
     d = Centred(np.asarray(y, dtype=float))
     total = d.dot()
     codes = list(terms)
-    if is_balanced(codes):
+    if is_balanced(codes) if balanced is None else balanced:
         ss, dof = _balanced(d, codes)
     else:
         ss, dof = _sequential(d, [np.asarray(t) for t in codes])

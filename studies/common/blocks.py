@@ -63,12 +63,19 @@ class FiniteSummary:
         return self.total / self.count if self.count else np.nan
 
 
+def code_range(codes: Any) -> tuple[int, int]:
+    """The smallest and largest of integer codes ((0, -1) for no run), read by blocks."""
+    found = [(int(part.min()), int(part.max())) for part in blocks(codes) if part.size]
+    if not found:
+        return 0, -1
+    return min(low for low, _ in found), max(high for _, high in found)
+
+
 def compact_codes(codes: Any) -> np.ndarray:
     """Integer codes (e.g. a lazily read ``<factor>_level``) in memory in the smallest signed
     integer type that holds them: 1 byte per run for up to 127 levels instead of 4. Read a
     block of runs at a time (two passes: the range, then the values)."""
-    seen = finite_summary(codes)
-    low, high = (seen.low, seen.high) if seen.count else (0, 0)
+    low, high = code_range(codes)
     dtype = next(
         t
         for t in (np.int8, np.int16, np.int32, np.int64)
@@ -82,8 +89,7 @@ def compact_codes(codes: Any) -> np.ndarray:
 
 def level_count(codes: Any) -> int:
     """Levels of 0-based level codes (their largest + 1; 0 for no run), read by blocks."""
-    seen = finite_summary(codes)
-    return int(seen.high) + 1 if seen.count else 0
+    return code_range(codes)[1] + 1
 
 
 def finite_summary(values: Any, block: int | None = None) -> FiniteSummary:

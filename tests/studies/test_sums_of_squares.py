@@ -154,3 +154,17 @@ def test_normal_equations_in_blocks_equal_the_dense_design_matrix(monkeypatch) -
     np.testing.assert_array_equal(gram, x.T @ x)  # counts: exact in any order
     np.testing.assert_allclose(rhs, x.T @ d, rtol=1e-12, atol=1e-12 * np.abs(d).sum())
     assert owner.tolist() == [-1, 0, 0, 0, 0, 1, 1, 1, 1, 2]
+
+
+def test_a_complete_full_factorial_said_balanced_gets_the_counted_answer() -> None:
+    # The analysis tells a complete full factorial's ANOVA that it is balanced (it is, by
+    # construction) instead of counting every pair of factors per response: same numbers.
+    rng = np.random.default_rng(77)
+    levels = np.array(list(itertools.product(range(3), range(4), range(2))))
+    y = rng.normal(size=levels.shape[0]) + levels[:, 0]
+    codes = [levels[:, i] for i in range(3)]
+    assert is_balanced(codes)
+    counted = term_sums_of_squares(y, codes)
+    said = term_sums_of_squares(y, codes, balanced=True)
+    for a, b in zip(counted, said, strict=True):
+        np.testing.assert_array_equal(a, b)
