@@ -116,8 +116,8 @@ class Grid:
         return cell
 
     def row(self, row: int) -> np.ndarray:
-        """The runs of one row of :meth:`table` (one per condition)."""
-        return self.rows(slice(row, row + 1))[0]
+        """The runs of one row of :meth:`table` (one per condition; a copy)."""
+        return self.rows(slice(row, row + 1))[0].copy()
 
     def conditions(self) -> list[dict[str, int]]:
         """The operating-level combinations, in the column order of :meth:`table`."""

@@ -43,10 +43,10 @@ def centred(y: np.ndarray) -> np.ndarray:
 
 
 class Centred:
-    """:func:`centred` of ``y`` one block of :data:`studies.common.blocks.BLOCK` runs at a time: the two means over
-    the blocks, then each block's values ``(y - m1) - m2`` on request — the numbers of
-    :func:`centred` bit for bit when ``y`` is one block (else its means differ in the last
-    bits), without an array as large as ``y``."""
+    """:func:`centred` of ``y`` a block of runs at a time (:mod:`studies.common.blocks`): the
+    two means over the blocks, then each block's values ``(y - m1) - m2`` on request — the
+    numbers of :func:`centred` bit for bit when ``y`` is one block (else its means differ in
+    the last bits), without an array as large as ``y``."""
 
     def __init__(self, y: np.ndarray) -> None:
         self.y, self.size = y, y.size
