@@ -18,6 +18,7 @@ import xarray as xr
 from matplotlib import colormaps
 from matplotlib.figure import Figure
 
+from studies.common.blocks import blocks
 from studies.common.figure_style import axis_label, pretty_units
 
 DPI = 120
@@ -29,13 +30,17 @@ def design_factors(ds: xr.Dataset) -> list[str]:
 
 
 def factor_levels(ds: xr.Dataset, factor: str) -> list[int]:
-    return sorted({int(v) for v in ds[f"{factor}_level"].values})
+    """The level codes of ``factor`` that some run has (read a block of runs at a time)."""
+    found: set[int] = set()
+    for codes in blocks(ds[f"{factor}_level"].variable):
+        found.update(np.unique(codes).tolist())
+    return sorted(found)
 
 
 def raw_value(ds: xr.Dataset, factor: str, level: int):
     """The factor's value at a level (taken from the first run at that level)."""
     run = int(np.flatnonzero(ds[f"{factor}_level"].values == level)[0])
-    return ds[factor].values[run]
+    return ds[factor].variable[run].values[()]
 
 
 def value_text(ds: xr.Dataset, factor: str, level: int) -> str:
