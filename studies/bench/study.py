@@ -29,6 +29,7 @@ from typing import Any
 import netCDF4
 import numpy as np
 
+from studies.common.errors import StudyError
 from studies.define.definition import find_study
 
 PHASES = ("results_s", "analysis_s", "figures_s", "report_s")  # after the chunks (run.json)
@@ -100,9 +101,9 @@ def run_command(args: list[str]) -> tuple[float, float]:
     _, status, usage = os.wait4(process.pid, 0)
     wall = time.perf_counter() - t0
     process.returncode = os.waitstatus_to_exitcode(status)  # reaped here, not by Popen
-    if process.returncode != 0:
-        msg = f"{' '.join(args)} failed with exit code {process.returncode}"
-        raise RuntimeError(msg)
+    if process.returncode != 0:  # the run said why on stderr, above
+        msg = f"the benchmark's run stopped with exit code {process.returncode}: {' '.join(args)}"
+        raise StudyError(msg)
     return wall, usage.ru_maxrss / 1024.0  # kB on Linux
 
 

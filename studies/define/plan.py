@@ -37,8 +37,8 @@ from studies.scenes.base import short
 from studies.scenes.checks import Left, at_nominal_values, each_check_alone, reading
 from studies.scenes.design_points import DesignPoints, Factor
 
-BYTES_PER_FACTOR = 48
-BYTES_PER_RESPONSE = 16
+BYTES_PER_FACTOR = 8
+BYTES_PER_RESPONSE = 4
 MEMORY_SHARE = 0.8  # of the available memory a study may plan to use
 MAX_POINTS_VARIABLE = "ENGINE_STUDIES_MAX_POINTS"
 STATS_COST = "drawing it imports scipy.stats, about 1 s"
@@ -242,13 +242,14 @@ def full_factorial_size_problem(
     """Why a full factorial of ``counts`` will not fit this machine's memory, or "".
 
     Checked from the level counts alone, before anything is allocated. The estimate per design
-    point (``BYTES_PER_FACTOR`` per factor for its levels, values and analysis, plus
-    ``BYTES_PER_RESPONSE`` per response) is 368 bytes for the 10⁷-point valve study of
-    ``bench study`` (4 factors, 9 responses), whose whole run peaked at 1.33 GB, 133 bytes a
-    point, on 2026-11-27 at 5e75680 (the results layout and the analysis still hold O(N)
-    arrays; the plan no longer stores a value per point); ``ENGINE_STUDIES_MAX_POINTS``
-    overrides the limit. The message
-    also estimates the compute time from the scene's ``seconds_per_point``.
+    point (``BYTES_PER_FACTOR`` per factor for its level codes and per-run coordinates, plus
+    ``BYTES_PER_RESPONSE`` per response) is 76 bytes for the valve study of ``bench study``
+    (4 factors, 9 responses and 2 status codes): 1.5× what its runs measured on 2026-11-27 at
+    b61dd3e (peak 392 MB at 10⁶ points, 853 MB at 10⁷: 51 bytes a point beyond the process's
+    own few hundred MB; the analysis holds one response and the compact level codes at a
+    time; at 10⁸ points the run peaked at 4.66 GB against the estimate's 7.6 GB).
+    ``ENGINE_STUDIES_MAX_POINTS`` overrides the limit. The message also estimates the
+    compute time from the scene's ``seconds_per_point``.
     """
     runs = math.prod(counts.values())
     per_point = BYTES_PER_FACTOR * len(counts) + BYTES_PER_RESPONSE * (responses + 2)

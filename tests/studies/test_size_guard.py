@@ -50,8 +50,8 @@ def test_a_ten_million_point_design_passes(monkeypatch: pytest.MonkeyPatch) -> N
     monkeypatch.setattr(planning, "available_memory", lambda: 24 * GB)
     counts = dict(zip(FACTORS, (100, 40, 50, 50), strict=True))
     assert full_factorial_size_problem(counts, responses=9) == ""
-    # the estimate (~0.37 kB per point here) scales with the machine: 2 GB is too little
-    monkeypatch.setattr(planning, "available_memory", lambda: 2 * GB)
+    # the estimate (76 bytes per point here) scales with the machine: 0.5 GB is too little
+    monkeypatch.setattr(planning, "available_memory", lambda: GB // 2)
     assert "= 1e+07 design points" in full_factorial_size_problem(counts, responses=9)
 
 
