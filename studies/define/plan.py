@@ -222,7 +222,7 @@ def settings_fit(
     }
     usual = scene.work_estimate(defaults, asked, curves)
     ratio = (work.fixed + work.per_point) / (usual.fixed + usual.per_point)
-    seconds = scene.seconds_per_point * ratio * runs  # compute grows with the grids
+    seconds = scene.point_seconds(definition.settings, asked) * ratio * runs  # grows with the grids
     changed = ", ".join(
         f"{name} = {value:g}" if isinstance(value, float) else f"{name} = {value!r}"
         for name, value in definition.settings.items()
@@ -336,7 +336,9 @@ def _design(d: StudyDefinition) -> designs.Design:
     counts = {f.name: len(f.levels) for f in d.factors}
     if d.design == "full_factorial":
         size_problem = full_factorial_size_problem(
-            counts, len(d.responses), get_scene(d.scene).seconds_per_point
+            counts,
+            len(d.responses),
+            get_scene(d.scene).point_seconds(d.settings, list(d.responses)),
         )
         if size_problem:
             raise designs.DesignError([size_problem])

@@ -252,6 +252,12 @@ class Scene(ABC, Generic[State]):
     def curve(self, name: str) -> Curve | None:
         return next((c for c in self.curves if c.name == name), None)
 
+    def point_seconds(self, settings: dict[str, Any], responses: list[str]) -> float:
+        """A conservative compute time of one design point asking ``responses`` at these
+        ``settings`` (as the study gives them) [s], for the size guard's time estimate:
+        :attr:`seconds_per_point` unless the scene knows its costs better."""
+        return self.seconds_per_point
+
     def stages_for(self, responses: list[str], curves: list[str]) -> list[str]:
         """The stages needed for these responses and curves, in execution order."""
         needed: set[str] = set()

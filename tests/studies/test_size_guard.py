@@ -39,8 +39,8 @@ def test_a_trillion_point_design_is_refused_before_anything_is_allocated(
     message = str(refused.value)
     assert "= 1e+12 design points" in message
     assert "GB to plan, run and analyse" in message
-    # 10¹² points x the valve scene's 1e-3 s per point = 1e9 s = 31.7 years of 365.25 days
-    assert "about 31.7 years to compute (0.001 s per point)" in message
+    # 10¹² points x 1e-5 s per point of the valve's fixed-step dynamics = 1e7 s = 115.7 days
+    assert "about 116 days to compute (1e-05 s per point)" in message
     assert "24 GB of memory available" in message
     assert "orthogonal array" in message
     assert "ENGINE_STUDIES_MAX_POINTS" in message
@@ -76,3 +76,28 @@ def test_a_bad_limit_names_the_variable(monkeypatch: pytest.MonkeyPatch) -> None
 )
 def test_durations_are_shown_in_the_largest_unit_reached(seconds: float, shown: str) -> None:
     assert planning.duration(seconds) == shown
+
+
+@pytest.mark.parametrize(
+    ("extra", "shown"),
+    [
+        ("", "(1e-05 s per point)"),
+        ('responses = ["jump_speed"]\n', "(0.001 s per point)"),
+        ('[settings]\nintegrator = "dopri"\n', "(0.001 s per point)"),
+        ("[settings]\ntolerance = 1e-3\n", "(0.01 s per point)"),
+    ],
+)
+def test_the_time_estimate_follows_what_a_point_computes(
+    extra: str, shown: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # The valve's costs per design point (measured, see ValveScene): fixed-step dynamics
+    # 2.8 µs on 2 cores, the jump-speed search 0.29 ms, dopri and the tolerance ladder more.
+    monkeypatch.setattr(planning, "available_memory", lambda: 24 * GB)
+    text = huge_study(1000)
+    if extra.startswith("responses"):
+        text = text.replace('responses = ["max_lift"]\n', extra)
+    else:
+        text = text.replace("[factors.", extra + "[factors.", 1)
+    with pytest.raises(StudyFileError) as refused:
+        plan_text(text)
+    assert shown in str(refused.value)

@@ -90,7 +90,15 @@ KINEMATIC_RESPONSES = frozenset(r.name for r in ROCKER_RESPONSES)
 
 class ValveScene(LinkageScene[ValveState]):
     name = "valve"
-    seconds_per_point = 1e-3
+    # The dynamics at fixed step (lanes at 0.5°, the default): `bench study` measured 2.8 µs a
+    # design point on 2 cores (10⁷ points, b61dd3e), about 6 µs on one; 1e-5 s bounds both.
+    seconds_per_point = 1e-5
+    # Anything else, per design point [s]: the jump-speed search measured 0.29 ms on 2 cores
+    # (2000 points of jump_speed_map's setup); dopri costs 9–62× the default per case and the
+    # tolerance ladder 27–10 060× (issue #26's random sample); the multi-mass chain was not
+    # measured at scale (1e-3, the conservative value this scene had for everything).
+    SEARCH_OR_ADAPTIVE_SECONDS = 1e-3
+    TOLERANCE_SECONDS = 1e-2
     work_estimate = staticmethod(work.work_estimate)  # type: ignore[assignment]
     description = "valve-train dynamics through the rocker: jump, bounce, seating, jump speed"
     parameters = PARAMETERS
@@ -100,6 +108,19 @@ class ValveScene(LinkageScene[ValveState]):
     stage_order: tuple[str, ...] = ("tappet", "rocker", "dynamics", "surge", "jump_speed")
     status_responses: tuple[str, ...] = ("chain_status", "status", "surge_status")
     state_type: type[RunState] = ValveState
+
+    def point_seconds(self, settings: dict[str, Any], responses: list[str]) -> float:
+        """:attr:`seconds_per_point` for the fixed-step dynamics; more for the jump-speed
+        search, ``dopri``, the multi-mass chain or a tolerance (see the class constants)."""
+        if self.name != ValveScene.name:  # the accuracy and spring-ladder scenes: their own
+            return self.seconds_per_point
+        if settings.get("tolerance"):
+            return self.TOLERANCE_SECONDS
+        known = [r for r in responses if self.response(r)]  # unknown ones are refused later
+        plain = set(self.stages_to_run(settings, known, [])) <= {"tappet", "rocker", "dynamics"}
+        if plain and settings.get("integrator", "lanes") != DOPRI:
+            return self.seconds_per_point
+        return self.SEARCH_OR_ADAPTIVE_SECONDS
 
     def stages_to_run(
         self, settings: dict[str, Any], responses: list[str], curves: list[str]
