@@ -151,9 +151,12 @@ class Grid:
         row, ties, rule = self._tie_break(mean, self._best(mean, bounds))
         codes = np.unravel_index(row, self.control_counts) if self.control else ()
         levels = {f: int(c) for f, c in zip(self.control, codes, strict=True)}
-        unsigned = mean * (1.0 if sense == "smaller" else -1.0)
+        sign = 1.0 if sense == "smaller" else -1.0
         neighbours = {
-            f: (self._neighbour(unsigned, levels, f, -1), self._neighbour(unsigned, levels, f, 1))
+            f: (
+                self._neighbour(mean, sign, levels, f, -1),
+                self._neighbour(mean, sign, levels, f, 1),
+            )
             for f in self.control
         }
         return GridOptimum(
@@ -255,10 +258,14 @@ class Grid:
         # Scores within round-off of the best are equal (as the means are): a choice made by
         # the last bits would depend on the order of a sum, and say "main effects" falsely.
         limit = seen.low + ROUND_OFF * seen.largest
-        near = [(rows, score <= limit) for rows, score in map(scores, parts)]
-        if sum(int(n.sum()) for _, n in near) == ties:
+        near, row = 0, -1  # how many score within round-off of the best; the first of them
+        for rows, score in map(scores, parts):
+            within = score <= limit
+            near += int(within.sum())
+            if row < 0 and within.any():
+                row = int(rows[np.argmax(within)])
+        if near == ties:
             return int(np.argmax(first)), ties, "grid order"
-        row = next(int(rows[np.argmax(n)]) for rows, n in near if n.any())
         return row, ties, "main effects"
 
     def _main_effects(self, mean: np.ndarray) -> list[np.ndarray]:
@@ -283,11 +290,13 @@ class Grid:
         ]
 
     def _neighbour(
-        self, mean: np.ndarray, levels: Mapping[str, int], factor: str, step: int
+        self, mean: np.ndarray, sign: float, levels: Mapping[str, int], factor: str, step: int
     ) -> tuple[float, int]:
+        """The mean (``sign`` × the signed ``mean``) and, with one condition, the run of the
+        combination one level ``step`` away in ``factor`` (NaN, -1 past the edge)."""
         level = levels[factor] + step
         if not 0 <= level < self.control_counts[self.control.index(factor)]:
             return math.nan, -1
         row = self.combination({**levels, factor: level})
         run = int(self.row(row)[0]) if self.shape[1] == 1 else -1
-        return float(mean[row]), run
+        return float(mean[row] * sign), run

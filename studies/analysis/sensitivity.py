@@ -25,8 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from studies.analysis.sums_of_squares import centred, without_round_off
-from studies.common.blocks import BLOCK
+from studies.analysis.sums_of_squares import Centred, centred, without_round_off
+from studies.common.blocks import BLOCK, rows_per_block
 
 
 @dataclass(frozen=True)
@@ -68,20 +68,86 @@ def squares(d: np.ndarray, axis: int | None = None) -> float:
     return total
 
 
+Sums = tuple[float, list[np.ndarray], dict[tuple[int, int], np.ndarray], np.ndarray]
+"""Of the centred grid d: Σ d², the mean over the other axes of each axis and of each pair of
+axes, and Σ (d − its mean along each axis)²."""
+
+
+def _whole(grid: np.ndarray) -> Sums:
+    """:data:`Sums` from the centred grid made whole (one block: the numbers as written)."""
+    d = centred(grid.ravel()).reshape(grid.shape)
+    pairs = itertools.combinations(range(d.ndim), 2)
+    return (
+        squares(d),
+        [_mean_keeping(d, (a,)) for a in range(d.ndim)],
+        {(a, b): _mean_keeping(d, (a, b)) for a, b in pairs},
+        np.array([squares(d, a) for a in range(d.ndim)]),
+    )
+
+
+def _by_slabs(grid: np.ndarray) -> Sums:
+    """:data:`Sums` over slabs of about :data:`BLOCK` values along the first axis, each
+    centred when read (:class:`studies.analysis.sums_of_squares.Centred`): no array as large
+    as the grid is made (the mean along the first axis, ``grid.size / grid.shape[0]`` values,
+    is kept for a second pass). The sums of the slabs are added: the numbers of
+    :func:`_whole` within round-off."""
+    k, n, shape = grid.ndim, grid.size, grid.shape
+    centring = Centred(grid.reshape(-1))
+    step = rows_per_block(n // shape[0])
+    parts = [slice(i, i + step) for i in range(0, shape[0], step)]
+    pairs = list(itertools.combinations(range(k), 2))
+    total = 0.0
+    sums = [np.zeros(m) for m in shape]
+    pair_sums = {(a, b): np.zeros((shape[a], shape[b])) for a, b in pairs}
+    first_axis = np.zeros(shape[1:])
+    within = np.zeros(k)
+
+    def slab(part: slice) -> np.ndarray:
+        d = grid[part] - centring.first
+        d -= centring.second
+        return d
+
+    for part in parts:
+        d = slab(part)
+        total += float(np.sum(d * d))
+        first_axis += d.sum(axis=0)
+        for a in range(k):
+            kept = d.sum(axis=tuple(x for x in range(k) if x != a))
+            if a == 0:
+                sums[0][part] += kept
+            else:
+                sums[a] += kept
+                e = d - d.mean(axis=a, keepdims=True)  # whole lines along a: in the slab
+                within[a] += float(np.sum(e * e))
+        for a, b in pairs:
+            kept = d.sum(axis=tuple(x for x in range(k) if x not in (a, b)))
+            if a == 0:
+                pair_sums[a, b][part] += kept
+            else:
+                pair_sums[a, b] += kept
+    first_axis /= shape[0]
+    for part in parts:
+        e = slab(part) - first_axis
+        within[0] += float(np.sum(e * e))
+    means = [total_a / (n / m) for total_a, m in zip(sums, shape, strict=True)]
+    pair_means = {p: t / (n / t.size) for p, t in pair_sums.items()}
+    return total, means, pair_means, within
+
+
 def decompose(grid: np.ndarray, factors: tuple[str, ...]) -> Decomposition:
     """Decomposition of a response on a complete grid (axis i = factor i; finite values)."""
-    d = centred(np.asarray(grid, dtype=float).ravel()).reshape(grid.shape)
-    n = d.size
-    total = squares(d)
-    means = [_mean_keeping(d, (a,)) for a in range(d.ndim)]
+    grid = np.asarray(grid, dtype=float)
+    one_block = grid.size <= BLOCK or grid.ndim == 1
+    total, means, pair_means, within = _whole(grid) if one_block else _by_slabs(grid)
+    n = grid.size
     main = np.array([n / m.size * float(m @ m) for m in means])
-    pairs = tuple(itertools.combinations(range(d.ndim), 2))
+    pairs = tuple(itertools.combinations(range(grid.ndim), 2))
     pair = np.zeros(len(pairs))
     for i, (a, b) in enumerate(pairs):
-        effect = _mean_keeping(d, (a, b)) - means[a][:, None] - means[b][None, :]
+        effect = pair_means[a, b] - means[a][:, None] - means[b][None, :]
         pair[i] = n / effect.size * float(np.sum(effect * effect))
     main, pair = without_round_off(main, total), without_round_off(pair, total)
-    within = without_round_off(np.array([squares(d, a) for a in range(d.ndim)]), total)
+    within = without_round_off(within, total)
     remainder = float(without_round_off(np.array([total - main.sum() - pair.sum()]), total)[0])
     with np.errstate(invalid="ignore", divide="ignore"):
         first, total_effect = main / total, within / total
