@@ -360,7 +360,7 @@ def _filled(
     and, when some value was not finite, how it was resolved (``missing.Filled``), else None."""
     variable = y.variable.copy(deep=False).load()
     values = np.asarray(variable.values, dtype=float)
-    if finite_summary(values).count == values.size:
+    if all(np.isfinite(part).all() for part in blocks(values)):
         return variable, None
     sense = str(y.attrs.get("better", "smaller"))
     filled = missing.fill(values, ran, missing.none_means(y), sense)

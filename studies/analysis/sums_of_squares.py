@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from studies.common.blocks import run_slices
+from studies.common.blocks import level_count, run_slices
 
 RANK_TOLERANCE = 1e-9  # relative pivot below which a dummy column counts as dependent
 # A sum of squares below this fraction of the total is round-off of a zero effect (an effect
@@ -105,15 +105,11 @@ def level_sums_in_blocks(
     return n, s
 
 
-def _levels(codes: Any) -> int:
-    return max((int(np.max(codes[part])) + 1 for part in run_slices(len(codes))), default=0)
-
-
 def is_balanced(terms: Sequence[Any]) -> bool:
     """True if every pair of terms has proportional frequencies (orthogonal main effects).
     Counts accumulated over blocks of runs (exact; the codes may be read lazily)."""
     total = len(terms[0]) if terms else 0
-    widths = [_levels(t) for t in terms]
+    widths = [level_count(t) for t in terms]
     counts = [np.zeros(w, dtype=np.int64) for w in widths]
     pairs = [(a, b) for a in range(len(terms)) for b in range(a + 1, len(terms))]
     joints = {(a, b): np.zeros(widths[a] * widths[b], dtype=np.int64) for a, b in pairs}
@@ -155,7 +151,7 @@ def term_sums_of_squares(
 def _balanced(d: Centred, terms: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     ss, dof = np.zeros(len(terms)), np.zeros(len(terms), dtype=np.int64)
     for i, t in enumerate(terms):
-        levels = _levels(t)
+        levels = level_count(t)
         n, s = np.zeros(levels), np.zeros(levels)
         for part, block in d.blocks():
             n_part, s_part = level_sums(np.asarray(t[part]), block, levels)

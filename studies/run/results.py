@@ -28,7 +28,7 @@ import netCDF4
 import numpy as np
 import xarray as xr
 
-from studies.common.blocks import finite_summary, run_slices
+from studies.common.blocks import code_range, run_slices
 from studies.common.errors import StudyError
 from studies.define.plan import Plan, first_runs, noise_label
 from studies.run.runner import Evaluation
@@ -318,11 +318,11 @@ def grid_cells(ds: xr.Dataset) -> tuple[list[str], tuple[int, ...], np.ndarray |
     codes = [ds[f"{f}_level"].variable for f in factors]
     counts: tuple[int, ...] = ()
     for f, c in zip(factors, codes, strict=True):
-        seen = finite_summary(c)
-        if seen.count and seen.low < 0:
+        low, high = code_range(c)
+        if low < 0:
             msg = f"the full factorial is incomplete: {f} has runs without a level"
             raise StudyError(msg)
-        counts += (int(seen.high) + 1 if seen.count else 0,)
+        counts += (high + 1,)
     incomplete = f"the full factorial is incomplete: {runs} runs for {math.prod(counts)} grid cells"
     if runs != math.prod(counts):
         raise StudyError(incomplete)
