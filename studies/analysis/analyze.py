@@ -58,9 +58,9 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from studies.analysis import missing, prediction, taguchi
+from studies.analysis import grid_codes, missing, prediction, scratch, taguchi
 from studies.analysis import optimum as analysis_optimum
-from studies.analysis.factorial import factorial, factorial_frame, grid_of
+from studies.analysis.factorial import factorial, factorial_frame
 from studies.analysis.filled_array import filled_variable
 from studies.analysis.grid_optimum import Grid
 from studies.analysis.statistics import (
@@ -76,7 +76,15 @@ from studies.analysis.uncertainty.noise_statistics import robust_statistics
 from studies.analysis.uncertainty.sample_statistics import sample_analysis
 from studies.analysis.uncertainty.sobol_indices import sobol_analysis
 from studies.analysis.uncertainty.violation_map import with_violation_maps
-from studies.common.blocks import blocks, compact_codes, finite_summary, level_count, run_slices
+from studies.common import blocks as run_blocks
+from studies.common.blocks import (
+    blocks,
+    compact_codes,
+    finite_summary,
+    level_count,
+    run_slices,
+    values_of,
+)
 from studies.define.sampling import SAMPLING_DESIGNS
 from studies.run.results import NOT_EVALUATED, PASS_FAIL, is_status, write_netcdf
 
@@ -125,6 +133,13 @@ def analyze(
     ``responses`` default to the study's (attribute ``responses``); ``pool`` is passed to every
     ANOVA (default: the study's ``[design] pool``, else pool only when the error has no dof).
     """
+    with scratch.in_folder(ds):  # a response too large to hold is read from beside ds
+        return _analyze(ds, responses, pool)
+
+
+def _analyze(
+    ds: xr.Dataset, responses: Sequence[str] | None, pool: Sequence[str] | None
+) -> xr.Dataset:
     names = list(responses or json.loads(ds.attrs.get("responses", "[]")))
     design = str(ds.attrs.get("design", ""))
     attrs = {
@@ -156,37 +171,31 @@ def analyze(
     # One response at a time, over the level codes held compactly (1 byte per run and term
     # up to 127 levels); factor values are read where used: a 10⁷-run result is never held
     # whole.
-    base = with_compact_codes(view.drop_vars(list(view.data_vars)))
+    base = with_level_codes(view.drop_vars(list(view.data_vars)))
     out = _frame(base, view, analysed, terms, operating, models)
-    order = grid_of(base) if design == "full_factorial" else None
+    order = grid_codes.grid_in_order(base)
     grid = None if order is None else Grid(*order, operating)
     if order is not None:
         factorial_frame(out, order)
     attrs["optimum_basis"] = analysis_optimum.COMPUTED if grid else analysis_optimum.PREDICTED
     tables, optima, replaced = {}, {}, {}
     for name in analysed:
-        variable, filled = _filled(out, base, view[name], ran, name, terms)
-        one = base.assign({name: variable})
-        beyond = None if filled is None else filled.beyond
-        if filled is not None:  # the trade-off reads it again: lazily, where it can
-            rule = filled.rule if variable.dims == ("run",) else None
-            replaced[name] = (
-                variable if rule is None else filled_variable(view[name].variable, ran, rule)
-            )
-        del variable, filled
-        out["varies"].loc[name] = int(taguchi.varies(one, name))
-        tables[name] = anova(
-            one, name, factors=terms, pool=pool, balanced=True if grid is not None else None
-        )
-        _range(out, one, name, terms, operating)
-        _anova(out, tables[name], name)
-        if str(view[name].attrs.get("better")) != UNRANKED:
-            found = analysis_optimum.optimum(out, one, name, tables[name], grid, beyond)
+        with scratch.held(view[name].variable) as raw:
+            variable, filled = _filled(out, base, raw, ran, name, terms)
+            if filled is not None:  # the trade-off reads it again: lazily, where it can
+                rule = filled.rule if variable.dims == ("run",) else None
+                replaced[name] = (
+                    variable if rule is None else filled_variable(view[name].variable, ran, rule)
+                )
+            beyond = None if filled is None else filled.beyond
+            del filled
+            one = base.assign({name: variable})
+            del variable
+            tables[name], found = _response(out, one, name, terms, operating, pool, grid, beyond)
             if found is not None:
                 optima[name] = found
-        _interactions(out, one, name, tables[name])
-        if order is not None:
-            factorial(out, one, name, order)
+            if order is not None:
+                factorial(out, one, name, order)
     sn = {taguchi.sn_name(r) for r in names}
     optimised = [n for n in analysed if n not in sn and int(out["varies"].loc[n]) and n in optima]
     if len(optimised) > 1:
@@ -206,14 +215,24 @@ def analyze(
     return out
 
 
-def with_compact_codes(ds: xr.Dataset) -> xr.Dataset:
-    """``ds`` with every ``<name>_level`` coordinate on ``run`` in memory as compact codes
-    (:func:`studies.common.blocks.compact_codes`: 1 byte per run up to 127 levels), read a
-    block of runs at a time."""
+def with_level_codes(ds: xr.Dataset) -> xr.Dataset:
+    """``ds`` with every ``<name>_level`` coordinate on ``run`` as the analysis reads it: the
+    factors of a full factorial in grid order of more than a block of runs computed from the
+    run index when read (:mod:`studies.analysis.grid_codes`: nothing held per run), any other
+    (and every code of a smaller study, which renderers may index run by run) in memory as compact
+    codes (:func:`studies.common.blocks.compact_codes`: 1 byte per run up to 127 levels),
+    read a block of runs at a time."""
+    grid = grid_codes.grid_in_order(ds) if ds.sizes.get("run", 0) > run_blocks.BLOCK else None
+    computed = {}
+    if grid is not None and grid[2] is None:
+        computed = grid_codes.grid_coordinates(ds, grid[0], grid[1])
     levels = [c for c in ds.coords if str(c).endswith("_level") and ds[c].dims == ("run",)]
-    return ds.assign_coords(
-        {c: ds[c].variable.copy(data=compact_codes(ds[c].variable)) for c in levels}
-    )
+    held = {
+        c: ds[c].variable.copy(data=compact_codes(ds[c].variable))
+        for c in levels
+        if c not in computed and grid_codes.computed(ds[c].variable) is None
+    }
+    return ds.assign_coords(computed | held)
 
 
 def write_analysis_nc(an: xr.Dataset, folder: Path) -> Path:
@@ -352,29 +371,67 @@ def _level_values(
 
 # --- per response ---------------------------------------------------------------------------
 def _filled(
-    out: xr.Dataset, base: xr.Dataset, y: xr.DataArray, ran: np.ndarray, name: str, terms: list[str]
-) -> tuple[xr.Variable, missing.Filled | None]:
+    out: xr.Dataset,
+    base: xr.Dataset,
+    raw: xr.Variable,
+    ran: np.ndarray,
+    name: str,
+    terms: list[str],
+) -> tuple[xr.Variable, missing.Filled | missing.Resolved | None]:
     """The values the analysis uses (runs without a finite value resolved by
-    :mod:`studies.analysis.missing`), with the per-level counts of what was done written into ``out``.
-    A bare Variable (no coordinates to compare and load on assignment; the view stays lazy),
-    and, when some value was not finite, how it was resolved (``missing.Filled``), else None."""
-    variable = y.variable.copy(deep=False).load()
-    values = np.asarray(variable.values, dtype=float)
+    :mod:`studies.analysis.missing`), with the per-level counts of what was done written into
+    ``out``. A bare Variable (no coordinates to compare and load on assignment): ``raw`` when
+    every value is finite, else the resolved values, in memory when ``raw`` is, else resolved
+    where read (:func:`studies.analysis.filled_array.filled_variable`); and how they were
+    resolved (None when every value was finite)."""
+    values = values_of(raw)
     if all(np.isfinite(part).all() for part in blocks(values)):
-        return variable, None
-    sense = str(y.attrs.get("better", "smaller"))
-    filled = missing.fill(values, ran, missing.none_means(y), sense)
+        return raw, None
+    sense = str(raw.attrs.get("better", "smaller"))
+    meaning = missing.none_means(raw)
     i = out.indexes["response"].get_loc(name)
     nlevels = out.sizes["level"]
-    for j, t in enumerate(terms):
-        codes = base[f"{t}_level"].variable
-        out["left_out"].values[i, j] = missing.per_level(filled.left_out, codes, nlevels)
-        out["bounded"].values[i, j] = missing.per_level(filled.bounded, codes, nlevels)
+    codes = [base[f"{t}_level"].variable for t in terms]
+    resolved = None
+    if not isinstance(values, np.ndarray):
+        resolved = missing.resolve(values, ran, meaning, sense, codes, nlevels)
+    if resolved is not None:
+        out["left_out"].values[i], out["bounded"].values[i] = resolved.left_out, resolved.bounded
+        out["best_bound"].values[i] = resolved.best_bound
+        out["worst_bound"].values[i] = resolved.worst_bound
+        return filled_variable(raw, ran, resolved.rule), resolved
+    filled = missing.fill(np.asarray(values[:], dtype=float), ran, meaning, sense)
+    for j, c in enumerate(codes):
+        out["left_out"].values[i, j] = missing.per_level(filled.left_out, c, nlevels)
+        out["bounded"].values[i, j] = missing.per_level(filled.bounded, c, nlevels)
     out["best_bound"].values[i], out["worst_bound"].values[i] = (
         filled.best_bound,
         filled.worst_bound,
     )
-    return xr.Variable(variable.dims, filled.values, variable.attrs), filled
+    return xr.Variable(raw.dims, filled.values, raw.attrs), filled
+
+
+def _response(
+    out: xr.Dataset,
+    one: xr.Dataset,
+    name: str,
+    terms: list[str],
+    operating: list[str],
+    pool: Sequence[str] | None,
+    grid: Grid | None,
+    beyond: Any,
+) -> tuple[Any, Any]:
+    """Range analysis, ANOVA, optimum and interactions of one response into ``out``; its
+    ANOVA table and optimum (None when not ranked or not found)."""
+    out["varies"].loc[name] = int(taguchi.varies(one, name))
+    table = anova(one, name, factors=terms, pool=pool, balanced=True if grid is not None else None)
+    _range(out, one, name, terms, operating)
+    _anova(out, table, name)
+    found = None
+    if str(one[name].attrs.get("better")) != UNRANKED:
+        found = analysis_optimum.optimum(out, one, name, table, grid, beyond)
+    _interactions(out, one, name, table)
+    return table, found
 
 
 def _range(

@@ -7,7 +7,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from studies.analysis.sensitivity import decompose
+from studies.analysis.sensitivity import SlabGrid, decompose, mean_keeping
+from studies.common.blocks import blocks, values_of
 from studies.run.results import grid_cells
 
 GridOrder = tuple[list[str], tuple[int, ...], np.ndarray | None]
@@ -49,14 +50,17 @@ def factorial_frame(out: xr.Dataset, grid: GridOrder) -> None:
 
 def factorial(out: xr.Dataset, one: xr.Dataset, name: str, grid: GridOrder) -> None:
     """Main, two-factor and remainder SS and Sobol indices of a response that is finite in
-    every run of a complete full factorial (otherwise the grid has holes: left NaN)."""
+    every run of a complete full factorial (otherwise the grid has holes: left NaN). A
+    response in memory is used as the grid; one read lazily in grid order is read a slab of
+    about a block of runs at a time (:class:`studies.analysis.sensitivity.SlabGrid`)."""
     factors, counts, order = grid
-    y = np.asarray(one[name].values, dtype=float)
-    y = y if order is None else y[order]  # a copy only when the runs are not in grid order
-    if not np.isfinite(y).all():
+    y = values_of(one[name].variable)
+    if order is not None:  # a copy only when the runs are not in grid order
+        y = np.asarray(y[:], dtype=float)[order]
+    if not all(np.isfinite(part).all() for part in blocks(y)):
         return
     i = out.indexes["response"].get_loc(name)
-    values = y.reshape(counts)
+    values = y.reshape(counts) if isinstance(y, np.ndarray) else SlabGrid(y, counts)
     dec = decompose(values, tuple(factors))
     out["main_SS"].values[i], out["pair_SS"].values[i] = dec.main, dec.pair
     out["first_order"].values[i], out["total_effect"].values[i] = dec.first_order, dec.total_effect
@@ -64,6 +68,6 @@ def factorial(out: xr.Dataset, one: xr.Dataset, name: str, grid: GridOrder) -> N
     if len(factors) >= 2:
         a, b = np.argsort(-dec.total_effect, kind="stable")[:2]
         x, yy = sorted((int(a), int(b)))
-        mean = values.mean(axis=tuple(k for k in range(len(factors)) if k not in (x, yy)))
+        mean = mean_keeping(values, (x, yy))
         out["map_x"].values[i], out["map_y"].values[i] = factors[x], factors[yy]
         out["map_mean"].values[i, : counts[yy], : counts[x]] = mean.T

@@ -24,12 +24,22 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Callable, Mapping, Sequence
+from contextlib import ExitStack
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
+from studies.analysis import scratch
 from studies.analysis.sums_of_squares import ROUND_OFF
-from studies.common.blocks import FiniteSummary, finite_summary, rows_per_block, run_slices
+from studies.common.blocks import (
+    FiniteSummary,
+    finite_summary,
+    gather,
+    rows_per_block,
+    run_slices,
+    values_of,
+)
 
 SIDES = ("below", "above")
 
@@ -55,6 +65,22 @@ class GridOptimum:
     @property
     def mean(self) -> float:
         return float(np.mean(self.at)) if self.at.size else math.nan
+
+
+class RunView:
+    """``form(values[key])`` where read (``values`` per run, read by slices): a table per
+    control combination that is a function of one run's value, never written out."""
+
+    def __init__(self, values: Any, form: Callable[[np.ndarray], np.ndarray]) -> None:
+        self.values, self.form, self.size = values, form, len(values)
+
+    def __len__(self) -> int:
+        return self.size
+
+    def __getitem__(self, key: slice | int) -> Any:
+        if not isinstance(key, slice):
+            return self[int(key) : int(key) + 1][0]
+        return self.form(np.asarray(self.values[key]))
 
 
 class Grid:
@@ -137,16 +163,18 @@ class Grid:
         codes = tuple(int(levels[f]) for f in self.control)
         return int(np.ravel_multi_index(codes, self.control_counts))
 
-    def optimum(
-        self, y: np.ndarray, sense: str, beyond: np.ndarray | None = None
-    ) -> GridOptimum | None:
-        """The best computed control combination of ``y`` (NaN where a run has no value: a
+    def optimum(self, y: Any, sense: str, beyond: Any = None) -> GridOptimum | None:
+        """The best computed control combination of ``y`` (per run: a float array, or a
+        :class:`studies.common.blocks.RunValues` read a block of rows at a time; NaN where a run has no value: a
         combination missing a condition is not chosen); None if none is complete. ``beyond``
         (per run, :attr:`studies.analysis.missing.Filled.beyond`): +1 where the run's value is a bound
         it is better than, -1 one it is worse than."""
-        y = np.asarray(y, dtype=float)
-        mean, bounds, best_values, best_runs = self._rows(y, sense, beyond)
-        if not np.isfinite(mean).any():
+        with ExitStack() as stack:
+            return self._optimum(values_of(y), sense, beyond, stack)
+
+    def _optimum(self, y: Any, sense: str, beyond: Any, stack: ExitStack) -> GridOptimum | None:
+        mean, bounds, best_values, best_runs = self._rows(y, sense, beyond, stack)
+        if not finite_summary(mean).count:
             return None
         row, ties, rule = self._tie_break(mean, self._best(mean, bounds))
         codes = np.unravel_index(row, self.control_counts) if self.control else ()
@@ -161,7 +189,7 @@ class Grid:
         }
         return GridOptimum(
             levels,
-            y[self.row(row)],
+            gather(y, self.row(row)),
             self.row(row),
             best_values,
             best_runs,
@@ -171,27 +199,40 @@ class Grid:
         )
 
     def _rows(
-        self, y: np.ndarray, sense: str, beyond: np.ndarray | None
-    ) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray] | None, np.ndarray, np.ndarray]:
+        self, y: Any, sense: str, beyond: Any, stack: ExitStack
+    ) -> tuple[Any, tuple[Any, Any] | None, np.ndarray, np.ndarray]:
         """One pass over :meth:`table`, a block of rows at a time: each control combination's
         signed mean over the conditions (the smaller the better), its runs counted at a worse
         and at a better bound (when ``beyond`` is given), and each condition's best value and
-        its run (the first of equals)."""
+        its run (the first of equals). The per-row tables are arrays up to a block of rows,
+        else scratch files closed with ``stack`` (:func:`studies.analysis.scratch.column`)."""
         rows, conditions = self.shape
-        mean = np.empty(rows)
-        bounds = None if beyond is None else (np.empty(rows, np.int32), np.empty(rows, np.int32))
+        # One condition, rows in run order, values read by slices: a row's mean is its run's
+        # signed value, read where needed instead of written out.
+        views = conditions == 1 and self._in_row_order and not isinstance(y, np.ndarray)
+        if views:
+            mean: Any = RunView(y, lambda v: v if sense == "smaller" else -v)
+        else:
+            mean = scratch.column(rows, float, stack)
+        bounds: tuple[Any, Any] | None = None
+        if beyond is not None and views:
+            bounds = (RunView(beyond, lambda b: b < 0), RunView(beyond, lambda b: b > 0))
+        elif beyond is not None:
+            bounds = (scratch.column(rows, np.int32, stack), scratch.column(rows, np.int32, stack))
         best_signed = np.full(conditions, np.inf)
         best_values = np.full(conditions, np.nan)
         best_runs = np.full(conditions, -1, dtype=np.int64)
         for part in run_slices(rows, rows_per_block(conditions)):
             runs = self.rows(part)
-            values = y[runs]
+            values = gather(y, runs)
             signed = values if sense == "smaller" else -values
-            with np.errstate(invalid="ignore"):
-                mean[part] = signed.mean(axis=1)
-            if bounds is not None:
-                seen = np.asarray(beyond)[runs]
-                bounds[0][part], bounds[1][part] = (seen < 0).sum(axis=1), (seen > 0).sum(axis=1)
+            if not views:
+                with np.errstate(invalid="ignore"):
+                    mean[part] = signed.mean(axis=1)
+            if bounds is not None and not views:
+                seen = gather(beyond, runs)
+                bounds[0][part] = (seen < 0).sum(axis=1)
+                bounds[1][part] = (seen > 0).sum(axis=1)
             # each condition's first smallest value (nanargmin), later blocks only if smaller
             k = np.argmin(np.where(np.isnan(signed), np.inf, signed), axis=0)
             columns = np.arange(conditions)
@@ -202,7 +243,7 @@ class Grid:
             best_runs[better] = runs[k, columns][better]
         return mean, bounds, best_values, best_runs
 
-    def _best(self, mean: np.ndarray, bounds: tuple[np.ndarray, np.ndarray] | None) -> np.ndarray:
+    def _best(self, mean: Any, bounds: tuple[Any, Any] | None) -> np.ndarray:
         """The control combinations that share the first place in the order of the module
         docstring (a mask): fewest worst-bound runs, then most best-bound runs, then the best
         mean. O(rows), one pass per key (no sort: only the first place is needed), each pass
@@ -210,8 +251,10 @@ class Grid:
         seen = finite_summary(mean)
         # Means within round-off of the best are ties, as in the range analysis (R = 0).
         best, tolerance = seen.low, ROUND_OFF * seen.largest
-        chosen = np.isfinite(mean)
         parts = list(run_slices(mean.size))
+        chosen = np.empty(mean.size, dtype=bool)
+        for p in parts:
+            chosen[p] = np.isfinite(mean[p])
 
         def keep(key_of: Callable[[slice], np.ndarray], smallest: bool) -> None:
             """Keep the chosen rows whose key is the smallest (largest) among them."""
@@ -230,7 +273,7 @@ class Grid:
         keep(lambda p: np.where(mean[p] <= best + tolerance, best, mean[p]), smallest=True)
         return chosen
 
-    def _tie_break(self, mean: np.ndarray, first: np.ndarray) -> tuple[int, int, str]:
+    def _tie_break(self, mean: Any, first: np.ndarray) -> tuple[int, int, str]:
         """The best-ranked row, the number of rows sharing its rank and the rule that chose:
         among exact ties, the one whose levels have the best main effects (mean of ``mean``
         over each factor's level, summed), so a flat optimum agrees with the range analysis
@@ -268,15 +311,17 @@ class Grid:
             return int(np.argmax(first)), ties, "grid order"
         return row, ties, "main effects"
 
-    def _main_effects(self, mean: np.ndarray) -> list[np.ndarray]:
+    def _main_effects(self, mean: Any) -> list[np.ndarray]:
         """Per control factor, the mean of the finite row means at each of its levels (NaN
         where none), summed over slabs of about a block of rows along the first factor."""
-        grid = mean.reshape(self.control_counts)
-        sums = [np.zeros(n) for n in self.control_counts]
-        counts = [np.zeros(n) for n in self.control_counts]
-        step = rows_per_block(grid[0].size)
-        for start in range(0, self.control_counts[0], step):
-            slab = grid[start : start + step]
+        shape = self.control_counts
+        inner = math.prod(shape[1:])
+        sums = [np.zeros(n) for n in shape]
+        counts = [np.zeros(n) for n in shape]
+        step = rows_per_block(inner)
+        for start in range(0, shape[0], step):
+            stop = min(start + step, shape[0])
+            slab = np.asarray(mean[start * inner : stop * inner]).reshape((-1, *shape[1:]))
             finite = np.isfinite(slab)
             filled = np.where(finite, slab, 0.0)
             for axis in range(slab.ndim):
@@ -290,7 +335,7 @@ class Grid:
         ]
 
     def _neighbour(
-        self, mean: np.ndarray, sign: float, levels: Mapping[str, int], factor: str, step: int
+        self, mean: Any, sign: float, levels: Mapping[str, int], factor: str, step: int
     ) -> tuple[float, int]:
         """The mean (``sign`` × the signed ``mean``) and, with one condition, the run of the
         combination one level ``step`` away in ``factor`` (NaN, -1 past the edge)."""

@@ -20,13 +20,14 @@ in any response) are always left out.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
-from studies.common.blocks import run_slices
+from studies.common.blocks import finite_summary, run_slices
 from studies.scenes.base import NONE_MEANINGS
 
 DEFAULT = "unknown"
@@ -51,7 +52,7 @@ class Filled:
     rule: Rule | None = None  # how each run was resolved (None: no finite value)
 
 
-def none_means(y: xr.DataArray) -> str:
+def none_means(y: xr.DataArray | xr.Variable) -> str:
     """What a NaN of ``y`` means (its ``none_means`` attribute, else "unknown")."""
     meaning = str(y.attrs.get("none_means", DEFAULT))
     return meaning if meaning in NONE_MEANINGS else DEFAULT
@@ -130,6 +131,72 @@ def fill(y: np.ndarray, ran: np.ndarray, meaning: str, sense: str) -> Filled:
         rule.worst if to_worst.any() else np.nan,
         to_best.astype(np.int8) - to_worst.astype(np.int8),
         rule,
+    )
+
+
+class Beyond:
+    """:attr:`Filled.beyond` of the runs read (``beyond[a:b]``), computed from the stored
+    values where read: nothing held per run."""
+
+    def __init__(self, values: Any, ran: np.ndarray, rule: Rule) -> None:
+        self.values, self.ran, self.rule = values, ran, rule
+
+    def __len__(self) -> int:
+        return len(self.ran)
+
+    def __getitem__(self, key: slice) -> np.ndarray:
+        to_best, to_worst = self.rule.masks(
+            np.asarray(self.values[key], dtype=float), self.ran[key]
+        )
+        return to_best.astype(np.int8) - to_worst.astype(np.int8)
+
+
+@dataclass(frozen=True)
+class Resolved:
+    """What :func:`fill` would do, counted without holding a value per run: the :class:`Rule`,
+    the runs left out and bounded at each level of each term (terms × levels), the bounds
+    used (NaN when not) and :class:`Beyond`."""
+
+    rule: Rule
+    left_out: np.ndarray
+    bounded: np.ndarray
+    best_bound: float
+    worst_bound: float
+    beyond: Beyond
+
+
+def resolve(
+    values: Any, ran: np.ndarray, meaning: str, sense: str, codes: Sequence[Any], nlevels: int
+) -> Resolved | None:
+    """:func:`fill` of ``values`` (read a block of runs at a time, e.g. a
+    :class:`studies.common.blocks.RunValues`) with the left-out and bounded runs counted per
+    level of each term's ``codes``, in two passes (the finite range, then the masks); None
+    without a finite value."""
+    seen = finite_summary(values)
+    if not seen.count:
+        return None
+    best, worst = (seen.low, seen.high) if sense == "smaller" else (seen.high, seen.low)
+    rule = Rule(meaning if sense in ("smaller", "larger") else DEFAULT, sense, best, worst)
+    left = np.zeros((len(codes), nlevels), dtype=np.int64)
+    bounded = np.zeros((len(codes), nlevels), dtype=np.int64)
+    used = [False, False]
+    for part in run_slices(len(values)):
+        y = np.asarray(values[part], dtype=float)
+        to_best, to_worst = rule.masks(y, ran[part])
+        hit = to_best | to_worst
+        miss = ~np.isfinite(y) & ~hit
+        used = [used[0] or bool(to_best.any()), used[1] or bool(to_worst.any())]
+        for j, c in enumerate(codes):
+            level = np.asarray(c[part])
+            left[j] += np.bincount(level[miss], minlength=nlevels)[:nlevels]
+            bounded[j] += np.bincount(level[hit], minlength=nlevels)[:nlevels]
+    return Resolved(
+        rule,
+        left,
+        bounded,
+        best if used[0] else np.nan,
+        worst if used[1] else np.nan,
+        Beyond(values, ran, rule),
     )
 
 

@@ -30,6 +30,7 @@ import xarray as xr
 
 from studies.analysis import prediction, tradeoff
 from studies.analysis.grid_optimum import SIDES, Grid, GridOptimum
+from studies.common.blocks import values_of
 
 COMPUTED, PREDICTED = "computed", "predicted"
 
@@ -126,7 +127,7 @@ def _computed(
     out: xr.Dataset, one: xr.Dataset, name: str, grid: Grid, beyond: np.ndarray | None
 ) -> GridOptimum | None:
     sense = str(one[name].attrs.get("better", "smaller"))
-    found = grid.optimum(one[name].values, sense, beyond)
+    found = grid.optimum(values_of(one[name].variable), sense, beyond)
     if found is None:
         return None
     i = out.indexes["response"].get_loc(name)

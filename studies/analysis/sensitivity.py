@@ -21,7 +21,10 @@ Each quantity is a mean over axes of the grid: O(N) per term.
 from __future__ import annotations
 
 import itertools
+import math
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -45,6 +48,50 @@ class Decomposition:
 
 def _mean_keeping(d: np.ndarray, keep: tuple[int, ...]) -> np.ndarray:
     return d.mean(axis=tuple(a for a in range(d.ndim) if a not in keep))
+
+
+class SlabGrid:
+    """A grid (axis i = factor i) over values in grid order that are read a slab along the
+    first axis at a time (``grid[a:b]``: rows a…b-1 of the first axis), e.g. a
+    :class:`studies.common.blocks.RunValues`: what :func:`decompose` and
+    :func:`mean_keeping` take instead of a grid in memory."""
+
+    def __init__(self, values: Any, shape: Sequence[int]) -> None:
+        self.values, self.shape = values, tuple(int(n) for n in shape)
+        self.ndim, self.size = len(self.shape), math.prod(self.shape)
+
+    def __getitem__(self, part: slice) -> np.ndarray:
+        first, stop, _ = part.indices(self.shape[0])
+        inner = self.size // self.shape[0]
+        slab = np.asarray(self.values[first * inner : max(first, stop) * inner], dtype=float)
+        return slab.reshape((-1, *self.shape[1:]))
+
+    def reshape(self, shape: int) -> Any:
+        """The values in grid order (``shape`` -1 only)."""
+        if shape != -1:
+            raise ValueError(f"a SlabGrid reshapes to -1 only, not {shape}")
+        return self.values
+
+    def slabs(self) -> list[slice]:
+        """Slices of about :data:`BLOCK` values along the first axis."""
+        step = rows_per_block(self.size // self.shape[0])
+        return [slice(i, i + step) for i in range(0, self.shape[0], step)]
+
+
+def mean_keeping(grid: np.ndarray | SlabGrid, keep: tuple[int, ...]) -> np.ndarray:
+    """The mean of ``grid`` over the axes not in ``keep``: NumPy's mean of an array, the sums
+    of the slabs of a :class:`SlabGrid` added (the same within round-off)."""
+    if isinstance(grid, np.ndarray):
+        return _mean_keeping(grid, keep)
+    others = tuple(a for a in range(grid.ndim) if a not in keep)
+    total = np.zeros(tuple(grid.shape[a] for a in keep))
+    for part in grid.slabs():
+        kept = grid[part].sum(axis=others)
+        if 0 in keep:
+            total[part] += kept
+        else:
+            total += kept
+    return total / (grid.size / total.size)
 
 
 def squares(d: np.ndarray, axis: int | None = None) -> float:
@@ -85,7 +132,7 @@ def _whole(grid: np.ndarray) -> Sums:
     )
 
 
-def _by_slabs(grid: np.ndarray) -> Sums:
+def _by_slabs(grid: np.ndarray | SlabGrid) -> Sums:
     """:data:`Sums` over slabs of about :data:`BLOCK` values along the first axis, each
     centred when read (:class:`studies.analysis.sums_of_squares.Centred`): no array as large
     as the grid is made (the mean along the first axis, ``grid.size / grid.shape[0]`` values,
@@ -134,11 +181,17 @@ def _by_slabs(grid: np.ndarray) -> Sums:
     return total, means, pair_means, within
 
 
-def decompose(grid: np.ndarray, factors: tuple[str, ...]) -> Decomposition:
-    """Decomposition of a response on a complete grid (axis i = factor i; finite values)."""
-    grid = np.asarray(grid, dtype=float)
-    one_block = grid.size <= BLOCK or grid.ndim == 1
-    total, means, pair_means, within = _whole(grid) if one_block else _by_slabs(grid)
+def decompose(grid: np.ndarray | SlabGrid, factors: tuple[str, ...]) -> Decomposition:
+    """Decomposition of a response on a complete grid (axis i = factor i; finite values; a
+    :class:`SlabGrid` above a block is read a slab at a time)."""
+    if isinstance(grid, SlabGrid) and grid.size <= BLOCK:
+        grid = grid[:]
+    elif not isinstance(grid, SlabGrid):
+        grid = np.asarray(grid, dtype=float)
+    if isinstance(grid, np.ndarray) and (grid.size <= BLOCK or grid.ndim == 1):
+        total, means, pair_means, within = _whole(grid)
+    else:
+        total, means, pair_means, within = _by_slabs(grid)
     n = grid.size
     main = np.array([n / m.size * float(m @ m) for m in means])
     pairs = tuple(itertools.combinations(range(grid.ndim), 2))

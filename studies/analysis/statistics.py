@@ -18,12 +18,15 @@ from __future__ import annotations
 
 import json
 from collections.abc import Mapping, Sequence
+from contextlib import ExitStack
+from typing import Any
 
 import numpy as np
 import pandas as pd
 import xarray as xr
 from scipy import special
 
+from studies.analysis import scratch
 from studies.analysis.sums_of_squares import (
     ROUND_OFF,
     Centred,
@@ -31,9 +34,8 @@ from studies.analysis.sums_of_squares import (
     term_sums_of_squares,
     without_round_off,
 )
-from studies.common.blocks import level_count, run_slices
+from studies.common.blocks import first_runs, level_count, run_slices, values_of
 from studies.common.errors import StudyError
-from studies.define.plan import first_runs
 
 SENSES = ("smaller", "larger")
 UNRANKED = "none"
@@ -86,7 +88,10 @@ def _response(ds: xr.Dataset, response: str) -> tuple[xr.DataArray, np.ndarray]:
     if y.dims != ("run",):
         msg = f"{response!r} has dims {y.dims}; analysis needs a scalar response on 'run'"
         raise StudyError(msg)
-    finite = np.isfinite(y.values.astype(float))
+    values = values_of(y.variable)
+    finite = np.empty(values.shape, dtype=bool)
+    for part in run_slices(len(values)):
+        finite[part] = np.isfinite(values[part])
     if not finite.any():
         msg = f"{response!r} has no finite value to analyse"
         raise StudyError(msg)
@@ -111,7 +116,7 @@ def _level_table(
     O(N) by ``bincount``."""
     codes = ds[f"{f}_level"].variable  # read a block of runs at a time
     n = level_count(codes)
-    counts, sums = level_sums_in_blocks(codes, np.asarray(y.values), n, finite)
+    counts, sums = level_sums_in_blocks(codes, values_of(y.variable), n, finite)
     present = np.flatnonzero(counts)
     k = sums[present] / counts[present]
     value = np.full(present.size, np.nan)
@@ -243,12 +248,32 @@ def anova(
         raise StudyError(msg)
     y_da, finite = _response(ds, response)
     complete = bool(finite.all())
-    y = np.asarray(y_da.values, dtype=float)  # no copy of a float response
-    y = y if complete else y[finite]
-    codes = {  # complete: read a block of runs at a time; else the finite runs' codes
-        f: ds[f"{f}_level"].variable if complete else _kept(ds[f"{f}_level"].variable, finite)
-        for f in names
-    }
+    with ExitStack() as stack:  # the finite runs' values and codes, when too many to hold
+        values = values_of(y_da.variable)  # an array in memory, else read a block at a time
+        y = values if complete else _kept(values, finite, stack)
+        codes = {  # complete: read a block of runs at a time; else the finite runs' codes
+            f: ds[f"{f}_level"].variable
+            if complete
+            else _kept(ds[f"{f}_level"].variable, finite, stack)
+            for f in names
+        }
+        return _table(ds, response, y_da, y, codes, finite, names, errors, pool, balanced)
+
+
+def _table(
+    ds: xr.Dataset,
+    response: str,
+    y_da: xr.DataArray,
+    y: Any,
+    codes: dict[str, Any],
+    finite: np.ndarray,
+    names: list[str],
+    errors: list[str],
+    pool: Sequence[str] | None,
+    balanced: bool | None,
+) -> pd.DataFrame:
+    """The ANOVA table of :func:`anova` from the values ``y`` and ``codes`` it analyses."""
+    complete = bool(finite.all())
     if pool is None and "pool" in ds.attrs:
         pool = json.loads(ds.attrs["pool"])
     pooled = list(pool) if pool is not None else []
@@ -324,9 +349,18 @@ def anova(
     return table
 
 
-def _kept(codes: xr.Variable, keep: np.ndarray) -> np.ndarray:
-    """The codes of the runs ``keep`` selects, gathered a block of runs at a time."""
-    return np.concatenate([np.asarray(codes[part])[keep[part]] for part in run_slices(len(codes))])
+def _kept(values: Any, keep: np.ndarray, stack: ExitStack) -> Any:
+    """The values (level codes, a response) of the runs ``keep`` selects, gathered a block of
+    runs at a time into an array, or a scratch file when above a block
+    (:func:`studies.analysis.scratch.column`, closed with ``stack``)."""
+    dtype = np.asarray(values[0:1]).dtype
+    out = scratch.column(int(np.count_nonzero(keep)), dtype, stack)
+    at = 0
+    for part in run_slices(len(values)):
+        chosen = np.asarray(values[part])[keep[part]]
+        out[at : at + chosen.size] = chosen
+        at += chosen.size
+    return out
 
 
 def sweep_runs(ds: xr.Dataset, factor: str) -> xr.Dataset:

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from studies.common.blocks import level_count, run_slices
+from studies.common.blocks import Values, code_range, level_count, run_slices, values_of
 
 RANK_TOLERANCE = 1e-9  # relative pivot below which a dummy column counts as dependent
 # A sum of squares below this fraction of the total is round-off of a zero effect (an effect
@@ -48,7 +48,7 @@ class Centred:
     numbers of :func:`centred` bit for bit when ``y`` is one block (else its means differ in
     the last bits), without an array as large as ``y``."""
 
-    def __init__(self, y: np.ndarray) -> None:
+    def __init__(self, y: Values) -> None:
         self.y, self.size = y, y.size
         self.first = _block_sum(y[part] for part in run_slices(y.size)) / y.size
         self.second = _block_sum(y[part] - self.first for part in run_slices(y.size)) / y.size
@@ -91,7 +91,7 @@ def level_sums(
 
 
 def level_sums_in_blocks(
-    codes: Any, y: np.ndarray, levels: int, finite: np.ndarray | None = None
+    codes: Any, y: Values, levels: int, finite: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`level_sums` a block of runs at a time (``codes`` may be read lazily): the
     same numbers for one block, the blocks' sums added for more."""
@@ -129,7 +129,7 @@ def is_balanced(terms: Sequence[Any]) -> bool:
 
 
 def term_sums_of_squares(
-    y: np.ndarray, terms: Sequence[Any], balanced: bool | None = None
+    y: Values, terms: Sequence[Any], balanced: bool | None = None
 ) -> tuple[np.ndarray, np.ndarray, float]:
     """Type I sums of squares and dof of ``terms`` in order, and the total SS of ``y``.
 
@@ -138,13 +138,13 @@ def term_sums_of_squares(
     The centred response is made a block of runs at a time (:class:`Centred`). ``balanced``:
     known (e.g. a complete full factorial), else None: :func:`is_balanced` counts it.
     """
-    d = Centred(np.asarray(y, dtype=float))
+    d = Centred(values_of(y))
     total = d.dot()
     codes = list(terms)
     if is_balanced(codes) if balanced is None else balanced:
         ss, dof = _balanced(d, codes)
     else:
-        ss, dof = _sequential(d, [np.asarray(t) for t in codes])
+        ss, dof = _sequential(d, codes)
     return without_round_off(ss, total), dof, total
 
 
@@ -163,12 +163,17 @@ def _balanced(d: Centred, terms: list[np.ndarray]) -> tuple[np.ndarray, np.ndarr
     return ss, dof
 
 
-def _dummies(terms: list[np.ndarray]) -> tuple[list[np.ndarray], list[np.ndarray]]:
+def _dummies(terms: Sequence[Any]) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """Per term: the levels present but the first (treatment coding) and the lookup from a
-    level to its dummy column (-1 for the reference level and for absent levels)."""
+    level to its dummy column (-1 for the reference level and for absent levels); the codes
+    read a block of runs at a time."""
     present, lookups = [], []
     for t in terms:
-        levels = np.flatnonzero(np.bincount(t)) if t.min() >= 0 else np.unique(t) - t.min()
+        low, high = code_range(t)
+        seen = np.zeros(high - min(low, 0) + 1, dtype=bool)
+        for part in run_slices(len(t)):
+            seen[np.asarray(t[part]) - min(low, 0)] = True
+        levels = np.flatnonzero(seen)
         lookup = np.full(int(levels.max()) + 1, -1, dtype=np.int32)
         lookup[levels[1:]] = np.arange(levels.size - 1)
         present.append(levels[1:])
@@ -176,14 +181,12 @@ def _dummies(terms: list[np.ndarray]) -> tuple[list[np.ndarray], list[np.ndarray
     return present, lookups
 
 
-def normal_equations(
-    d: Centred, terms: list[np.ndarray]
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def normal_equations(d: Centred, terms: Sequence[Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Gram matrix XᵀX, Xᵀd and the term of each column for intercept + treatment dummies,
     from level counts and level sums (O(N) per pair of terms), accumulated over blocks of
     :data:`studies.common.blocks.BLOCK` runs so that the dummy codes of one block are held at a time."""
     present, lookups = _dummies(terms)
-    shifts = [0 if t.min() >= 0 else int(t.min()) for t in terms]
+    shifts = [min(code_range(t)[0], 0) for t in terms]
     widths = [p.size for p in present]
     starts = np.concatenate([[1], 1 + np.cumsum(widths)])
     p = int(starts[-1])
@@ -229,7 +232,7 @@ def _add_block(
             gram[sb, sa] += joint.T
 
 
-def _sequential(d: Centred, terms: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+def _sequential(d: Centred, terms: Sequence[Any]) -> tuple[np.ndarray, np.ndarray]:
     gram, rhs, owner = normal_equations(d, terms)
     z, independent = _cholesky_solve(gram, rhs)
     ss = np.array([float(np.sum(z[owner == i] ** 2)) for i in range(len(terms))])

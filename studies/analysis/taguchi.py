@@ -31,9 +31,8 @@ import pandas as pd
 import xarray as xr
 
 from studies.analysis.statistics import anova, f_survival
-from studies.common.blocks import finite_summary, level_count
+from studies.common.blocks import finite_summary, first_runs, level_count
 from studies.common.errors import StudyError
-from studies.define.plan import first_runs
 from studies.run.results import NOISE
 
 SN_KINDS = ("smaller", "larger", "nominal")

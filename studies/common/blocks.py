@@ -9,7 +9,7 @@ study of at most :data:`BLOCK` runs gets the whole-array numbers bit for bit.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -37,6 +37,68 @@ def blocks(values: Any, block: int | None = None) -> Iterator[np.ndarray]:
     runs at a time, each block read on its own."""
     for part in run_slices(len(values), block):
         yield np.asarray(values[part])
+
+
+class RunValues:
+    """A variable with one value per run (e.g. a response read lazily from ``results.nc``)
+    that gives float arrays when sliced: ``values[a:b]`` reads only those runs. What the block
+    passes take instead of an array, so a response of 10⁸ runs is never held whole."""
+
+    ndim = 1
+
+    def __init__(self, variable: Any) -> None:
+        self.variable = variable
+        self.shape = (len(variable),)
+        self.size = self.shape[0]
+
+    def __len__(self) -> int:
+        return self.size
+
+    def __getitem__(self, key: Any) -> np.ndarray:
+        return np.asarray(self.variable[key], dtype=float)
+
+
+Values = np.ndarray | RunValues
+"""Values per run: in memory, or read a slice at a time."""
+
+
+def values_of(variable: Any) -> Values:
+    """A response's values as the block passes read them: an array, or a Variable whose
+    values are in memory, as a float array (no copy of floats); anything else read by slices
+    (a Variable read lazily, a scratch column, a :class:`RunValues`) as a :class:`RunValues`."""
+    if isinstance(variable, RunValues):
+        return variable
+    if isinstance(variable, (np.ndarray, list, tuple)) or isinstance(
+        getattr(variable, "_data", None), np.ndarray
+    ):
+        return np.asarray(variable, dtype=float)
+    return RunValues(variable)
+
+
+SMALL_READ = 4096
+"""Runs read as one range rather than one by one (two chunks of ``results.nc``)."""
+
+
+def gather(values: Any, runs: np.ndarray) -> np.ndarray:
+    """``values[runs]`` for integer ``runs`` of any shape. From a :class:`RunValues`: the
+    range the runs span is read once when it is small (at most twice their number, or a
+    chunk's worth: e.g. a block of grid rows), else the range of each column of ``runs`` (one
+    per operating condition of a grid; each run of a 1-D ``runs``), so about a block is read
+    at a time."""
+    if isinstance(values, np.ndarray):
+        return values[runs]
+    if not runs.size:
+        return np.empty(runs.shape)
+    low, high = int(runs.min()), int(runs.max())
+    if high - low < max(2 * runs.size, SMALL_READ):
+        return values[low : high + 1][runs - low]
+    table = runs.reshape(-1, runs.shape[-1]) if runs.ndim > 1 else runs.reshape(1, -1)
+    out = np.empty(table.shape)
+    for j in range(table.shape[1]):
+        column = table[:, j]
+        start = int(column.min())
+        out[:, j] = values[start : int(column.max()) + 1][column - start]
+    return out.reshape(runs.shape)
 
 
 @dataclass
@@ -85,6 +147,33 @@ def compact_codes(codes: Any) -> np.ndarray:
     for part in run_slices(len(codes)):
         out[part] = np.asarray(codes[part])
     return out
+
+
+def runs_matching(conditions: Sequence[tuple[Any, int]], runs: int) -> np.ndarray:
+    """The runs (ascending) of ``runs`` where every ``(codes, level)`` of ``conditions`` has
+    its level: the codes (e.g. lazily read ``<factor>_level`` variables) a block at a time."""
+    found = [np.zeros(0, dtype=np.int64)]
+    for part in run_slices(runs):
+        keep = np.ones(part.stop - part.start, dtype=bool)
+        for codes, level in conditions:
+            keep &= np.asarray(codes[part]) == level
+        found.append(part.start + np.flatnonzero(keep))
+    return np.concatenate(found)
+
+
+def first_runs(codes: Any, levels: int) -> np.ndarray:
+    """The first run at each level 0…levels-1 of ``codes`` (-1 where a level has none); a
+    block of runs at a time, stopping once every level has its run."""
+    first = np.full(levels, -1, dtype=np.int64)
+    for part in run_slices(len(codes)):
+        here = np.full(levels, -1, dtype=np.int64)
+        runs = np.arange(part.start, part.stop)
+        here[np.asarray(codes[part])[::-1]] = runs[::-1]  # repeated indices: the last wins
+        new = (first < 0) & (here >= 0)
+        first[new] = here[new]
+        if (first >= 0).all():
+            break
+    return first
 
 
 def level_count(codes: Any) -> int:

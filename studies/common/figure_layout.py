@@ -18,7 +18,7 @@ import xarray as xr
 from matplotlib import colormaps
 from matplotlib.figure import Figure
 
-from studies.common.blocks import blocks
+from studies.common.blocks import blocks, first_runs, level_count, runs_matching
 from studies.common.figure_style import axis_label, pretty_units
 
 DPI = 120
@@ -39,7 +39,8 @@ def factor_levels(ds: xr.Dataset, factor: str) -> list[int]:
 
 def raw_value(ds: xr.Dataset, factor: str, level: int):
     """The factor's value at a level (taken from the first run at that level)."""
-    run = int(np.flatnonzero(ds[f"{factor}_level"].values == level)[0])
+    codes = ds[f"{factor}_level"].variable
+    run = int(first_runs(codes, max(level_count(codes), level + 1))[level])
     return ds[factor].variable[run].values[()]
 
 
@@ -56,10 +57,9 @@ def shown_value(ds: xr.Dataset, factor: str, value: object) -> str:
 
 
 def runs_where(ds: xr.Dataset, where: dict[str, int]) -> np.ndarray:
-    keep = np.ones(ds.sizes["run"], dtype=bool)
-    for f, level in where.items():
-        keep &= ds[f"{f}_level"].values == level
-    return np.flatnonzero(keep)
+    """The runs at the levels ``where`` (factor → level), a block of runs at a time."""
+    conditions = [(ds[f"{f}_level"].variable, level) for f, level in where.items()]
+    return runs_matching(conditions, ds.sizes["run"])
 
 
 class Layout:

@@ -20,7 +20,6 @@ from typing import Any
 import numpy as np
 
 from engine_kernels._jit import EVALUATIONS, CompilerNeeded, without_compiler
-from studies.common.blocks import run_slices
 from studies.common.errors import StudyError
 from studies.define import designs
 from studies.define.definition import (
@@ -467,18 +466,3 @@ def noise_label(d: StudyDefinition) -> str:
     names = ", ".join(short(f.name) for f in d.noise.factors)
     how = f"{d.noise.type} sample of {d.noise.samples}" if d.noise.sampled else d.noise.type
     return f"{how} over {names}"
-
-
-def first_runs(codes: Any, levels: int) -> np.ndarray:
-    """The first run at each level 0…levels-1 of ``codes`` (-1 where a level has none); a
-    block of runs at a time, stopping once every level has its run."""
-    first = np.full(levels, -1, dtype=np.int64)
-    for part in run_slices(len(codes)):
-        here = np.full(levels, -1, dtype=np.int64)
-        runs = np.arange(part.start, part.stop)
-        here[np.asarray(codes[part])[::-1]] = runs[::-1]  # repeated indices: the last wins
-        new = (first < 0) & (here >= 0)
-        first[new] = here[new]
-        if (first >= 0).all():
-            break
-    return first

@@ -12,6 +12,7 @@ import numpy as np
 import xarray as xr
 
 from studies.analysis import taguchi
+from studies.common.blocks import runs_matching
 from studies.common.text_safety import Markup, md_escape
 from studies.report.markdown_format import level_text, num, pct, table
 from studies.report.markdown_ran import replaced
@@ -141,10 +142,8 @@ def tradeoff_section(
 
 def _runs_at(view: xr.Dataset, levels: dict[str, int]) -> np.ndarray:
     """The runs at these control levels (one per operating condition on a grid)."""
-    hit = np.ones(view.sizes["run"], dtype=bool)
-    for f, level in levels.items():
-        hit &= view[f"{f}_level"].values == level
-    return np.flatnonzero(hit)
+    conditions = [(view[f"{f}_level"].variable, level) for f, level in levels.items()]
+    return runs_matching(conditions, view.sizes["run"])
 
 
 def _value(view: xr.Dataset, name: str, value: float, runs: Sequence[int] | np.ndarray) -> Markup:

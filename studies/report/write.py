@@ -65,7 +65,7 @@ def write_analysis(
         )
     folder.mkdir(parents=True, exist_ok=True)
     with clock("analysis_s"):
-        ds = analysis.with_compact_codes(ds)  # once, for the analysis and the renderers
+        ds = analysis.with_level_codes(ds)  # once, for the analysis and the renderers
         an = analysis.analyze(ds, scalar, pool)
         nc = analysis.write_analysis_nc(an, folder)
     done = json.loads(an.attrs["analysed"])

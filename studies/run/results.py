@@ -28,9 +28,9 @@ import netCDF4
 import numpy as np
 import xarray as xr
 
-from studies.common.blocks import code_range, run_slices
+from studies.common.blocks import code_range, first_runs, run_slices
 from studies.common.errors import StudyError
-from studies.define.plan import Plan, first_runs, noise_label
+from studies.define.plan import Plan, noise_label
 from studies.run.runner import Evaluation
 
 COMPRESSION_LEVEL: Final = 4

@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 
 from studies.common import blocks
-from studies.define.plan import first_runs
 
 
 @pytest.fixture(params=[None, 3], ids=["one block", "blocks of 3"])
@@ -57,4 +56,13 @@ def test_first_runs_are_the_first_occurrences(seed: int, block: None) -> None:
         int(np.flatnonzero(codes == level)[0]) if (codes == level).any() else -1
         for level in range(8)
     ]
-    assert first_runs(codes, 8).tolist() == expected
+    assert blocks.first_runs(codes, 8).tolist() == expected
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_runs_matching_are_the_runs_at_every_level(seed: int, block: None) -> None:
+    rng = np.random.default_rng(seed)
+    runs = int(rng.integers(1, 40))
+    a, b = rng.integers(0, 3, size=runs), rng.integers(0, 2, size=runs)
+    expected = np.flatnonzero((a == 1) & (b == 0))  # the whole arrays at once
+    assert blocks.runs_matching([(a, 1), (b, 0)], runs).tolist() == expected.tolist()
