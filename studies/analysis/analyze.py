@@ -98,19 +98,23 @@ INTERACTION_COLUMNS = ("SS", "dof", "F", "P", "contribution")
 def presence(ds: xr.Dataset, responses: Sequence[str]) -> tuple[list[str], np.ndarray]:
     """The responses with a finite value in some run, and the runs with a value (finite or
     ±inf; for flags and status codes anything but -1 "not evaluated") in some response: the
-    others did not run. Reads each response once, a block of runs at a time."""
-    present, any_value = [], np.zeros(ds.sizes["run"], dtype=bool)
-    for r in responses:
+    others did not run. Reads each response a block of runs at a time, flags and status codes
+    first (a byte a run), and skips a block once it has a finite value and every run of the
+    block is known to have run."""
+    present, any_value = set(), np.zeros(ds.sizes["run"], dtype=bool)
+    for r in sorted(responses, key=lambda r: ds[r].dtype.kind != "i"):
         seen = False
         for part in run_slices(ds.sizes["run"]):
+            if seen and any_value[part].all():
+                continue
             values = np.asarray(ds[r].variable[part])
             integer = values.dtype.kind == "i"
             has = values != NOT_EVALUATED if integer else ~np.isnan(values)
             seen = seen or bool((has if integer else np.isfinite(values)).any())
             any_value[part] |= has.reshape(values.shape[0], -1).any(axis=1)
         if seen:
-            present.append(r)
-    return present, any_value
+            present.add(r)
+    return [r for r in responses if r in present], any_value
 
 
 def analyzed(ds: xr.Dataset, responses: Sequence[str]) -> tuple[xr.Dataset, list[str], np.ndarray]:

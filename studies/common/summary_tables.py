@@ -31,7 +31,23 @@ def column_header(ds: xr.Dataset, name: str) -> str:
     return axis_label(name, ds[name].attrs.get("units", ""))
 
 
-def runs_line(label: str, runs: np.ndarray) -> str:
-    """``  label: count (runs 0, 3, …)`` listing at most 20 design points."""
-    shown = ", ".join(str(r) for r in runs[:20]) + (", …" if runs.size > 20 else "")
-    return f"  {label}: {runs.size} (runs {shown})"
+SHOWN = 20
+"""Design points a line lists."""
+
+
+class RunList:
+    """How many design points were found and the first :data:`SHOWN` of them, added a block
+    of runs at a time (:meth:`add`), so a status of 10⁸ runs is never held whole."""
+
+    def __init__(self) -> None:
+        self.count, self.first = 0, np.zeros(0, dtype=np.int64)
+
+    def add(self, runs: np.ndarray) -> None:
+        self.count += runs.size
+        if self.first.size < SHOWN:
+            self.first = np.concatenate([self.first, runs[: SHOWN - self.first.size]])
+
+    def line(self, label: str) -> str:
+        """``  label: count (runs 0, 3, …)``."""
+        shown = ", ".join(str(r) for r in self.first) + (", …" if self.count > SHOWN else "")
+        return f"  {label}: {self.count} (runs {shown})"

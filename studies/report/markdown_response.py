@@ -11,6 +11,7 @@ import numpy as np
 import xarray as xr
 
 from studies.analysis import taguchi
+from studies.common.blocks import blocks
 from studies.common.text_safety import md_escape
 from studies.report import plots
 from studies.report.markdown_format import (
@@ -211,8 +212,8 @@ def _interaction_lines(
 def constant_section(view: xr.Dataset, response: str, figures: set[str]) -> list[str]:
     y = view[taguchi.mean_name(view, response)]
     units = str(y.attrs.get("units", ""))
-    finite = y.values[np.isfinite(y.values)]
-    value = value_text(float(finite[0]), units if units != "1" else "") if finite.size else "—"
+    first = next((v[np.isfinite(v)][0] for v in blocks(y.variable) if np.isfinite(v).any()), None)
+    value = value_text(float(first), units if units != "1" else "") if first is not None else "—"
     long_name = str(y.attrs.get("long_name", response))
     return [
         f"## {md_escape(response)}: {label(long_name, units)}",

@@ -17,10 +17,13 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from engine_kernels.valvetrain import rocker
 from studies.analysis import grid_codes, scratch, sensitivity
 from studies.analysis.analyze import analyze, with_level_codes
 from studies.common import blocks
 from studies.run.results import open_results, write_netcdf
+from studies.scenes.linkage.summaries import linkage_status_summary
+from studies.scenes.valve.summaries import dynamics_status_summary
 
 SHAPE = {"speed": 3, "a": 5, "b": 4}  # speed (operating) first: rows gathered by column
 
@@ -139,3 +142,32 @@ def test_grid_codes_of_any_range_are_the_division_formula(seed: int) -> None:
     stop = int(rng.integers(start, runs + 1))
     expected = (np.arange(start, stop) // stride) % count  # the definition, run by run
     np.testing.assert_array_equal(codes._range(start, stop), expected)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_status_summaries_over_blocks_list_what_a_whole_array_search_finds(
+    seed: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    rng = np.random.default_rng(seed)
+    runs = int(rng.integers(1, 90))
+    status = rng.choice([0, 0, 0, 1, 2, 3], size=runs).astype(np.int8)
+    chain = rng.choice([rocker.ROCKER_OK, rocker.ROCKER_OK, 1, 2, 4, 3], size=runs).astype(np.int8)
+    ds = xr.Dataset({"status": ("run", status), "chain_status": ("run", chain)})
+    monkeypatch.setattr(blocks, "BLOCK", 7)
+    text = "\n".join(dynamics_status_summary(ds) + linkage_status_summary(ds))
+    for name, values, groups in (
+        ("status", status, [status == code for code in (1, 2, 3)]),
+        (
+            "chain_status",
+            chain,
+            [(chain != rocker.ROCKER_OK) & ((chain & f) != 0) for f in (1, 2, 4)],
+        ),
+    ):
+        bad = np.flatnonzero(values != (0 if name == "status" else rocker.ROCKER_OK))
+        if bad.size:
+            assert f"({name}) at {bad.size} of {runs} points" in text
+        for group in groups:
+            found = np.flatnonzero(group)
+            if found.size:  # count and the first 20, from the whole array
+                shown = ", ".join(map(str, found[:20])) + (", …" if found.size > 20 else "")
+                assert f": {found.size} (runs {shown})" in text
