@@ -32,73 +32,16 @@ from xarray.core import indexing
 from studies.common import blocks
 from studies.common.blocks import run_slices
 
-ITEM = np.dtype(float).itemsize
 FOLDER: ContextVar[Path | None] = ContextVar("scratch_folder", default=None)
 """Where scratch files go while an analysis runs (:func:`in_folder`); None: the system's
 temporary folder."""
 
 
-class ScratchArray(BackendArray):
-    """The doubles of an open scratch file, read by ``pread`` where indexed."""
-
-    def __init__(self, file: IO[bytes], size: int) -> None:
-        self.file, self.shape, self.dtype = file, (size,), np.dtype(float)
-
-    def __getitem__(self, key: indexing.ExplicitIndexer) -> Any:
-        return indexing.explicit_indexing_adapter(
-            key, self.shape, indexing.IndexingSupport.BASIC, self._read
-        )
-
-    def _read(self, key: tuple[Any, ...]) -> np.ndarray:
-        (at,) = key
-        if not isinstance(at, slice):  # one run
-            return self._range(int(at), int(at) + 1)[0]
-        start, stop, step = at.indices(self.shape[0])
-        return self._range(start, max(start, stop))[::step]
-
-    def _range(self, start: int, stop: int) -> np.ndarray:
-        buffer = bytearray((stop - start) * ITEM)
-        if buffer:
-            os.preadv(self.file.fileno(), [buffer], start * ITEM)
-        return np.frombuffer(buffer, dtype=float)
-
-
-@contextmanager
-def held(variable: xr.Variable) -> Iterator[xr.Variable]:
-    """``variable`` (one value per run) as the analysis reads it while the block runs: in
-    memory up to :data:`studies.common.blocks.BLOCK` runs (or when it is there already), else
-    as doubles in a scratch file (in :data:`FOLDER`) read where indexed; from where it is when
-    no scratch file can be written."""
-    data = getattr(variable, "_data", None)
-    if variable.ndim != 1 or variable.size <= blocks.BLOCK or isinstance(data, np.ndarray):
-        yield variable.copy(deep=False).load()
-        return
-    with ExitStack() as stack:
-        file = _written(variable, stack)
-        if file is None:
-            yield variable
-            return
-        lazy = indexing.LazilyIndexedArray(ScratchArray(file, variable.size))
-        yield xr.Variable(variable.dims, lazy, variable.attrs)
-
-
-def _written(variable: xr.Variable, stack: ExitStack) -> IO[bytes] | None:
-    """An unlinked scratch file (closed with ``stack``) holding ``variable`` as doubles,
-    written a block at a time; None when it cannot be written."""
-    try:
-        file = stack.enter_context(tempfile.TemporaryFile(dir=FOLDER.get()))  # noqa: SIM115 (the stack closes it)
-        for part in run_slices(variable.size):
-            file.write(np.ascontiguousarray(variable[part].values, dtype=float).tobytes())
-        file.flush()
-    except OSError:
-        return None
-    return file
-
-
 class ScratchColumn:
     """``size`` values of one type in an unlinked scratch file, written and read a slice at
-    a time (``column[a:b] = values``; ``column[a:b]``, ``column[i]``): a table per control
-    combination of a grid too large to hold. Closed with the ``stack`` it was made with."""
+    a time (``column[a:b] = values``; ``column[a:b]``, ``column[i]``) with ``pwrite`` and
+    ``pread``: a response, or a table per control combination of a grid, too large to hold.
+    Closed with the ``stack`` it was made with."""
 
     ndim = 1
 
@@ -123,17 +66,70 @@ class ScratchColumn:
         return np.frombuffer(buffer, dtype=self.dtype)[::step]
 
 
+class ScratchArray(BackendArray):
+    """A :class:`ScratchColumn` as an xarray backend array (read where indexed)."""
+
+    def __init__(self, column: ScratchColumn) -> None:
+        self.column, self.shape, self.dtype = column, column.shape, column.dtype
+
+    def __getitem__(self, key: indexing.ExplicitIndexer) -> Any:
+        return indexing.explicit_indexing_adapter(
+            key, self.shape, indexing.IndexingSupport.BASIC, self._read
+        )
+
+    def _read(self, key: tuple[Any, ...]) -> Any:
+        (at,) = key
+        return self.column[at]
+
+
+def _scratch_file(stack: ExitStack) -> IO[bytes] | None:
+    """An unlinked file in :data:`FOLDER`, closed with ``stack``; None when none can be made."""
+    try:
+        return stack.enter_context(tempfile.TemporaryFile(dir=FOLDER.get()))
+    except OSError:
+        return None
+
+
 def column(size: int, dtype: Any, stack: ExitStack) -> Any:
     """``size`` values of ``dtype`` to fill and read a slice at a time: an array up to
     :data:`studies.common.blocks.BLOCK` (or when no scratch file can be made), else a
-    :class:`ScratchColumn` (in :data:`FOLDER`) closed with ``stack``."""
-    if size <= blocks.BLOCK:
-        return np.empty(size, dtype)
+    :class:`ScratchColumn` closed with ``stack``."""
+    file = None if size <= blocks.BLOCK else _scratch_file(stack)
+    return np.empty(size, dtype) if file is None else ScratchColumn(size, dtype, file)
+
+
+@contextmanager
+def held(variable: xr.Variable) -> Iterator[xr.Variable]:
+    """``variable`` (one value per run) as the analysis reads it while the block runs: in
+    memory up to :data:`studies.common.blocks.BLOCK` runs (or when it is there already), else
+    as doubles in a scratch file (in :data:`FOLDER`) read where indexed; from where it is when
+    no scratch file can be written."""
+    data = getattr(variable, "_data", None)
+    if variable.ndim != 1 or variable.size <= blocks.BLOCK or isinstance(data, np.ndarray):
+        yield variable.copy(deep=False).load()
+        return
+    with ExitStack() as stack:
+        copy = _written(variable, stack)
+        if copy is None:
+            yield variable
+            return
+        lazy = indexing.LazilyIndexedArray(ScratchArray(copy))
+        yield xr.Variable(variable.dims, lazy, variable.attrs)
+
+
+def _written(variable: xr.Variable, stack: ExitStack) -> ScratchColumn | None:
+    """``variable`` as doubles in a :class:`ScratchColumn` (closed with ``stack``), written a
+    block at a time; None when it cannot be written."""
+    file = _scratch_file(stack)
+    if file is None:
+        return None
+    copy = ScratchColumn(variable.size, float, file)
     try:
-        file = stack.enter_context(tempfile.TemporaryFile(dir=FOLDER.get()))  # noqa: SIM115 (the stack closes it)
+        for part in run_slices(variable.size):
+            copy[part] = variable[part].values
     except OSError:
-        return np.empty(size, dtype)
-    return ScratchColumn(size, dtype, file)
+        return None
+    return copy
 
 
 @contextmanager
