@@ -172,9 +172,9 @@ def _analyze(
     terms = taguchi.model_terms(view)
     operating = prediction.operating_factors(view)
     models = [f for f in json.loads(view.attrs.get("model_factors", "[]")) if f in operating]
-    # One response at a time, over the level codes held compactly (1 byte per run and term
-    # up to 127 levels); factor values are read where used: a 10⁷-run result is never held
-    # whole.
+    # One response at a time (above a block of runs: from a scratch file, a block at a time),
+    # over level codes computed from the run index or held compactly (with_level_codes);
+    # factor values are read where used: a 10⁸-run result is never held whole.
     base = with_level_codes(view.drop_vars(list(view.data_vars)))
     out = _frame(base, view, analysed, terms, operating, models)
     order = grid_codes.grid_in_order(base)
