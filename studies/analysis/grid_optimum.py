@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from studies.analysis import scratch
+from studies.analysis.sensitivity import SlabGrid, slabs
 from studies.analysis.sums_of_squares import ROUND_OFF
 from studies.common.blocks import (
     FiniteSummary,
@@ -314,19 +315,16 @@ class Grid:
     def _main_effects(self, mean: Any) -> list[np.ndarray]:
         """Per control factor, the mean of the finite row means at each of its levels (NaN
         where none), summed over slabs of about a block of rows along the first factor."""
-        shape = self.control_counts
-        inner = math.prod(shape[1:])
-        sums = [np.zeros(n) for n in shape]
-        counts = [np.zeros(n) for n in shape]
-        step = rows_per_block(inner)
-        for start in range(0, shape[0], step):
-            stop = min(start + step, shape[0])
-            slab = np.asarray(mean[start * inner : stop * inner]).reshape((-1, *shape[1:]))
+        grid = SlabGrid(mean, self.control_counts)
+        sums = [np.zeros(n) for n in grid.shape]
+        counts = [np.zeros(n) for n in grid.shape]
+        for rows in slabs(grid.shape):
+            slab = grid[rows]
             finite = np.isfinite(slab)
             filled = np.where(finite, slab, 0.0)
             for axis in range(slab.ndim):
                 others = tuple(a for a in range(slab.ndim) if a != axis)
-                part = slice(start, start + slab.shape[0]) if axis == 0 else slice(None)
+                part = rows if axis == 0 else slice(None)
                 sums[axis][part] += filled.sum(axis=others)
                 counts[axis][part] += finite.sum(axis=others)
         return [

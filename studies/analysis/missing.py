@@ -103,7 +103,11 @@ def rule_of(y: np.ndarray, meaning: str, sense: str) -> Rule | None:
     finite = y[np.isfinite(y)]
     if not finite.size:
         return None
-    low, high = float(finite.min()), float(finite.max())
+    return _rule(float(finite.min()), float(finite.max()), meaning, sense)
+
+
+def _rule(low: float, high: float, meaning: str, sense: str) -> Rule:
+    """The :class:`Rule` of a response whose finite values span ``low`` … ``high``."""
     best, worst = (low, high) if sense == "smaller" else (high, low)
     return Rule(meaning if sense in ("smaller", "larger") else DEFAULT, sense, best, worst)
 
@@ -175,8 +179,7 @@ def resolve(
     seen = finite_summary(values)
     if not seen.count:
         return None
-    best, worst = (seen.low, seen.high) if sense == "smaller" else (seen.high, seen.low)
-    rule = Rule(meaning if sense in ("smaller", "larger") else DEFAULT, sense, best, worst)
+    rule = _rule(seen.low, seen.high, meaning, sense)
     left = np.zeros((len(codes), nlevels), dtype=np.int64)
     bounded = np.zeros((len(codes), nlevels), dtype=np.int64)
     used = [False, False]
@@ -194,8 +197,8 @@ def resolve(
         rule,
         left,
         bounded,
-        best if used[0] else np.nan,
-        worst if used[1] else np.nan,
+        rule.best if used[0] else np.nan,
+        rule.worst if used[1] else np.nan,
         Beyond(values, ran, rule),
     )
 

@@ -104,8 +104,7 @@ def held(variable: xr.Variable) -> Iterator[xr.Variable]:
     memory up to :data:`studies.common.blocks.BLOCK` runs (or when it is there already), else
     as doubles in a scratch file (in :data:`FOLDER`) read where indexed; from where it is when
     no scratch file can be written."""
-    data = getattr(variable, "_data", None)
-    if variable.ndim != 1 or variable.size <= blocks.BLOCK or isinstance(data, np.ndarray):
+    if variable.ndim != 1 or variable.size <= blocks.BLOCK or blocks.in_memory(variable):
         yield variable.copy(deep=False).load()
         return
     with ExitStack() as stack:

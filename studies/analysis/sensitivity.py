@@ -50,6 +50,12 @@ def _mean_keeping(d: np.ndarray, keep: tuple[int, ...]) -> np.ndarray:
     return d.mean(axis=tuple(a for a in range(d.ndim) if a not in keep))
 
 
+def slabs(shape: Sequence[int]) -> list[slice]:
+    """Slices along the first axis of a grid of ``shape``, each about :data:`BLOCK` values."""
+    step = rows_per_block(math.prod(shape[1:]))
+    return [slice(i, i + step) for i in range(0, shape[0], step)]
+
+
 class SlabGrid:
     """A grid (axis i = factor i) over values in grid order that are read a slab along the
     first axis at a time (``grid[a:b]``: rows a…b-1 of the first axis), e.g. a
@@ -72,11 +78,6 @@ class SlabGrid:
             raise ValueError(f"a SlabGrid reshapes to -1 only, not {shape}")
         return self.values
 
-    def slabs(self) -> list[slice]:
-        """Slices of about :data:`BLOCK` values along the first axis."""
-        step = rows_per_block(self.size // self.shape[0])
-        return [slice(i, i + step) for i in range(0, self.shape[0], step)]
-
 
 def mean_keeping(grid: np.ndarray | SlabGrid, keep: tuple[int, ...]) -> np.ndarray:
     """The mean of ``grid`` over the axes not in ``keep``: NumPy's mean of an array, the sums
@@ -85,7 +86,7 @@ def mean_keeping(grid: np.ndarray | SlabGrid, keep: tuple[int, ...]) -> np.ndarr
         return _mean_keeping(grid, keep)
     others = tuple(a for a in range(grid.ndim) if a not in keep)
     total = np.zeros(tuple(grid.shape[a] for a in keep))
-    for part in grid.slabs():
+    for part in slabs(grid.shape):
         kept = grid[part].sum(axis=others)
         if 0 in keep:
             total[part] += kept
@@ -140,8 +141,7 @@ def _by_slabs(grid: np.ndarray | SlabGrid) -> Sums:
     :func:`_whole` within round-off."""
     k, n, shape = grid.ndim, grid.size, grid.shape
     centring = Centred(grid.reshape(-1))
-    step = rows_per_block(n // shape[0])
-    parts = [slice(i, i + step) for i in range(0, shape[0], step)]
+    parts = slabs(shape)
     pairs = list(itertools.combinations(range(k), 2))
     total = 0.0
     sums = [np.zeros(m) for m in shape]

@@ -62,15 +62,18 @@ Values = np.ndarray | RunValues
 """Values per run: in memory, or read a slice at a time."""
 
 
+def in_memory(variable: Any) -> bool:
+    """Whether an xarray Variable's values are an array in memory (not read lazily)."""
+    return isinstance(getattr(variable, "_data", None), np.ndarray)
+
+
 def values_of(variable: Any) -> Values:
     """A response's values as the block passes read them: an array, or a Variable whose
     values are in memory, as a float array (no copy of floats); anything else read by slices
     (a Variable read lazily, a scratch column, a :class:`RunValues`) as a :class:`RunValues`."""
     if isinstance(variable, RunValues):
         return variable
-    if isinstance(variable, (np.ndarray, list, tuple)) or isinstance(
-        getattr(variable, "_data", None), np.ndarray
-    ):
+    if isinstance(variable, (np.ndarray, list, tuple)) or in_memory(variable):
         return np.asarray(variable, dtype=float)
     return RunValues(variable)
 
@@ -174,6 +177,16 @@ def first_runs(codes: Any, levels: int) -> np.ndarray:
         if (first >= 0).all():
             break
     return first
+
+
+def first_run(codes: Any, level: int) -> int:
+    """The first run at ``level`` of ``codes`` (-1 when none), a block of runs at a time,
+    stopping at the block that holds it."""
+    for part in run_slices(len(codes)):
+        found = np.flatnonzero(np.asarray(codes[part]) == level)
+        if found.size:
+            return part.start + int(found[0])
+    return -1
 
 
 def level_count(codes: Any) -> int:

@@ -18,7 +18,7 @@ import xarray as xr
 from matplotlib import colormaps
 from matplotlib.figure import Figure
 
-from studies.common.blocks import blocks, first_runs, level_count, runs_matching
+from studies.common.blocks import blocks, first_run, runs_matching
 from studies.common.figure_style import axis_label, pretty_units
 
 DPI = 120
@@ -39,8 +39,9 @@ def factor_levels(ds: xr.Dataset, factor: str) -> list[int]:
 
 def raw_value(ds: xr.Dataset, factor: str, level: int):
     """The factor's value at a level (taken from the first run at that level)."""
-    codes = ds[f"{factor}_level"].variable
-    run = int(first_runs(codes, max(level_count(codes), level + 1))[level])
+    run = first_run(ds[f"{factor}_level"].variable, level)
+    if run < 0:
+        raise IndexError(f"no run at level {level} of {factor}")
     return ds[factor].variable[run].values[()]
 
 
