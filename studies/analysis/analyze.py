@@ -51,7 +51,7 @@ response); the ANOVA SS are in units².
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -85,6 +85,7 @@ from studies.common.blocks import (
     run_slices,
     values_of,
 )
+from studies.common.run_masks import false_count, run_mask
 from studies.define.sampling import SAMPLING_DESIGNS
 from studies.run.results import NOT_EVALUATED, PASS_FAIL, is_status, write_netcdf
 
@@ -98,23 +99,29 @@ INTERACTION_COLUMNS = ("SS", "dof", "F", "P", "contribution")
 def presence(ds: xr.Dataset, responses: Sequence[str]) -> tuple[list[str], np.ndarray]:
     """The responses with a finite value in some run, and the runs with a value (finite or
     ±inf; for flags and status codes anything but -1 "not evaluated") in some response: the
-    others did not run. Reads each response a block of runs at a time, flags and status codes
-    first (a byte a run), and skips a block once it has a finite value and every run of the
-    block is known to have run."""
-    present, any_value = set(), np.zeros(ds.sizes["run"], dtype=bool)
-    for r in sorted(responses, key=lambda r: ds[r].dtype.kind != "i"):
-        seen = False
+    others did not run; a mask held only where some run did not, :func:`run_mask`). Reads a
+    block of runs at a time, flags and status codes first (a byte a run), and skips a
+    response in a block once it has a finite value and every run of the block is known to
+    have run."""
+    order = sorted(responses, key=lambda r: ds[r].dtype.kind != "i")
+    present: set[str] = set()
+
+    def blocks() -> Iterator[tuple[slice, np.ndarray]]:
         for part in run_slices(ds.sizes["run"]):
-            if seen and any_value[part].all():
-                continue
-            values = np.asarray(ds[r].variable[part])
-            integer = values.dtype.kind == "i"
-            has = values != NOT_EVALUATED if integer else ~np.isnan(values)
-            seen = seen or bool((has if integer else np.isfinite(values)).any())
-            any_value[part] |= has.reshape(values.shape[0], -1).any(axis=1)
-        if seen:
-            present.add(r)
-    return [r for r in responses if r in present], any_value
+            any_value = np.zeros(part.stop - part.start, dtype=bool)
+            for r in order:
+                if r in present and any_value.all():
+                    continue
+                values = np.asarray(ds[r].variable[part])
+                integer = values.dtype.kind == "i"
+                has = values != NOT_EVALUATED if integer else ~np.isnan(values)
+                if (has if integer else np.isfinite(values)).any():
+                    present.add(r)
+                any_value |= has.reshape(values.shape[0], -1).any(axis=1)
+            yield part, any_value
+
+    ran = run_mask(ds.sizes["run"], blocks())
+    return [r for r in responses if r in present], ran
 
 
 def analyzed(ds: xr.Dataset, responses: Sequence[str]) -> tuple[xr.Dataset, list[str], np.ndarray]:
@@ -158,17 +165,17 @@ def _analyze(
     if design in SAMPLING_DESIGNS:  # Sobol' indices of the sample, no level means
         present, ran = presence(ds, names)
         present = [r for r in present if r not in status]
-        attrs |= {"points": ds.sizes["run"], "points_without_value": int((~ran).sum())}
+        attrs |= {"points": ds.sizes["run"], "points_without_value": false_count(ran)}
         sampled = (sobol_analysis if design == "saltelli" else sample_analysis)(ds, present)
         return sampled.assign(counts).assign_attrs(attrs | {"analysed": json.dumps(present)})
     if design == "sweep":  # tables and plots of the runs themselves: nothing to estimate
         present, ran = presence(ds, names)
         present = [r for r in present if r not in status]
-        attrs |= {"points": ds.sizes["run"], "points_without_value": int((~ran).sum())}
+        attrs |= {"points": ds.sizes["run"], "points_without_value": false_count(ran)}
         robust = robust_statistics(ds, present)
         return xr.Dataset(counts, attrs=attrs | {"analysed": json.dumps(present)}).merge(robust)
     view, analysed, ran = analyzed(ds, names)
-    attrs |= {"points": ds.sizes["run"], "points_without_value": int((~ran).sum())}
+    attrs |= {"points": ds.sizes["run"], "points_without_value": false_count(ran)}
     terms = taguchi.model_terms(view)
     operating = prediction.operating_factors(view)
     models = [f for f in json.loads(view.attrs.get("model_factors", "[]")) if f in operating]

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import ExitStack
 from dataclasses import dataclass
 from typing import Any
@@ -41,8 +41,11 @@ from studies.common.blocks import (
     run_slices,
     values_of,
 )
+from studies.common.run_masks import BlockMask
 
 SIDES = ("below", "above")
+SCORE_ROWS = 1 << 16
+"""Table rows whose tie-break scores are made at a time (:meth:`Grid._tie_break`)."""
 
 
 @dataclass(frozen=True)
@@ -244,28 +247,32 @@ class Grid:
             best_runs[better] = runs[k, columns][better]
         return mean, bounds, best_values, best_runs
 
-    def _best(self, mean: Any, bounds: tuple[Any, Any] | None) -> np.ndarray:
+    def _best(self, mean: Any, bounds: tuple[Any, Any] | None) -> BlockMask:
         """The control combinations that share the first place in the order of the module
-        docstring (a mask): fewest worst-bound runs, then most best-bound runs, then the best
-        mean. O(rows), one pass per key (no sort: only the first place is needed), each pass
-        a block of rows at a time (minima and maxima: exact in any order)."""
+        docstring (a mask, held only in its mixed blocks): fewest worst-bound runs, then most
+        best-bound runs, then the best mean. O(rows), one pass per key (no sort: only the
+        first place is needed), each pass a block of rows at a time (minima and maxima: exact
+        in any order)."""
         seen = finite_summary(mean)
         # Means within round-off of the best are ties, as in the range analysis (R = 0).
         best, tolerance = seen.low, ROUND_OFF * seen.largest
-        parts = list(run_slices(mean.size))
-        chosen = np.empty(mean.size, dtype=bool)
-        for p in parts:
-            chosen[p] = np.isfinite(mean[p])
+        chosen = BlockMask(mean.size)
+        parts = list(enumerate(chosen.parts))
+        for i, p in parts:
+            chosen[i] = np.isfinite(mean[p])
 
         def keep(key_of: Callable[[slice], np.ndarray], smallest: bool) -> None:
             """Keep the chosen rows whose key is the smallest (largest) among them."""
             extreme = min if smallest else max
             found = [
-                k.min() if smallest else k.max() for p in parts if (k := key_of(p)[chosen[p]]).size
+                k.min() if smallest else k.max()
+                for i, p in parts
+                if chosen.any(i) and (k := key_of(p)[chosen[i]]).size
             ]
             target = extreme(found)
-            for p in parts:
-                chosen[p] &= key_of(p) == target
+            for i, p in parts:
+                if chosen.any(i):
+                    chosen[i] = chosen[i] & (key_of(p) == target)
 
         if bounds is not None:
             worse, better = bounds
@@ -274,42 +281,45 @@ class Grid:
         keep(lambda p: np.where(mean[p] <= best + tolerance, best, mean[p]), smallest=True)
         return chosen
 
-    def _tie_break(self, mean: Any, first: np.ndarray) -> tuple[int, int, str]:
+    def _tie_break(self, mean: Any, first: BlockMask) -> tuple[int, int, str]:
         """The best-ranked row, the number of rows sharing its rank and the rule that chose:
         among exact ties, the one whose levels have the best main effects (mean of ``mean``
         over each factor's level, summed), so a flat optimum agrees with the range analysis
         instead of the grid order."""
-        ties = int(np.count_nonzero(first))
+        ties = first.count()
         if ties == 1 or not self.control:
-            return int(np.argmax(first)), ties, "" if ties == 1 else "grid order"
+            return first.first(), ties, "" if ties == 1 else "grid order"
         effects = self._main_effects(mean)
-        parts = [p for p in run_slices(mean.size) if first[p].any()]
+        parts = [i for i in range(len(first.parts)) if first.any(i)]
 
-        def scores(part: slice) -> tuple[np.ndarray, np.ndarray]:
-            """The tied rows of a block and their summed main effects."""
-            rows = part.start + np.flatnonzero(first[part])
-            codes = np.unravel_index(rows, self.control_counts)
-            score = sum(
-                (effect[c] for effect, c in zip(effects, codes, strict=True)), np.zeros(rows.size)
-            )
-            return rows, score
+        def scores() -> Iterator[tuple[np.ndarray, np.ndarray]]:
+            """The tied rows and their summed main effects, ``SCORE_ROWS`` rows of the table
+            at a time: temporaries of one size, which the allocator reuses (a block's worth,
+            of a size that varies with its ties, made its heap grow at every block)."""
+            for i in parts:
+                start, mask = first.parts[i].start, first[i]
+                for at in range(0, mask.size, SCORE_ROWS):
+                    rows = start + at + np.flatnonzero(mask[at : at + SCORE_ROWS])
+                    codes = np.unravel_index(rows, self.control_counts)
+                    terms = (effect[c] for effect, c in zip(effects, codes, strict=True))
+                    yield rows, sum(terms, np.zeros(rows.size))
 
         seen = FiniteSummary()
-        for part in parts:
-            seen.add(scores(part)[1])
+        for _, score in scores():
+            seen.add(score)
         if not seen.count:
-            return int(np.argmax(first)), ties, "grid order"
+            return first.first(), ties, "grid order"
         # Scores within round-off of the best are equal (as the means are): a choice made by
         # the last bits would depend on the order of a sum, and say "main effects" falsely.
         limit = seen.low + ROUND_OFF * seen.largest
         near, row = 0, -1  # how many score within round-off of the best; the first of them
-        for rows, score in map(scores, parts):
+        for rows, score in scores():
             within = score <= limit
             near += int(within.sum())
             if row < 0 and within.any():
                 row = int(rows[np.argmax(within)])
         if near == ties:
-            return int(np.argmax(first)), ties, "grid order"
+            return first.first(), ties, "grid order"
         return row, ties, "main effects"
 
     def _main_effects(self, mean: Any) -> list[np.ndarray]:

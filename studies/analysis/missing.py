@@ -91,8 +91,11 @@ class Rule:
         """The values of runs ``y`` (finite, bounded, or NaN where left out); ``ran`` of the
         same runs; ``masks``: their :meth:`masks` when already made."""
         y = np.asarray(y, dtype=float)
+        finite = np.isfinite(y)
+        if masks is None and finite.all():  # nothing to resolve (the common block)
+            return y.copy()
         to_best, to_worst = self.masks(y, ran) if masks is None else masks
-        values = np.where(np.isfinite(y), y, np.nan)
+        values = np.where(finite, y, np.nan)
         values[to_best] = self.best
         values[to_worst] = self.worst
         return values
@@ -149,9 +152,10 @@ class Beyond:
         return len(self.ran)
 
     def __getitem__(self, key: slice) -> np.ndarray:
-        to_best, to_worst = self.rule.masks(
-            np.asarray(self.values[key], dtype=float), self.ran[key]
-        )
+        y = np.asarray(self.values[key], dtype=float)
+        if np.isfinite(y).all():  # no run at a bound (the common block)
+            return np.zeros(y.shape, dtype=np.int8)
+        to_best, to_worst = self.rule.masks(y, self.ran[key])
         return to_best.astype(np.int8) - to_worst.astype(np.int8)
 
 
@@ -185,6 +189,8 @@ def resolve(
     used = [False, False]
     for part in run_slices(len(values)):
         y = np.asarray(values[part], dtype=float)
+        if np.isfinite(y).all():  # no run left out or bounded in this block
+            continue
         to_best, to_worst = rule.masks(y, ran[part])
         hit = to_best | to_worst
         miss = ~np.isfinite(y) & ~hit

@@ -36,6 +36,7 @@ from studies.analysis.sums_of_squares import (
 )
 from studies.common.blocks import first_runs, level_count, run_slices, values_of
 from studies.common.errors import StudyError
+from studies.common.run_masks import run_mask
 
 SENSES = ("smaller", "larger")
 UNRANKED = "none"
@@ -80,7 +81,8 @@ def has_values(ds: xr.Dataset, response: str) -> bool:
 
 
 def _response(ds: xr.Dataset, response: str) -> tuple[xr.DataArray, np.ndarray]:
-    """The response and the mask of runs where it is finite."""
+    """The response and the mask of runs where it is finite (held only where some run is
+    not, :func:`studies.common.run_masks.run_mask`)."""
     if response not in ds.data_vars:
         msg = f"no response {response!r}; the Dataset has {sorted(map(str, ds.data_vars))}"
         raise StudyError(msg)
@@ -89,9 +91,8 @@ def _response(ds: xr.Dataset, response: str) -> tuple[xr.DataArray, np.ndarray]:
         msg = f"{response!r} has dims {y.dims}; analysis needs a scalar response on 'run'"
         raise StudyError(msg)
     values = values_of(y.variable)
-    finite = np.empty(values.shape, dtype=bool)
-    for part in run_slices(len(values)):
-        finite[part] = np.isfinite(values[part])
+    parts = run_slices(len(values))
+    finite = run_mask(len(values), ((part, np.isfinite(values[part])) for part in parts))
     if not finite.any():
         msg = f"{response!r} has no finite value to analyse"
         raise StudyError(msg)

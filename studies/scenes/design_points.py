@@ -25,6 +25,9 @@ from typing import Any
 import numpy as np
 
 DISTINCT_KEPT = 4
+KEPT_COMBINATIONS = 1 << 16
+"""Answers of :meth:`DesignPoints.distinct` with at most this many combinations are kept;
+larger ones (10⁶ combinations of a 10⁸-point study: tens of MB) are made again when asked."""
 Numbering = Callable[[np.ndarray], np.ndarray]
 """Indices of combinations -> the computed points that have them (sorted)."""
 
@@ -126,13 +129,17 @@ class DesignPoints(Mapping[str, np.ndarray]):
         """The distinct combinations of the parameters ``names`` among the computed points, in
         order of first appearance, as values of every parameter (those not in ``names`` at the
         first point of each combination), and the numbering back to the computed points. The
-        last DISTINCT_KEPT answers are kept: a check and its warnings share them."""
+        last DISTINCT_KEPT answers of at most KEPT_COMBINATIONS combinations are kept: a check
+        and its warnings share them."""
         key = tuple(names)
-        if key not in self._distinct:
+        if key in self._distinct:
+            return self._distinct[key]
+        answer = self._combinations(names)
+        if self.combinations_bound(names) <= KEPT_COMBINATIONS:
             while len(self._distinct) >= DISTINCT_KEPT:
                 del self._distinct[next(iter(self._distinct))]
-            self._distinct[key] = self._combinations(names)
-        return self._distinct[key]
+            self._distinct[key] = answer
+        return answer
 
     def combinations_bound(self, names: Sequence[str]) -> int:
         """At most how many distinct combinations of ``names`` :meth:`distinct` finds, from the

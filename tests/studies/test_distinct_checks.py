@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from studies.define.plan import Plan, plan_study, plan_text
+from studies.scenes import design_points
 from studies.scenes.checks import per_noise_case, point_list
 from studies.scenes.design_points import DesignPoints
 from study_text import scene_study
@@ -167,3 +168,22 @@ def test_what_a_task_carries_makes_its_chunk_exactly(design: str, noise: str) ->
         for name, values in chunk.at(part).items():
             np.testing.assert_array_equal(values, expected[name], err_msg=name)
         assert all(v.shape[0] == part.stop - part.start for v in chunk.noise.values())
+
+
+def test_large_answers_are_made_again_not_kept(monkeypatch) -> None:
+    # A 10⁸-point study's checks see ~10⁶ combinations (tens of MB): kept for the whole run
+    # they raised its memory. Above KEPT_COMBINATIONS an answer is made again when asked, the
+    # same answer; at or below it, kept.
+    points = valve_plan().points
+    names = list(points.factors)
+    kept_values, kept_numbering = points.distinct(names)
+    assert tuple(names) in points._distinct
+    points._distinct.clear()
+    monkeypatch.setattr(design_points, "KEPT_COMBINATIONS", 1)
+    values, numbering = points.distinct(names)
+    assert not points._distinct
+    assert values.keys() == kept_values.keys()
+    for name in values:
+        np.testing.assert_array_equal(values[name], kept_values[name])
+    everything = np.arange(len(next(iter(values.values()))))
+    np.testing.assert_array_equal(numbering(everything), kept_numbering(everything))

@@ -18,7 +18,7 @@ import pytest
 import xarray as xr
 
 from results_datasets import CATALOG, study_dataset
-from studies.analysis import confirmation
+from studies.analysis import confirmation, grid_optimum
 from studies.analysis.analyze import analyze
 from studies.analysis.grid_optimum import Grid
 from studies.analysis.sums_of_squares import ROUND_OFF
@@ -411,7 +411,7 @@ def test_the_first_place_is_what_sorting_every_combination_gives(seed: int, monk
         in_blocks, bounds, _, _ = grid._rows(y, "smaller", beyond, stack)
         np.testing.assert_array_equal(in_blocks[:], mean)
         np.testing.assert_array_equal(
-            grid._best(mean, bounds), first_place_by_sorting(grid, mean, beyond)
+            grid._best(mean, bounds).whole(), first_place_by_sorting(grid, mean, beyond)
         )
 
 
@@ -419,9 +419,10 @@ def test_the_first_place_is_what_sorting_every_combination_gives(seed: int, monk
 def test_the_optimum_over_blocks_of_rows_is_the_one_over_the_whole_table(
     seed: int, monkeypatch
 ) -> None:
-    # Brute force: the whole table at once (one block) against blocks of 1-3 rows, on grids
-    # with ties, round-off ties, holes and bounds; every field must be equal, the best run of
-    # each condition the first of equals in both.
+    # Brute force: the whole table at once (one block) against blocks of 1-3 rows (and the
+    # tie-break's scores made 1-2 rows at a time), on grids with ties, round-off ties, holes
+    # and bounds; every field must be equal, the best run of each condition the first of
+    # equals in both.
     rng = np.random.default_rng(1000 + seed)
     counts = (int(rng.integers(2, 5)), int(rng.integers(2, 5)), int(rng.integers(1, 4)))
     runs = int(np.prod(counts))
@@ -431,6 +432,7 @@ def test_the_optimum_over_blocks_of_rows_is_the_one_over_the_whole_table(
     sense = ("smaller", "larger")[seed % 3 == 0]
     whole = grid.optimum(y, sense, beyond)
     monkeypatch.setattr(blocks, "BLOCK", int(rng.integers(1, 4)) * grid.runs.shape[1])
+    monkeypatch.setattr(grid_optimum, "SCORE_ROWS", int(rng.integers(1, 3)))
     in_blocks = grid.optimum(y, sense, beyond)
     if whole is None:
         assert in_blocks is None
