@@ -189,11 +189,12 @@ def resolve(
     used = [False, False]
     for part in run_slices(len(values)):
         y = np.asarray(values[part], dtype=float)
-        if np.isfinite(y).all():  # no run left out or bounded in this block
+        finite = np.isfinite(y)
+        if finite.all():  # no run left out or bounded in this block
             continue
         to_best, to_worst = rule.masks(y, ran[part])
         hit = to_best | to_worst
-        miss = ~np.isfinite(y) & ~hit
+        miss = ~finite & ~hit
         used = [used[0] or bool(to_best.any()), used[1] or bool(to_worst.any())]
         for j, c in enumerate(codes):
             level = np.asarray(c[part])
