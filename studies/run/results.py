@@ -27,6 +27,8 @@ from typing import Any, Final
 import netCDF4
 import numpy as np
 import xarray as xr
+from xarray.backends import NetCDF4DataStore
+from xarray.backends.netCDF4_ import NETCDF4_PYTHON_LOCK
 
 from studies.common.blocks import code_range, first_runs, run_slices
 from studies.common.errors import StudyError
@@ -275,16 +277,27 @@ def _run_chunks(variable: xr.DataArray) -> dict[str, tuple[int, ...]]:
 
 def write_netcdf(ds: xr.Dataset, path: Path, atomic: bool = True) -> Path:
     """Write compressed netCDF4 (every numeric variable zlib-compressed); ``atomic``: under a
-    temporary name renamed into place, so an interrupted write leaves no partial file."""
+    temporary name renamed into place, so an interrupted write leaves no partial file.
+
+    Written through xarray's netCDF4 store with the netCDF library's lock: ``to_netcdf`` first
+    asks which Dask scheduler runs, and that imports Dask and dask.distributed (0.1-0.3 s) in
+    every command that writes a file. A Dask-backed variable is computed first (the store would
+    defer its write)."""
     encoding = {
         name: dict(COMPRESSION) | _run_chunks(ds[name])
         for name in list(ds.data_vars) + list(ds.coords)
         if ds[name].dtype.kind in "fiu"
     }
+    if any(v.chunks for v in ds.variables.values()):
+        ds = ds.compute()
     path.parent.mkdir(parents=True, exist_ok=True)
     target = path.with_name(path.name + ".writing") if atomic else path
     try:
-        ds.to_netcdf(target, engine="netcdf4", format="NETCDF4", encoding=encoding)
+        store = NetCDF4DataStore.open(target, mode="w", lock=NETCDF4_PYTHON_LOCK)
+        try:
+            ds.dump_to_store(store, encoding=encoding)
+        finally:
+            store.close()
     except RuntimeError as exc:  # the netCDF library's "HDF error" of a full disk
         target.unlink(missing_ok=True)
         raise netcdf_write_error(exc, path) from None

@@ -107,7 +107,8 @@ def evaluate(
     ``on_chunk(index, output)`` sees each newly finished chunk (the run record checkpoints it
     and streams it into results.nc); ``done`` holds chunks finished by an earlier, interrupted
     run, which are not recomputed; ``executor`` runs the chunks elsewhere (``compile_s`` then
-    counts only the local warm-up). With ``collect=False`` no chunk is kept (``on_chunk`` has
+    times the first point on one of its workers; the others load their kernels in their first
+    chunk). With ``collect=False`` no chunk is kept (``on_chunk`` has
     them all; the Evaluation holds the timings only), so memory does not grow with the study,
     and ``done`` needs only its keys.
     """
@@ -119,7 +120,7 @@ def evaluate(
     todo = [(i, part) for i, part in enumerate(chunks(plan.cases, chunk_size)) if i not in finished]
     t0 = time.perf_counter()
     if todo:
-        evaluate_chunk(plan, slice(todo[0][1].start, todo[0][1].start + 1))
+        _warm_up(plan, slice(todo[0][1].start, todo[0][1].start + 1), executor)
     compile_s = time.perf_counter() - t0
     t1 = time.perf_counter()
     computed = sum(part.stop - part.start for _, part in todo)
@@ -160,12 +161,9 @@ def _results(
         for index, part in todo:
             yield index, part, evaluate_chunk(plan, part)
         return
-    d = plan.definition
 
     def submit(index: int, part: slice) -> tuple[Future[SceneOutput], tuple[int, slice]]:
-        task = (d.scene, plan.points.for_chunk(part), part, plan.settings)
-        future = executor.submit(evaluate_part, *task, list(plan.responses), list(d.curves))
-        return future, (index, part)
+        return executor.submit(evaluate_part, *_task(plan, part)), (index, part)
 
     waiting = iter(todo)
     running = dict(submit(*item) for item in itertools.islice(waiting, MAX_IN_FLIGHT))
@@ -176,6 +174,23 @@ def _results(
             for item in itertools.islice(waiting, 1):
                 running.update([submit(*item)])
             yield index, part, future.result()
+
+
+def _task(plan: Plan, part: slice) -> tuple[Any, ...]:
+    """The arguments of :func:`evaluate_part` for the chunk ``part``."""
+    d = plan.definition
+    points = plan.points.for_chunk(part)
+    return d.scene, points, part, plan.settings, list(plan.responses), list(d.curves)
+
+
+def _warm_up(plan: Plan, part: slice, executor: Executor | None) -> None:
+    """Evaluate ``part`` (one point) where the chunks will run, so that loading or compiling
+    the kernels is timed apart (``compile_s``): here, or on one of ``executor``'s workers (this
+    process then never loads a kernel)."""
+    if executor is None:
+        evaluate_chunk(plan, part)
+    else:
+        executor.submit(evaluate_part, *_task(plan, part)).result()
 
 
 def dask_executor(scheduler: str) -> Executor:

@@ -69,7 +69,7 @@ FAULTS = {
     # results.nc: a chunk written into it, its closing, its creation
     "results-chunk": (results_writer.ResultsWriter, "_write", hdf, 2),
     "results-close": (netCDF4.Dataset, "close", hdf, 1),
-    "analysis-nc": (xr.Dataset, "to_netcdf", hdf, 2),  # 1: the results layout, 2: analysis.nc
+    "analysis-nc": (xr.Dataset, "dump_to_store", hdf, 2),  # 1: the results layout, 2: analysis.nc
     "figure": (matplotlib.figure.Figure, "savefig", enospc, 2),
 }
 
