@@ -43,6 +43,10 @@ class GridCodes(BackendArray):
         runs = np.arange(*at.indices(self.shape[0])) if isinstance(at, slice) else np.asarray(at)
         return ((runs // self.stride) % self.count).astype(self.dtype)
 
+    def first_runs(self) -> np.ndarray:
+        """The first run at each level (level × stride), without reading a run."""
+        return np.arange(self.count, dtype=np.int64) * self.stride
+
     def _range(self, start: int, stop: int) -> np.ndarray:
         """The codes of runs ``start … stop-1`` without a division per run: the period of
         ``count × stride`` runs tiled when the range spans it, else the runs of each level

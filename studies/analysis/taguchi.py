@@ -30,6 +30,7 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from studies.analysis.grid_codes import computed
 from studies.analysis.statistics import anova, f_survival
 from studies.common.blocks import finite_summary, first_runs, level_count
 from studies.common.errors import StudyError
@@ -219,7 +220,8 @@ def plain(value: Any) -> Any:
 def level_values(ds: xr.Dataset, factor: str) -> dict[int, Any]:
     """Level index → the factor's physical value (level number + 1 when it has none)."""
     levels = ds[f"{factor}_level"].variable  # read a block of runs at a time
-    first = first_runs(levels, level_count(levels))
+    grid = computed(levels)  # a full factorial in grid order: known without reading
+    first = grid.first_runs() if grid is not None else first_runs(levels, level_count(levels))
     present = np.flatnonzero(first >= 0)
     runs = first[present]  # the factor's values are read at these runs only
     values = ds[factor].isel(run=runs).values if factor in ds.coords else present + 1

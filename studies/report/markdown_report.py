@@ -101,7 +101,11 @@ def _report(
         lines += [note, ""]
     if status:
         lines += [f"- {md_escape(status_line(an, r))}" for r in status] + [""]
-    listed = [r for r in responses if r not in status and _has_value(ds, r)]
+    listed = [  # an analysed response has finite values: nothing to read
+        r
+        for r in responses
+        if r not in status and (taguchi.mean_name(ds, r) in analysed or _has_value(ds, r))
+    ]
     responses = [r for r in responses if taguchi.mean_name(ds, r) in analysed]
     if ds.attrs.get("design") == "sweep":
         lines += _sweep(ds, responses, figures)

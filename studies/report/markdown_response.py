@@ -48,12 +48,15 @@ def _best(an: xr.Dataset, row: xr.Dataset, f: str) -> str:
     return "— (not ranked)" if str(row.sense.values) == "none" else "— (R = 0: all levels equal)"
 
 
-def _k(row: xr.Dataset, i: int) -> str:
-    """A level mean, marked * when runs at that level have no value (left out) and † when some
-    count at a bound (see the notes under the table)."""
-    mark = "*" if int(row.left_out.values[i]) else ""
-    mark += "†" if int(row.bounded.values[i]) else ""
-    return num(float(row.k.values[i])) + mark
+def _level_means(row: xr.Dataset) -> list[str]:
+    """The level means of a term, each marked * when runs at that level have no value (left
+    out) and † when some count at a bound (see the notes under the table); the arrays are
+    read once (a factor may have hundreds of levels)."""
+    k, left_out, bounded = row.k.values, row.left_out.values, row.bounded.values
+    return [
+        num(float(k[i])) + ("*" if int(left_out[i]) else "") + ("†" if int(bounded[i]) else "")
+        for i in range(k.size)
+    ]
 
 
 def _range_rows(view: xr.Dataset, an: xr.Dataset, name: str) -> tuple[list[str], list[list[Any]]]:
@@ -72,7 +75,7 @@ def _range_rows(view: xr.Dataset, an: xr.Dataset, name: str) -> tuple[list[str],
         rows.append(
             [
                 f,
-                *[_k(row, i) for i in range(nlevels)],
+                *_level_means(row)[:nlevels],
                 num(float(row.R)),
                 int(row["rank"]),
                 _best(an, row, f),
@@ -90,8 +93,8 @@ def _long_levels(view: xr.Dataset, an: xr.Dataset, name: str) -> list[str]:
         present = np.flatnonzero(np.isfinite(row.k.values))
         if present.size <= MAX_LEVEL_COLUMNS:
             continue
-        values = levels_of(an, f)
-        rows = [[value_text(values[int(i)], units_of(view, f)), _k(row, int(i))] for i in present]
+        values, means, units = levels_of(an, f), _level_means(row), units_of(view, f)
+        rows = [[value_text(values[int(i)], units), means[int(i)]] for i in present]
         lines += [f"Level means of {md_escape(f)}:", "", table([f, "k"], rows), ""]
     return lines
 

@@ -45,13 +45,14 @@ def _with_units(text: str, units: str) -> str:
     return f"{text} {units}" if units not in ("", "1") else text
 
 
-def _k(row: xr.Dataset, i: int) -> str:
-    """A level mean, * when runs at the level have no value (left out), † when some count at
-    the best or worst value seen (see :func:`missing_notes`)."""
-    mark = ("*" if int(row.left_out.values[i]) else "") + (
-        "†" if int(row.bounded.values[i]) else ""
-    )
-    return _number(row.k.values[i]) + mark
+def _level_means(row: xr.Dataset) -> list[str]:
+    """A term's level means, * when runs at the level have no value (left out), † when some
+    count at the best or worst value seen (see :func:`missing_notes`); the arrays read once."""
+    k, left_out, bounded = row.k.values, row.left_out.values, row.bounded.values
+    return [
+        _number(k[i]) + ("*" if int(left_out[i]) else "") + ("†" if int(bounded[i]) else "")
+        for i in range(k.size)
+    ]
 
 
 def _level_names(row: xr.Dataset) -> list[str]:
@@ -86,14 +87,14 @@ def range_text(an: xr.Dataset, response: str) -> str:
     rows, long = [], []
     for t in an["term"].values:
         row = r.sel(term=t)
-        names = _level_names(row)
+        names, means = _level_names(row), _level_means(row)
         fu = str(row.term_units.values)
         levels = f"{len(names)} levels" if wide else _with_units(", ".join(names), fu)
         rows.append(
             {
                 "factor": t,
                 "levels": levels,
-                **({} if wide else {f"k{i + 1}": _k(row, i) for i in range(nlevels)}),
+                **({} if wide else {f"k{i + 1}": means[i] for i in range(nlevels)}),
                 "R": _number(float(row.R)),
                 "rank": int(row["rank"]),
                 "best": _best_text(an, row, str(t)),
@@ -101,7 +102,7 @@ def range_text(an: xr.Dataset, response: str) -> str:
         )
         if wide:
             present = np.flatnonzero(np.isfinite(row.k.values))
-            pairs = ", ".join(f"{names[i]}: {_k(row, int(i))}" for i in present)
+            pairs = ", ".join(f"{names[i]}: {means[i]}" for i in present)
             long.append(
                 textwrap.fill(
                     f"k of {t} by level{_units_suffix(fu)}: {pairs}",

@@ -18,7 +18,7 @@ import pytest
 import xarray as xr
 
 from engine_kernels.valvetrain import rocker
-from studies.analysis import grid_codes, scratch, sensitivity
+from studies.analysis import grid_codes, scratch, sensitivity, taguchi
 from studies.analysis.analyze import analyze, with_level_codes
 from studies.common import blocks
 from studies.run.results import open_results, write_netcdf
@@ -142,6 +142,18 @@ def test_grid_codes_of_any_range_are_the_division_formula(seed: int) -> None:
     stop = int(rng.integers(start, runs + 1))
     expected = (np.arange(start, stop) // stride) % count  # the definition, run by run
     np.testing.assert_array_equal(codes._range(start, stop), expected)
+
+
+def test_level_values_of_grid_codes_are_read_at_the_first_run_of_each_level() -> None:
+    # GridCodes.first_runs (level x stride, no run read) against the search over the stored codes
+    ds = factorial_results(6)
+    grid = ds.assign_coords(grid_codes.grid_coordinates(ds, list(SHAPE), list(SHAPE.values())))
+    for f, count in SHAPE.items():
+        codes = grid_codes.computed(grid[f"{f}_level"].variable)
+        assert codes is not None
+        stored = ds[f"{f}_level"].values
+        np.testing.assert_array_equal(codes.first_runs(), blocks.first_runs(stored, count))
+        assert taguchi.level_values(grid, f) == taguchi.level_values(ds, f)
 
 
 @pytest.mark.parametrize("seed", range(4))
