@@ -60,10 +60,15 @@ class ScratchColumn:
         if not isinstance(key, slice):
             return self[int(key) : int(key) + 1][0]
         start, stop, step = key.indices(self.size)
-        buffer = bytearray(max(0, stop - start) * self.dtype.itemsize)
-        if buffer:
-            os.preadv(self.file.fileno(), [buffer], start * self.dtype.itemsize)
-        return np.frombuffer(buffer, dtype=self.dtype)[::step]
+        values = np.empty(max(0, stop - start), self.dtype)  # filled by the read, not zeroed first
+        read = (
+            os.preadv(self.file.fileno(), [values], start * self.dtype.itemsize)
+            if values.size
+            else 0
+        )
+        if read < values.nbytes:
+            raise OSError(f"scratch file ended before run {stop} (short read)")
+        return values[::step]
 
 
 class ScratchArray(BackendArray):

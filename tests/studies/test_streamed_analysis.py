@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -130,6 +131,22 @@ def test_without_a_scratch_file_the_response_is_read_where_it_is(
     monkeypatch.setattr(blocks, "BLOCK", 7)
     monkeypatch.setattr(sensitivity, "BLOCK", 7)
     assert_same(analyze(with_level_codes(open_results(path))), held)
+
+
+def test_a_scratch_column_reads_back_what_was_written_and_a_cut_file_raises() -> None:
+    """Expected values: the values written (a file that lost its end would read as whatever
+    the buffer held, so it must raise instead)."""
+    values = np.random.default_rng(3).normal(size=50)
+    with tempfile.TemporaryFile() as file:
+        column = scratch.ScratchColumn(50, float, file)
+        column[0:30] = values[:30]
+        column[30:50] = values[30:]
+        np.testing.assert_array_equal(column[0:50], values)
+        np.testing.assert_array_equal(column[10:40:3], values[10:40:3])
+        assert column[7] == values[7]
+        file.truncate(40 * 8)
+        with pytest.raises(OSError, match="short read"):
+            column[20:50]
 
 
 @pytest.mark.parametrize("seed", range(20))
