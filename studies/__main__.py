@@ -13,6 +13,7 @@ import sys
 import threading
 
 from studies.cli import main
+from studies.common.errors import EXIT_OUTPUT_ERROR
 
 
 def leave(code: int) -> None:
@@ -24,8 +25,15 @@ def leave(code: int) -> None:
         raise SystemExit(code)
     atexit._run_exitfuncs()
     for stream in (sys.stdout, sys.stderr):
-        with contextlib.suppress(OSError, ValueError):  # a pipe closed by `| head`, as in main
+        try:
             stream.flush()
+        except (BrokenPipeError, ValueError):  # a pipe closed by `| head`, as in main
+            pass
+        except OSError as exc:  # e.g. output redirected to a full disk: one line, a failure
+            if not code:  # a command that failed has said why already
+                with contextlib.suppress(OSError):
+                    os.write(2, f"error: the output could not be written: {exc}\n".encode())
+                code = EXIT_OUTPUT_ERROR
     os._exit(code)
 
 

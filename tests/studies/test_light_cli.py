@@ -63,3 +63,35 @@ def test_check_imports_no_xarray_pandas_or_matplotlib(study: str) -> None:
         timeout=120,
     )
     assert done.stdout.strip() == "", f"check {study} imported {done.stdout.strip()}"
+
+
+FULL_OUTPUT = """
+import runpy, sys
+
+class Full:  # takes every write, fails at the flush: output redirected to a full disk
+    def write(self, text):
+        return len(text)
+
+    def flush(self):
+        raise OSError(28, "No space left on device")
+
+sys.stdout = Full()
+sys.argv = ["studies", "scenes", "cam"]
+runpy.run_module("studies", run_name="__main__")
+"""
+
+
+def test_output_lost_at_the_final_flush_is_one_line_and_a_failure() -> None:
+    """The process ends without the interpreter's teardown (studies/__main__.py), so the last
+    flush of the output is the command's own: a full disk there is reported, not exit 0."""
+    done = subprocess.run(
+        [sys.executable, "-c", FULL_OUTPUT],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 4, done.stderr
+    assert done.stderr.splitlines() == [
+        "error: the output could not be written: [Errno 28] No space left on device"
+    ]
