@@ -37,4 +37,5 @@ def leave(code: int) -> None:
     os._exit(code)
 
 
-leave(main())
+if __name__ == "__main__":  # not when a worker process imports it
+    leave(main())

@@ -24,9 +24,11 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import functools
 import json
 import sqlite3
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -241,6 +243,24 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _figure_workers(command: Callable[[argparse.Namespace], int]) -> Callable[..., int]:
+    """``command`` with the figure workers (:mod:`studies.report.figure_pool`) started
+    before it imports anything heavy: they import the renderers while it computes."""
+
+    @functools.wraps(command)
+    def with_workers(args: argparse.Namespace) -> int:
+        from studies.report import figure_pool
+
+        figure_pool.warm()
+        try:
+            return command(args)
+        finally:
+            figure_pool.stop()
+
+    return with_workers
+
+
+@_figure_workers
 def _cmd_run(args: argparse.Namespace) -> int:
     from studies.define.plan import plan_study
     from studies.pipeline import resume_run
@@ -408,6 +428,7 @@ def _cmd_scenes(args: argparse.Namespace) -> int:
     return 0
 
 
+@_figure_workers
 def _cmd_analyze(args: argparse.Namespace) -> int:
     import datetime as dt
 

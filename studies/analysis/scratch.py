@@ -62,7 +62,7 @@ class ScratchColumn:
         start, stop, step = key.indices(self.size)
         values = np.empty(max(0, stop - start), self.dtype)  # filled by the read, not zeroed first
         read = (
-            os.preadv(self.file.fileno(), [values], start * self.dtype.itemsize)
+            os.preadv(self.file.fileno(), [values.data], start * self.dtype.itemsize)
             if values.size
             else 0
         )

@@ -1,5 +1,7 @@
 """Benchmark of a whole study, end to end: the command line in its own process, timed by the
-wall clock, with its peak resident memory, beside the compute time the run records.
+wall clock, with its peak resident memory (``peak_rss_mb``: the run's process;
+``peak_pss_all_mb``: with its figure workers, :mod:`studies.bench.tree_memory`), beside the
+compute time the run records.
 
 The study is the 125 cc OHC valve train of ``ohc125_dynamics`` over a full factorial of camshaft
 speed × spring preload × spring rate × drive stiffness with that study's nine responses:
@@ -29,6 +31,7 @@ from typing import Any
 import netCDF4
 import numpy as np
 
+from studies.bench.tree_memory import TreePeak
 from studies.common.errors import StudyError
 from studies.define.definition import find_study
 
@@ -94,17 +97,20 @@ def noise_study_text(points: int) -> str:
     return text
 
 
-def run_command(args: list[str]) -> tuple[float, float]:
-    """Run a command; its wall time [s] and peak resident memory [MB] (from wait4)."""
+def run_command(args: list[str]) -> tuple[float, float, float | None]:
+    """Run a command; its wall time [s], its peak resident memory [MB] (from wait4) and the
+    peak of its process tree's summed PSS [MB] (with the figure workers; None off Linux)."""
     t0 = time.perf_counter()
     process = subprocess.Popen(args, stdout=subprocess.DEVNULL)
+    tree = TreePeak(process.pid)
     _, status, usage = os.wait4(process.pid, 0)
     wall = time.perf_counter() - t0
+    tree_peak = tree.stop()
     process.returncode = os.waitstatus_to_exitcode(status)  # reaped here, not by Popen
     if process.returncode != 0:  # the run said why on stderr, above
         msg = f"the benchmark's run stopped with exit code {process.returncode}: {' '.join(args)}"
         raise StudyError(msg)
-    return wall, usage.ru_maxrss / 1024.0  # kB on Linux
+    return wall, usage.ru_maxrss / 1024.0, tree_peak  # ru_maxrss: kB on Linux
 
 
 def bench_study(points: int, step: float, repeat: int) -> dict[str, Any]:  # noqa: ARG001
@@ -132,7 +138,7 @@ def _run_study(name: str, text: str, step: float) -> dict[str, Any]:
         study.write_text(text.replace("angle_step = 0.5", f"angle_step = {step}"))
         outputs = folder / "outputs"
         command = [sys.executable, "-m", "studies", "run", str(study), "--no-progress"]
-        wall, peak = run_command([*command, "--outputs", str(outputs)])
+        wall, peak, tree_peak = run_command([*command, "--outputs", str(outputs)])
         (record,) = outputs.glob(f"{name}/*/run.json")
         timings = json.loads(record.read_text(encoding="utf-8"))["timings"]
         (results,) = outputs.glob(f"{name}/*/results.nc")
@@ -153,6 +159,7 @@ def _run_study(name: str, text: str, step: float) -> dict[str, Any]:
         **{k: round(timings[k], 2) for k in PHASES if k in timings},
         "wall_over_compute": wall / timings["run_s"],
         "peak_rss_mb": round(peak, 1),
+        "peak_pss_all_mb": None if tree_peak is None else round(tree_peak, 1),
         "results_nc_mb": round(size / 1e6, 1),
         "results_nc_cases": cases,
     }

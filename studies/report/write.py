@@ -15,10 +15,9 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
 
 import xarray as xr
 
@@ -31,6 +30,7 @@ from studies.define.sampling import SAMPLING_DESIGNS
 from studies.report import html as html_report
 from studies.report import markdown_report, plots
 from studies.report import text as analysis_text
+from studies.report.figure_pool import Drawing
 from studies.report.uncertainty import noise_report, sample_report, sobol_report
 from studies.run.results import NOISE
 from studies.scenes import SCENES, get_scene
@@ -54,7 +54,8 @@ def write_analysis(
     A response that is NaN in every run (e.g. ``jump_start`` when no design point separates)
     gets a line saying so instead of tables and figures.
     """
-    clock = Phases(timings if timings is not None else {}, problems if problems is not None else [])
+    clock = Phases(timings if timings is not None else {})
+    drawing = Drawing(clock.timings, problems if problems is not None else [])
     names = responses or json.loads(ds.attrs.get("responses", "[]")) or list(ds.data_vars)
     scalar = [r for r in names if r in ds and ds[r].dims in (("run",), ("run", NOISE))]
     missing = [r for r in names if r not in ds]
@@ -72,7 +73,7 @@ def write_analysis(
     means = {r: taguchi.mean_name(ds, r) for r in scalar}  # under noise: <r>_mean per run
     analysed = [r for r in scalar if means[r] in done]
     header = _header(ds) + not_run_line(an, "\n")
-    body, figures = _design_outputs(ds, an, analysed, means, folder, clock)
+    body = _design_outputs(ds, an, analysed, means, folder, drawing)
     status = json.loads(an.attrs.get("status_responses", "[]"))
     body += [analysis_text.wrap(analysis_text.status_line(an, r)) for r in status]
     body += [
@@ -86,21 +87,23 @@ def write_analysis(
     elif scene_name in SCENES:  # a plugin scene that is not installed here: generic outputs only
         scene = get_scene(scene_name)
         body += scene.summaries(ds)
-        figures += clock.draw(save_figures, ds, folder, scene.figures())
+        for name, build in scene.figures().items():
+            drawing.add(save_figures, ds, folder, {name: build})
     with clock("report_s"):
         text_path = folder / "analysis.txt"
         text_path.write_text("\n\n".join([header, *body]) + "\n", encoding="utf-8")
+    figures = drawing.paths()
+    with clock("report_s"):
         reports = markdown_report.write_report(ds, an, folder, scalar, figures)
         page = html_report.write_html(reports[0], figures)
     return [text_path, *reports, page, nc, *figures]
 
 
 class Phases:
-    """Seconds spent per phase, added up into ``timings`` (``with clock("figures_s"): …``),
-    and the figures that could not be drawn, one line each into ``problems``."""
+    """Seconds spent per phase, added up into ``timings`` (``with clock("report_s"): …``)."""
 
-    def __init__(self, timings: dict[str, float], problems: list[str]) -> None:
-        self.timings, self.problems = timings, problems
+    def __init__(self, timings: dict[str, float]) -> None:
+        self.timings = timings
 
     @contextmanager
     def __call__(self, phase: str) -> Iterator[None]:
@@ -111,20 +114,6 @@ class Phases:
             spent = time.perf_counter() - start
             self.timings[phase] = self.timings.get(phase, 0.0) + spent
 
-    def draw(self, figures: Callable[..., list[Path]], *args: Any) -> list[Path]:
-        """``figures(*args)``, timed as ``figures_s``; [] and a line in ``problems`` if it
-        raises (the numbers and texts never depend on a figure). A full disk or exhausted
-        memory is the run's failure, not the figure's: it propagates."""
-        with self("figures_s"):
-            try:
-                return figures(*args)
-            except (OSError, MemoryError):
-                raise
-            except Exception as exc:  # noqa: BLE001  (any other failure of one figure kind)
-                name = getattr(figures, "__name__", "figures")
-                self.problems.append(f"{name} drew nothing: {type(exc).__name__}: {exc}")
-                return []
-
 
 def _design_outputs(
     ds: xr.Dataset,
@@ -132,29 +121,35 @@ def _design_outputs(
     analysed: list[str],
     means: dict[str, str],
     folder: Path,
-    clock: Phases,
-) -> tuple[list[str], list[Path]]:
-    """The design's own text blocks and figures (sweep, Saltelli, sample or array/factorial)."""
+    drawing: Drawing,
+) -> list[str]:
+    """The design's own text blocks (sweep, Saltelli, sample or array/factorial); its figures
+    go to ``drawing``, one job per response so that they are drawn side by side."""
     design = ds.attrs.get("design")
     if design == "sweep":
-        figures = clock.draw(plots.save_sweep_plots, ds, analysed, folder)
-        return [analysis_text.format_sweep(ds, analysed)], figures
+        for r in analysed:
+            drawing.add(plots.save_sweep_plots, ds, [r], folder)
+        return [analysis_text.format_sweep(ds, analysed)]
     if design == "saltelli":
-        return sobol_report.sobol_text(an), clock.draw(sobol_report.save_tornado, an, folder)
+        drawing.add(sobol_report.save_tornado, an, folder)
+        return sobol_report.sobol_text(an)
     if design in SAMPLING_DESIGNS:
-        figures = clock.draw(sample_report.save_correlations, an, folder)
-        return sample_report.sample_text(an), figures
+        drawing.add(sample_report.save_correlations, an, folder)
+        return sample_report.sample_text(an)
     body = [noise_report.robust_text(ds, an)] if noise_report.has_noise(an) else []
     body += [analysis_text.format_tables(an, means[r]) for r in analysed]
     varying = [means[r] for r in analysed if int(an["varies"].sel(response=means[r]))]
-    figures = clock.draw(plots.save_main_effects, an, varying, folder)
+    for r in varying:
+        drawing.add(plots.save_main_effects, an, [r], folder)
     if noise_report.has_noise(an):
-        figures += clock.draw(noise_report.save_noise_figures, ds, an, folder)
-    sn = [r for r in analysed if f"{r}_sn" in an["response"].values]
-    figures += clock.draw(plots.save_sn_plots, an, sn, folder)
-    figures += clock.draw(plots.save_interaction_plots, an, [means[r] for r in analysed], folder)
-    figures += clock.draw(plots.save_maps, an, varying, folder)
-    return body, figures
+        drawing.add(noise_report.save_noise_figures, ds, an, folder)
+    for r in [r for r in analysed if f"{r}_sn" in an["response"].values]:
+        drawing.add(plots.save_sn_plots, an, [r], folder)
+    for r in analysed:
+        drawing.add(plots.save_interaction_plots, an, [means[r]], folder)
+    for r in varying:
+        drawing.add(plots.save_maps, an, [r], folder)
+    return body
 
 
 NOISE_SUMMARIES = (
