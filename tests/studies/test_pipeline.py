@@ -208,7 +208,9 @@ def test_a_run_whose_figure_fails_finishes_with_its_numbers_and_says_which(
 
     monkeypatch.setattr(plots, "save_main_effects", broken)
     study = tmp_path / "small.toml"
-    study.write_text(small(responses=("max_contact_stress",)), encoding="utf-8")  # max_jerk [mm/rad³] does not vary here: no main effects drawn
+    study.write_text(
+        small(responses=("max_contact_stress",)), encoding="utf-8"
+    )  # max_jerk [mm/rad³] does not vary here: no main effects drawn
     outputs = tmp_path / "out"
     assert main(["run", str(study), "--outputs", str(outputs), "--no-progress"]) == 0
     (record_path,) = outputs.glob("small/*/run.json")
