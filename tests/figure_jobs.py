@@ -4,6 +4,7 @@ module is not: pytest imports it by path)."""
 from __future__ import annotations
 
 import os
+import time
 from pathlib import Path
 
 
@@ -22,3 +23,10 @@ def dies_in_a_worker(parent: int) -> list[Path]:
 
 def fails(kind: type[Exception]) -> list[Path]:
     raise kind("no display")
+
+
+def writes_after(path: Path, seconds: float) -> list[Path]:
+    """A slow figure: waits, then writes ``path``."""
+    time.sleep(seconds)
+    path.write_bytes(b"late")
+    return [path]

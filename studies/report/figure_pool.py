@@ -105,21 +105,25 @@ class Drawing:
         done: dict[int, Future[list[Path]]] = {}
         running: dict[Future[list[Path]], int] = {}
         front, back = 0, len(self.jobs)  # the workers' next job, one past this process's
-        while front < back or running:
-            for future in [f for f in running if f.done()]:
-                done[running.pop(future)] = future
-            while front < back and len(running) < _workers:
-                sent = _send(*self.jobs[front])
-                if sent is None:
-                    break  # no pool, or this job cannot be sent: drawn here below
-                running[sent], front = front, front + 1
-            if front < back:
-                back -= 1
-                done[back] = _here(*self.jobs[back])
-            else:
-                finished, _ = wait(running, return_when=FIRST_COMPLETED)
-                for future in finished:
+        try:
+            while front < back or running:
+                for future in [f for f in running if f.done()]:
                     done[running.pop(future)] = future
+                while front < back and len(running) < _workers:
+                    sent = _send(*self.jobs[front])
+                    if sent is None:
+                        break  # no pool, or this job cannot be sent: drawn here below
+                    running[sent], front = front, front + 1
+                if front < back:
+                    back -= 1
+                    done[back] = _here(*self.jobs[back])
+                else:
+                    finished, _ = wait(running, return_when=FIRST_COMPLETED)
+                    for future in finished:
+                        done[running.pop(future)] = future
+        except BaseException:  # a full disk here: no worker writes after the run has failed
+            wait(running)
+            raise
         drawn = [path for i in range(len(self.jobs)) for path in self._result(i, done[i])]
         self.jobs = []
         self.timings["figures_s"] = self.timings.get("figures_s", 0.0) + time.perf_counter() - start

@@ -12,7 +12,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from figure_jobs import dies_in_a_worker, drawn_by, fails
+from figure_jobs import dies_in_a_worker, drawn_by, fails, writes_after
 
 from results_datasets import CATALOG, study_dataset
 from studies.common.errors import StudyError
@@ -85,6 +85,17 @@ def test_a_figure_that_fails_in_a_worker_is_one_line_and_a_full_disk_fails_the_r
     drawing.add(drawn_by, "last")
     with pytest.raises(OSError, match="no display"):
         drawing.paths()
+
+
+def test_a_run_that_fails_here_waits_for_the_worker_first(pool: None, tmp_path: Path) -> None:
+    """A failed run removes the files it wrote: none may appear after that."""
+    late = tmp_path / "late.png"
+    drawing = Drawing({}, [])
+    drawing.add(writes_after, late, 0.5)
+    drawing.add(fails, OSError)
+    with pytest.raises(OSError, match="no display"):
+        drawing.paths()
+    assert late.read_bytes() == b"late"
 
 
 def test_a_job_that_cannot_be_sent_is_drawn_here(pool: None) -> None:
