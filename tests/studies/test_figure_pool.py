@@ -8,6 +8,8 @@ read from its own process id.
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -24,7 +26,7 @@ from studies.report.write import write_analysis
 @pytest.fixture
 def pool(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
     monkeypatch.setenv(figure_pool.ENVIRONMENT, "1")
-    figure_pool.warm()
+    figure_pool.start()
     yield
     figure_pool.stop()
 
@@ -114,4 +116,24 @@ def test_a_malformed_worker_count_is_an_error_naming_it(
 ) -> None:
     monkeypatch.setenv(figure_pool.ENVIRONMENT, text)
     with pytest.raises(StudyError, match=f"ENGINE_STUDIES_FIGURE_WORKERS = '{text}'"):
-        figure_pool.warm()
+        figure_pool.start()
+
+
+UNGUARDED = """
+import sys
+from studies.cli import main
+main(["run", "isac_l9", "--outputs", sys.argv[1], "--no-progress"])
+"""
+
+
+def test_a_script_calling_the_command_line_without_a_guard_runs_its_study_once(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A worker process imports the main module: this script's would run the study again
+    (and register a second run). Workers start only under ``python -m studies``."""
+    monkeypatch.setenv(figure_pool.ENVIRONMENT, "1")
+    script = tmp_path / "script.py"
+    script.write_text(UNGUARDED, encoding="utf-8")
+    outputs = tmp_path / "outputs"
+    subprocess.run([sys.executable, str(script), str(outputs)], check=True, timeout=600)
+    assert len(list(outputs.glob("isac_l9/*/run.json"))) == 1
