@@ -23,12 +23,11 @@ def descendants(pid: int) -> list[int]:
     while todo:
         p = todo.pop()
         found.append(p)
-        try:
-            todo += [
-                int(c) for c in (PROC / str(p) / "task" / str(p) / "children").read_text().split()
-            ]
-        except OSError:  # ended meanwhile, or no such file here
-            continue
+        for task in (PROC / str(p) / "task").glob("*"):  # children forked by any thread
+            try:
+                todo += [int(c) for c in (task / "children").read_text().split()]
+            except OSError:  # ended meanwhile, or no such file here
+                continue
     return found
 
 

@@ -5,8 +5,9 @@ Each figure is independent of the others and costs 0.1-1 s of matplotlib in one 
 study draws from a few to a few dozen. ``python -m studies run`` and ``analyze`` call
 :func:`warm` before they import anything heavy: a forkserver then imports matplotlib, xarray
 and the renderers while this process plans the study and computes it, and :class:`Drawing`
-shares the figures between this process and ``WORKERS`` process(es) forked from it, each
-taking the next figure when it has finished one (on the 2-core machine: the figures of the
+shares the figures between this process and ``WORKERS`` worker process(es) forked from that
+server, each taking the next figure when it has finished one (this process draws alone until
+the worker runs) (on the 2-core machine: the figures of the
 10⁶-point bench study in 2.9-3.2 s instead of 4.0-4.9 s, for about 165 MB more while the
 worker and its server live). Everything else (the Python API, a script calling the command
 line, the tests) draws in its own process, as do a figure whose arguments cannot be sent (a
@@ -22,6 +23,7 @@ import contextlib
 import multiprocessing
 import os
 import pickle
+import signal
 import sys
 import threading
 import time
@@ -32,6 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from studies.common.errors import StudyError
+from studies.run.results import small_chunk_cache
 
 WORKERS = 1
 PRELOAD = ["studies.report.write"]  # imports matplotlib, xarray and every generic renderer
@@ -39,6 +42,7 @@ ENVIRONMENT = "ENGINE_STUDIES_FIGURE_WORKERS"
 
 _pool: ProcessPoolExecutor | None = None
 _workers = 0  # of the pool
+_ready = threading.Event()  # set once the worker has started (not when it could not)
 
 
 def workers() -> int:
@@ -47,7 +51,7 @@ def workers() -> int:
     text = os.environ.get(ENVIRONMENT, "").strip()
     if not text:
         return WORKERS if (os.cpu_count() or 1) > 1 else 0
-    if not text.isdigit():
+    if not (text.isascii() and text.isdecimal()):
         msg = f"{ENVIRONMENT} = {text!r}: a whole number >= 0 (0: figures drawn in this process)"
         raise StudyError(msg)
     return int(text)
@@ -73,34 +77,53 @@ def start() -> None:
         context = multiprocessing.get_context("forkserver")
         context.set_forkserver_preload(PRELOAD)
         _workers = workers()
-        _pool = ProcessPoolExecutor(_workers, mp_context=context)
+        _pool = ProcessPoolExecutor(_workers, mp_context=context, initializer=_worker_setup)
     except (OSError, ValueError, RuntimeError):  # no forkserver on this platform
         _pool, _workers = None, 0
         return
     # The first job starts the forkserver and waits while it imports: on a thread of its
-    # own, so that this process plans and computes meanwhile.
+    # own, so that this process plans and computes meanwhile; figures go to the worker only
+    # once it runs (until then, and if it never starts, they are drawn here).
+    _ready.clear()
     threading.Thread(target=_start, args=(_pool,), daemon=True).start()
 
 
 def _start(pool: ProcessPoolExecutor) -> None:
-    with contextlib.suppress(Exception):  # no room for its socket, say: figures drawn here
+    # Ctrl-C is the run's to handle: the server and the worker it forks start from this
+    # thread with SIGINT blocked (the mask passes through fork and exec), so neither is
+    # interrupted while it imports or draws (the run shuts them down).
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
         pool.submit(int).result()
+    except Exception:  # noqa: BLE001  (e.g. no room for the forkserver's socket: drawn here)
+        return
+    _ready.set()
+
+
+def _worker_setup() -> None:
+    """In each worker: Ctrl-C is the run's to handle (the worker finishes its figure and is
+    shut down), and results files are read with the run's small chunk cache."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    small_chunk_cache()
 
 
 def stop() -> None:
-    """Shut the pool down (the command is done with figures)."""
+    """Shut the pool down (the command is done with figures). A worker still starting is
+    waited for (up to the server's imports, about a second): torn down under it, its start
+    would print a traceback."""
     global _pool, _workers
     if _pool is not None:
         with contextlib.suppress(Exception):
             _pool.shutdown(wait=True, cancel_futures=True)
         _pool, _workers = None, 0
+        _ready.clear()
 
 
 class Drawing:
     """The figures of one analysis: :meth:`add` lists each, :meth:`paths` draws them all and
     returns their files in the order asked for. The workers take figures from the front of
     the list while this process takes them from the back, so neither waits while figures
-    remain; a figure whose worker died is drawn here.
+    remain once the worker runs; a figure whose worker died is drawn here.
 
     ``problems`` gets one line per figure kind and error that drew nothing; a
     full disk or exhausted memory is the run's failure, not the figure's: it propagates.
@@ -174,11 +197,12 @@ def _here(figures: Callable[..., list[Path]], args: tuple[Any, ...]) -> Future[l
 
 
 def _send(figures: Callable[..., list[Path]], args: tuple[Any, ...]) -> Future[list[Path]] | None:
-    """``figures(*args)`` on the pool; None when there is none or the job cannot be sent."""
-    if _pool is None:
+    """``figures(*args)`` on the worker; None when there is none (yet), or the job cannot be
+    sent (its arguments do not pickle, whatever the exception)."""
+    if _pool is None or not _ready.is_set():
         return None
     try:
         pickle.dumps((figures, args), protocol=pickle.HIGHEST_PROTOCOL)
         return _pool.submit(figures, *args)
-    except (pickle.PicklingError, TypeError, AttributeError, BrokenProcessPool, RuntimeError):
+    except Exception:  # noqa: BLE001
         return None

@@ -27,6 +27,7 @@ from studies.report.write import write_analysis
 def pool(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
     monkeypatch.setenv(figure_pool.ENVIRONMENT, "1")
     figure_pool.start()
+    assert figure_pool._ready.wait(120)  # figures go to the worker once it runs
     yield
     figure_pool.stop()
 
@@ -44,7 +45,6 @@ def test_figures_drawn_by_a_worker_are_the_files_drawn_in_one_process(
     assert len(pictures) >= 6
     for a, b in pictures:
         assert a.read_bytes() == b.read_bytes(), a.name
-    assert timings["figures_s"] > 0
 
 
 def test_the_worker_takes_jobs_from_the_front_this_process_from_the_back(pool: None) -> None:
@@ -110,7 +110,21 @@ def test_a_job_that_cannot_be_sent_is_drawn_here(pool: None) -> None:
     assert [p.name for p in drawing.paths()] == [f"a-{os.getpid()}", f"b-{os.getpid()}"]
 
 
-@pytest.mark.parametrize("text", ["two", "-1", "1.5"])
+def test_a_job_whose_arguments_do_not_pickle_is_drawn_here(pool: None) -> None:
+    drawing = Drawing({}, [])
+    drawing.add(drawn_by, Unpicklable())
+    assert [p.name for p in drawing.paths()] == [f"unpicklable-{os.getpid()}"]
+
+
+class Unpicklable:
+    def __reduce__(self) -> tuple[object, ...]:
+        raise ValueError("ctypes objects containing pointers cannot be pickled")
+
+    def __str__(self) -> str:
+        return "unpicklable"
+
+
+@pytest.mark.parametrize("text", ["two", "-1", "1.5", "²"])
 def test_a_malformed_worker_count_is_an_error_naming_it(
     text: str, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -137,3 +151,30 @@ def test_a_script_calling_the_command_line_without_a_guard_runs_its_study_once(
     outputs = tmp_path / "outputs"
     subprocess.run([sys.executable, str(script), str(outputs)], check=True, timeout=600)
     assert len(list(outputs.glob("isac_l9/*/run.json"))) == 1
+
+
+def test_the_command_line_draws_with_a_worker_and_without_one_where_none_can_start(
+    tmp_path: Path,
+) -> None:
+    """``python -m studies run`` with a figure worker (through its exit without teardown), and
+    with a temporary folder too deep for the forkserver's socket (AF_UNIX paths end at 107
+    bytes): the run finishes with every figure either way."""
+    deep = tmp_path / ("d" * 60) / ("e" * 60)
+    deep.mkdir(parents=True)
+    counts = []
+    for name, temp in (("worker", tmp_path), ("no-socket", deep)):
+        env = {**os.environ, figure_pool.ENVIRONMENT: "1", "TMPDIR": str(temp)}
+        outputs = tmp_path / name
+        command = [sys.executable, "-m", "studies", "run", "isac_l9", "--outputs", str(outputs)]
+        done = subprocess.run(
+            [*command, "--no-progress"],
+            check=False,
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
+        assert done.returncode == 0, done.stderr
+        (folder,) = outputs.glob("isac_l9/*/")
+        counts.append(len(list(folder.glob("*.png"))))
+    assert counts[0] == counts[1] >= 6
