@@ -28,7 +28,7 @@ def leave(code: int) -> None:
         try:
             stream.flush()
         except (BrokenPipeError, ValueError):  # a pipe closed by `| head`, as in main
-            pass
+            continue
         except OSError as exc:  # e.g. output redirected to a full disk: one line, a failure
             if not code:  # a command that failed has said why already
                 with contextlib.suppress(OSError):

@@ -71,13 +71,14 @@ def start() -> None:
     """Start the worker pool (idempotent); nothing when workers are off or cannot start. A
     malformed ``ENGINE_STUDIES_FIGURE_WORKERS`` is an error here, before anything runs."""
     global _pool, _workers  # noqa: PLW0603  (one pool per process, for the runs of a command)
-    if _pool is not None or workers() == 0:
+    count = workers()
+    if _pool is not None or count == 0:
         return
     try:
         context = multiprocessing.get_context("forkserver")
         context.set_forkserver_preload(PRELOAD)
-        _workers = workers()
-        _pool = ProcessPoolExecutor(_workers, mp_context=context, initializer=_worker_setup)
+        _pool = ProcessPoolExecutor(count, mp_context=context, initializer=_worker_setup)
+        _workers = count
     except (OSError, ValueError, RuntimeError):  # no forkserver on this platform
         _pool, _workers = None, 0
         return
