@@ -45,6 +45,15 @@ def _install_once(session: nox.Session, python: Path, target: str) -> None:
     stamp.write_text(digest, encoding="utf-8")
 
 
+def _compile_sources(session: nox.Session, python: Path | str) -> None:
+    """Byte-compile the package's sources (only files changed since their last compile).
+    The install is editable, so its modules are read from the checkout; where the
+    environment forbids writing bytecode (``PYTHONDONTWRITEBYTECODE``) every command would
+    otherwise compile its ~300 modules again (0.2 s of each run)."""
+    sources = [str(HERE / name) for name in ("studies", "engine_kernels")]
+    session.run(str(python), "-m", "compileall", "-q", *sources, external=True, silent=True)
+
+
 def _own_python(session: nox.Session) -> Path:
     return Path(session.virtualenv.location) / ("Scripts" if os.name == "nt" else "bin") / "python"
 
@@ -55,6 +64,7 @@ def _shared_python(session: nox.Session) -> str:
     if not python.exists():
         session.run(sys.executable, "-m", "venv", str(SHARED), external=True)
     _install_once(session, python, ".")
+    _compile_sources(session, python)
     return str(python)
 
 
@@ -62,6 +72,7 @@ def _shared_python(session: nox.Session) -> str:
 def tests(session: nox.Session) -> None:
     """Run the test-suite."""
     _install_once(session, _own_python(session), ".[test]")
+    _compile_sources(session, _own_python(session))
     session.run("pytest", *(session.posargs or PARALLEL))
 
 

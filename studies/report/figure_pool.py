@@ -34,7 +34,6 @@ from pathlib import Path
 from typing import Any
 
 from studies.common.errors import StudyError
-from studies.run.results import small_chunk_cache
 
 WORKERS = 1
 PRELOAD = ["studies.report.write"]  # imports matplotlib, xarray and every generic renderer
@@ -104,6 +103,8 @@ def _start(pool: ProcessPoolExecutor) -> None:
 def _worker_setup() -> None:
     """In each worker: Ctrl-C is the run's to handle (the worker finishes its figure and is
     shut down), and results files are read with the run's small chunk cache."""
+    from studies.run.results import small_chunk_cache  # noqa: PLC0415  (xarray: not at warm)
+
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     small_chunk_cache()
 

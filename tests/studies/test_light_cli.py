@@ -65,6 +65,21 @@ def test_check_imports_no_xarray_pandas_or_matplotlib(study: str) -> None:
     assert done.stdout.strip() == "", f"check {study} imported {done.stdout.strip()}"
 
 
+def test_the_figure_server_starts_before_anything_heavy_is_imported() -> None:
+    # run and analyze start the figure server first so that it imports matplotlib while the
+    # study computes; a heavy import on the way to it (xarray through the results module
+    # held it back 0.5 s) delays every figure.
+    probe = "import sys\nimport studies.report.figure_pool\n" + PROBE.split("\n")[-2]
+    done = subprocess.run(
+        [sys.executable, "-c", probe.format(heavy=HEAVY)],
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=120,
+    )
+    assert done.stdout.strip() == "", f"figure_pool imported {done.stdout.strip()}"
+
+
 FULL_OUTPUT = """
 import runpy, sys
 
