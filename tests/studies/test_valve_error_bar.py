@@ -150,6 +150,42 @@ def test_tolerance_met_is_never_claimed_above_the_tolerance(
 
 
 @pytest.mark.slow
+def test_slow_valves_the_first_dopri_rung_leaves_above_are_met_by_the_second(
+    reference: xr.Dataset, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # Points 81 and 120 of sample A (726 and 544 rpm, a stiff seat): dopri at a tenth of
+    # 1e-3 mm per step leaves its bar above the tolerance (a bounce on landing shorter than a
+    # step). The second dopri rung, as for a 100x tighter tolerance, must meet it with a bar
+    # that bounds the true error (scipy reference), so that the switch-aware ladder (50-400
+    # times a dopri run per point) is not reached.
+    from studies.scenes.valve import error_bar
+
+    which = np.array([81, 120])
+    rungs: list[tuple[float, np.ndarray]] = []
+    first_rung = error_bar.dopri_ladder
+
+    def recorded(*args: Any) -> error_bar.Ladder:
+        ladder = first_rung(*args)
+        rungs.append((args[4] if len(args) > 4 else 1.0, ladder.met.copy()))
+        return ladder
+
+    monkeypatch.setattr(error_bar, "dopri_ladder", recorded)
+    plan = sample_plan(RESPONSES, "lanes", 1e-3)
+    points = {k: v[which] for k, v in sample_points(plan, "A").items()}
+    scalars = plan.scene.evaluate(points, plan.settings, RESPONSES, ["actual_lift"])
+    assert [(t, met.tolist()) for t, met in rungs[:2]] == [
+        (1.0, [0.0, 0.0]),
+        (error_bar.DOPRI_RETRY, [1.0, 1.0]),
+    ]
+    lift = reference.sel(sample="A", point=which)["lift"].values * 1e3
+    error = np.nanmax(np.abs(scalars.curves["actual_lift"] - lift), axis=1)
+    assert (scalars.scalars["integrator_used"] == INTEGRATORS.index("dopri")).all()
+    assert (scalars.scalars["tolerance_met"] == 1.0).all()
+    assert (error <= scalars.scalars["error_estimate"]).all()
+    assert (scalars.scalars["error_estimate"] <= 1e-3).all()
+
+
+@pytest.mark.slow
 def test_the_reference_file_is_reproduced(reference: xr.Dataset) -> None:
     # The stored reference is what valve_samples.py solves today: two points of each sample
     # (one of them separating) solved again, lift within 10 nm over the curve and outputs to

@@ -203,9 +203,9 @@ class ValveAccuracyScene(ValveScene):
         used = float(state.step_used[i])
         method = INTEGRATORS[int(state.method[i])]
         if method == DOPRI:
-            trace = self.dopri_run(
-                state, key, row[None, :], step_deg(settings["angle_step"]), True
-            )[1]
+            grid = step_deg(settings["angle_step"])
+            per_step = float(state.per_step[i])
+            trace = self.dopri_run(state, key, row[None, :], grid, True, per_step)[1]
             assert trace is not None
             return trace[0, valve.C_LIFT]
         substeps = state.out[i, valve.O_SUBSTEPS]

@@ -241,6 +241,7 @@ class ValveScene(LinkageScene[ValveState]):
         names = ("error_estimate", "tolerance_met", *DERIVED_BARS, *BUDGET_RESPONSES)
         state.bars = {name: np.full(n, np.nan) for name in names}
         state.method = np.full(n, float(INTEGRATORS.index(state.settings["integrator"])))
+        state.per_step = np.full(n, dopri_tolerance(state.settings["tolerance"]))
         for key, idx in state.groups.items():
             if not self.linkage_valid(state, key):
                 state.out[idx, valve.O_STATUS] = STATUS_NOT_RUN
@@ -286,6 +287,7 @@ class ValveScene(LinkageScene[ValveState]):
             state.out[at] = ladder.out
             state.step_used[at] = coarse / 2.0**ladder.level
             state.method[at] = INTEGRATORS.index(method)
+            state.per_step[at] = ladder.per_step
             state.bars["error_estimate"][at] = ladder.bar
             state.bars["tolerance_met"][at] = ladder.met
             for name, values in (ladder.derived | ladder.budget).items():
@@ -305,7 +307,7 @@ class ValveScene(LinkageScene[ValveState]):
     ) -> None:
         """Curves of each point at the level the ladder stopped at (its sub-step count)."""
         if integrator == DOPRI:
-            trace = self.dopri_run(state, key, rows, coarse, True)[1]
+            trace = self.dopri_run(state, key, rows, coarse, True, ladder.per_step)[1]
             assert trace is not None
             self.store_traces(state, key, idx, trace, coarse, 0)
             return
@@ -321,13 +323,20 @@ class ValveScene(LinkageScene[ValveState]):
             self.store_traces(state, key, idx[members], trace, coarse, int(level))
 
     def dopri_run(
-        self, state: ValveState, key: tuple, rows: np.ndarray, grid_deg: float, curves: bool
+        self,
+        state: ValveState,
+        key: tuple,
+        rows: np.ndarray,
+        grid_deg: float,
+        curves: bool,
+        per_step: float | None = None,
     ) -> tuple[np.ndarray, np.ndarray | None]:
         """``dopri`` on its own excitation table (``dopri_table_deg``), reported on the
-        grid every ``grid_deg`` [deg], at the per-step tolerance of the study's tolerance."""
+        grid every ``grid_deg`` [deg], at the per-step tolerance of the study's tolerance or
+        ``per_step`` [m] (a tighter rung's, :attr:`Ladder.per_step`)."""
         tolerance = state.settings["tolerance"]
         excitation = self.excitation(state, key, 2.0 * dopri_table_deg(tolerance), unclipped=True)
-        atol = dopri_tolerance(tolerance)
+        atol = dopri_tolerance(tolerance) if per_step is None else per_step
         return integrate_dopri(excitation, rows, grid_deg, atol, curves)
 
     def store_traces(

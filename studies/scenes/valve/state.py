@@ -20,6 +20,7 @@ class ValveState(LinkageState):
     out: np.ndarray = field(init=False)  # stage dynamics (or surge): outputs (n, N_OUT), O_*
     step_used: np.ndarray = field(init=False)  # RK4 step each point ran at [deg]
     method: np.ndarray = field(init=False)  # index in INTEGRATORS of what each point ran
+    per_step: np.ndarray = field(init=False)  # dopri: lift tolerance per step of the run [m]
     traces: np.ndarray = field(init=False)  # valve curves (n, N_CURVES, curve axis or 0), C_*
     bars: dict[str, np.ndarray] = field(init=False)  # error bars, budgets [m]; tolerance_met
     chain_out: np.ndarray = field(init=False)  # stage surge: spring-chain outputs (n, CO_*)
