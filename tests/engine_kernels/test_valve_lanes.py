@@ -89,6 +89,30 @@ def test_lanes_match_one_case_kernel():
     np.testing.assert_allclose(lanes, single, rtol=1e-12, atol=1e-15)
 
 
+@pytest.mark.parametrize("forced", [0, 3], ids=["guard", "3 sub-steps forced"])
+def test_lane_lifts_match_one_case_kernel(forced: int) -> None:
+    # The error bars' runs (valve_lift_lanes) against the one-case valve_lift_batch: outputs
+    # and the lift at every grid point to round-off, NaN lifts for the refused cases.
+    rows = mixed_batch(75, 13)
+    excitation, step, start = cosine_event_table(0.5)
+    settings = valve.valve_settings(substeps=forced)
+    n_grid = (excitation.shape[1] - 1) // 2 + 1
+    results = []
+    for kernel in (valve.valve_lift_batch, valve_lanes.valve_lift_lanes):
+        out = np.empty((rows.shape[0], len(valve.VALVE_OUTPUT_NAMES)))
+        lifts = np.empty((rows.shape[0], n_grid))
+        kernel(excitation, step, start, rows, settings, out, lifts)
+        results.append((out, lifts))
+    (single, single_lifts), (lanes, lane_lifts) = results
+    refused = single[:, valve.O_STATUS] != valve.STATUS_OK
+    assert refused.any()
+    assert (~refused).any()
+    assert np.isnan(single_lifts[refused]).all()
+    np.testing.assert_array_equal(lanes[:, valve.O_STATUS], single[:, valve.O_STATUS])
+    np.testing.assert_allclose(lanes, single, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(lane_lifts, single_lifts, rtol=1e-12, atol=1e-15)
+
+
 def test_lane_results_do_not_depend_on_block_neighbours():
     # Each case keeps its own sub-step count, whatever cases share its block: a shuffled
     # batch and cases run alone give exactly the same rows.

@@ -161,6 +161,48 @@ def spread_order(n):
     return order
 
 
+@jit
+def _lift_block(excitation, table_step, table_start, params, block, substeps, out, lifts):
+    """:func:`_lane_block` without the error estimate, keeping each case's lift at every grid
+    point in its row of ``lifts``."""
+    count = block.shape[0]
+    cases = np.empty(LANES, dtype=np.int64)
+    for l in range(LANES):
+        cases[l] = block[l if l < count else 0]
+    data = block_data(excitation, params, cases)
+    trace = np.empty((lifts.shape[1], LANES), excitation.dtype)
+    lane_pass(excitation, table_step, table_start, False, substeps, params, cases, data, trace)
+    finish_lanes(data, count, 2.0 * table_step, cases, out)
+    for l in range(count):
+        lifts[cases[l], :] = trace[:, l]
+
+
+@batch
+def valve_lift_lanes(excitation, table_step, table_start, params, settings, out, lifts):
+    """:func:`valve_response_lanes` that also keeps each case's lift at every grid point, as
+    :func:`engine_kernels.valvetrain.valve.one_case.valve_lift_batch` does one case at a time
+    (the same numbers to round-off; ``S_ESTIMATE_ERROR`` is not used).
+
+    lifts : 2-D array  (n_cases, (excitation.shape[1] − 1)//2 + 1) lift y [m] per grid point,
+                       NaN where the case is not integrated.
+    """
+    n_cases = params.shape[0]
+    substeps = np.empty(n_cases, dtype=np.int64)
+    for i in prange(n_cases):
+        substeps[i] = prepare_case(excitation, table_step, params[i], settings, out[i])
+        if substeps[i] == 0:
+            lifts[i, :] = np.nan
+    order = np.argsort(substeps, kind="mergesort")
+    starts = block_starts(substeps, order)
+    schedule = spread_order(starts.shape[0] - 1)
+    for i in prange(schedule.shape[0]):
+        b = schedule[i]
+        block = order[starts[b] : starts[b + 1]]
+        _lift_block(
+            excitation, table_step, table_start, params, block, substeps[block[0]], out, lifts
+        )
+
+
 @batch
 def valve_response_lanes(excitation, table_step, table_start, params, settings, out):
     """Valve dynamics of many cases, ``LANES`` cases per SIMD block, blocks in a prange.
