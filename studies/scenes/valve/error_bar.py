@@ -15,10 +15,11 @@ not monotone) and the excitation error (the cubic Hermite interpolation of the c
 between nodes, where the cam law's acceleration jumps: about second order). The factor
 1/(1 − 2⁻¹) = 2 turns the difference into an error for any order ≥ 1, and a safety factor
 1.5 covers the non-monotone convergence of plain RK4. Plain RK4's runs come from the lane
-kernel in double precision, as ``lanes`` runs without a tolerance (the one-case kernel's numbers
-to round-off); switch-aware RK4's from the one-case kernel; ``lanes_f32`` round-off is not in
-the bar. On sample A's 48 points tiled 5× (one linkage) the first rung's runs took 50-53 µs
-per point instead of 127-234 one case at a time; where every point has a linkage of its own
+kernel as ``lanes`` and ``lanes_f32`` run without a tolerance (double precision: the one-case
+kernel's numbers to round-off; single precision for ``lanes_f32``, whose round-off is then in
+the bar); switch-aware RK4's come from the one-case kernel. On sample A's 48 points tiled 5×
+(one linkage) the first rung's runs took 50-53 µs per point instead of 127-234 one case at a
+time; where every point has a linkage of its own
 (sample B) 0.9-1.3 ms instead of 0.2-0.5 (a block integrates 32 lanes however few cases fill
 it), about 4 % of the ~20 ms such a point costs under a tolerance.
 
@@ -73,6 +74,7 @@ from engine_kernels.valvetrain.valve import lane_batch as valve_lanes
 from studies.scenes.valve.batches import dopri_lifts
 from studies.scenes.valve.parameters import (
     DOPRI,
+    LANE_PRECISION,
     MAX_HALVINGS,
     dopri_table_deg,
     dopri_tolerance,
@@ -135,17 +137,24 @@ class Ladder:
 
 
 def lift_runs(
-    excitation: Excitation, rows: np.ndarray, flags: np.ndarray, forced: np.ndarray
+    excitation: Excitation,
+    rows: np.ndarray,
+    flags: np.ndarray,
+    forced: np.ndarray,
+    precision: type = np.float64,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Outputs (n, O_*) and lift at every grid point [m] of plain RK4 in double precision
     (the lane kernel, as ``lanes`` runs without a tolerance: the same numbers whatever
     the chunk), or of switch-aware RK4 (the one-case kernel) under ``flags[S_SWITCH_AWARE]``.
 
-    forced : sub-steps per grid step of each row (0: the guard's count), rows with the same
-             count run as one batch.
+    forced    : sub-steps per grid step of each row (0: the guard's count), rows with the
+                same count run as one batch.
+    precision : arithmetic of plain RK4's lanes (``np.float32``: ``lanes_f32``).
     """
     table, table_step, start = excitation
     lanes = not flags[valve.S_SWITCH_AWARE]
+    if lanes:
+        table = table.astype(precision)
     out = np.full((rows.shape[0], len(valve.VALVE_OUTPUT_NAMES)), np.nan)
     lifts = np.full((rows.shape[0], (table.shape[1] - 1) // 2 + 1), np.nan)
     for count in np.unique(forced):
@@ -189,6 +198,7 @@ def halving_ladder(
     tolerance: float,
     max_halvings: int,
     budget: bool,
+    precision: type = np.float64,
 ) -> Ladder:
     """Run the points ``rows`` down the ladder (see the module docstring).
 
@@ -196,10 +206,11 @@ def halving_ladder(
     flags         : kernel settings row (``S_*``) of the integrator.
     tolerance     : [m]; 0 stops every point at the first level (the error bar only).
     budget        : also estimate the integration and excitation parts of the bar.
+    precision     : arithmetic of plain RK4 (``lift_runs``).
     """
     n = rows.shape[0]
     out, lifts = lift_runs(
-        excitation_at(coarse_deg, False), rows, flags, np.zeros(n, dtype=np.int64)
+        excitation_at(coarse_deg, False), rows, flags, np.zeros(n, dtype=np.int64), precision
     )
     finished = out[:, valve.O_STATUS] == valve.STATUS_OK
     forced = np.where(np.isfinite(out[:, valve.O_SUBSTEPS]), out[:, valve.O_SUBSTEPS], 0)
@@ -220,14 +231,16 @@ def halving_ladder(
             break
         step = coarse_deg / 2**level
         fine = excitation_at(step / 2.0, False)
-        fine_out, fine_lifts = lift_runs(fine, rows[pending], flags, forced[pending])
+        fine_out, fine_lifts = lift_runs(fine, rows[pending], flags, forced[pending], precision)
         bar = BAR_FACTOR * halving_difference(lifts, fine_lifts)
         done = (bar <= tolerance) | (level == max_halvings) | (tolerance <= 0.0)
         take = pending[done]
         ladder.out[take], ladder.level[take], ladder.bar[take] = out[done], level, bar[done]
         ladder.met[take] = (bar[done] <= tolerance).astype(float)
         if budget and take.size:
-            middle = lift_runs(excitation_at(step, False), rows[take], flags, 2 * forced[take])[1]
+            middle = lift_runs(
+                excitation_at(step, False), rows[take], flags, 2 * forced[take], precision
+            )[1]
             ladder.budget["integration_error"][take] = BAR_FACTOR * np.max(
                 np.abs(lifts[done] - middle), axis=1
             )
@@ -362,6 +375,7 @@ def tolerance_rungs(
                 tolerance,
                 halvings,
                 budget,
+                LANE_PRECISION.get(method, np.float64),
             )
         finished = ladder.out[:, valve.O_STATUS] == valve.STATUS_OK
         passed_on = finished & (ladder.met == 0.0) & ((method, halvings, tightening) != rungs[-1])
