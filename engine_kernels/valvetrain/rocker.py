@@ -66,6 +66,16 @@ ROCKER_CURVE_NAMES = (
 )
 ROCKER_CURVE_UNITS = ("m", "m/rad", "m/rad^2", "1", "rad", "rad")
 
+# Rows of a rocker walk (the linkage at every tappet point, :func:`rocker_walk`).
+W_ROTATION = 0  # cam rotation φr [rad]
+W_VALVE = 1  # valve lift before clipping [m]
+W_VALVE_SLOPE = 2  # dY/dφr [m/rad]
+W_ANGLE = 3  # rocker angle W [rad]
+W_ANGLE_SLOPE = 4  # dW/dφr [-]
+W_TAPPET_SLOPE = 5  # dφ/dφr [-]
+W_RATIO = 6  # force ratio [-]
+N_WALK = 7
+
 ROCKER_OK = 0
 ROCKER_CONCAVE_CAM = 1
 ROCKER_NOT_MONOTONE = 2
@@ -252,10 +262,11 @@ def rocker_valve_lift(phi, lift, lift_velocity, lift_acceleration, geometry, sid
     """Theoretical valve lift, its derivatives, force ratio and rocker angle [R1]–[R6].
 
     Walks the tappet table, computes ``R, ψ, W, K, φr`` and the exact derivatives
-    ``dY/dφr``, ``dW/dφr``, ``dφ/dφr`` at every tappet point, then resamples onto ``theta``
-    with cubic Hermite pieces (values exact at the tappet points, error O(Δφ⁴)). The valve
-    acceleration is the central difference of the resampled velocity. Outside the mapped range
-    the end values are held (the table should start and end on the base circle).
+    ``dY/dφr``, ``dW/dφr``, ``dφ/dφr`` at every tappet point (:func:`rocker_walk`), then
+    resamples onto ``theta`` with cubic Hermite pieces (:func:`rocker_resample`: values exact at
+    the tappet points, error O(Δφ⁴)). The valve acceleration is the central difference of the
+    resampled velocity. Outside the mapped range the end values are held (the table should
+    start and end on the base circle).
 
     phi               : 1-D array  Tappet angles φ, increasing, nose at 0 [rad].
     lift              : 1-D array  Flat-tappet lift h(φ) [m].
@@ -271,6 +282,18 @@ def rocker_valve_lift(phi, lift, lift_velocity, lift_acceleration, geometry, sid
     ``ROCKER_STATUS_FLAGS``); the curves are still filled so the caller can report them.
     Reference: physics §3.
     """
+    walk = np.empty((N_WALK, phi.shape[0]))
+    status = rocker_walk(phi, lift, lift_velocity, lift_acceleration, geometry, side, walk)
+    rocker_resample(phi, walk, theta, out)
+    return status
+
+
+@jit
+def rocker_walk(phi, lift, lift_velocity, lift_acceleration, geometry, side, walk):
+    """The linkage at every tappet point: rows ``W_*`` of ``walk`` (``N_WALK``, len(phi));
+    arguments as :func:`rocker_valve_lift`, which it serves. The costly part of a linkage (about
+    110 ns a tappet point): made once, it is resampled onto any grid by
+    :func:`rocker_resample`. Returns the ``ROCKER_*`` status."""
     r0 = geometry[G_BASE_RADIUS]
     rs = geometry[G_PAD_RADIUS]
     la = geometry[G_PAD_ARM]
@@ -284,13 +307,13 @@ def rocker_valve_lift(phi, lift, lift_velocity, lift_acceleration, geometry, sid
     arm0 = valve_arm_base_angle(lb, geometry[G_BALL_RADIUS], geometry[G_STEM_HEIGHT], lash)
     nose_angle = cam_centre_angle(la, lc, r0 + rs + _nose_lift(phi, lift, lift_velocity))
 
-    rotation = np.empty(n)
-    valve = np.empty(n)
-    valve_slope = np.empty(n)
-    angle = np.empty(n)
-    angle_slope = np.empty(n)
-    tappet_slope = np.empty(n)
-    ratio = np.empty(n)
+    rotation = walk[W_ROTATION]
+    valve = walk[W_VALVE]
+    valve_slope = walk[W_VALVE_SLOPE]
+    angle = walk[W_ANGLE]
+    angle_slope = walk[W_ANGLE_SLOPE]
+    tappet_slope = walk[W_TAPPET_SLOPE]
+    ratio = walk[W_RATIO]
     for j in range(n):
         h = lift[j]
         dh = lift_velocity[j]
@@ -327,7 +350,21 @@ def rocker_valve_lift(phi, lift, lift_velocity, lift_acceleration, geometry, sid
     for j in range(n - 1):
         if not rotation[j + 1] > rotation[j]:
             status |= ROCKER_NOT_MONOTONE
+    return status
 
+
+@jit
+def rocker_resample(phi, walk, theta, out):
+    """The ``ROW_*`` curves of :func:`rocker_valve_lift` on ``theta`` from a :func:`rocker_walk`
+    of the tappet points ``phi``."""
+    n = phi.shape[0]
+    rotation = walk[W_ROTATION]
+    valve = walk[W_VALVE]
+    valve_slope = walk[W_VALVE_SLOPE]
+    angle = walk[W_ANGLE]
+    angle_slope = walk[W_ANGLE_SLOPE]
+    tappet_slope = walk[W_TAPPET_SLOPE]
+    ratio = walk[W_RATIO]
     m = theta.shape[0]
     j = 0
     for q in range(m):
@@ -360,7 +397,6 @@ def rocker_valve_lift(phi, lift, lift_velocity, lift_acceleration, geometry, sid
         out[ROW_VALVE_LIFT, q] = max(0.0, y_raw)
         out[ROW_VALVE_VELOCITY, q] = y_slope if y_raw > 0.0 else 0.0
     _central_difference(theta, out[ROW_VALVE_VELOCITY], out[ROW_VALVE_ACCELERATION])
-    return status
 
 
 @jit

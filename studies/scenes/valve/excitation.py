@@ -20,31 +20,17 @@ from __future__ import annotations
 import numpy as np
 
 from engine_kernels.valvetrain import rocker
-from studies.scenes.linkage.scene import SIDES, grid_deg
-from studies.scenes.linkage.tappet import TappetTable, geometry_row
+from studies.scenes.linkage.scene import RockerWalk, resampled_linkage
+from studies.scenes.linkage.tappet import TappetTable
 
 
 def unclipped_valve_lift(
-    points: dict[str, np.ndarray], i: int, tappet: TappetTable, grid: tuple[float, float, float]
+    walk: RockerWalk, tappet: TappetTable, grid: tuple[float, float, float]
 ) -> np.ndarray:
-    """(3, m) rows Y [m] (negative while the lash is open), Y' [m/rad], Y'' [m/rad²] of design
-    point ``i`` on the cam-angle grid (start, spacing, stop) [deg], from its tappet law."""
-    geometry = geometry_row(points, i)
-    lash = geometry[rocker.G_LASH]
-    geometry[rocker.G_STEM_HEIGHT] += lash
-    geometry[rocker.G_LASH] = 0.0
-    theta = np.radians(grid_deg(*grid))
-    out = np.empty((len(rocker.ROCKER_CURVE_NAMES), theta.size))
-    rocker.rocker_valve_lift(
-        tappet.phi,
-        tappet.curves[0],
-        tappet.curves[1],
-        tappet.curves[2],
-        geometry,
-        SIDES[str(points["pad_side"][i])],
-        theta,
-        out,
-    )
+    """(3, m) rows Y [m] (negative while the lash is open), Y' [m/rad], Y'' [m/rad²] on the
+    cam-angle grid (start, spacing, stop) [deg], from the walk of the linkage with the stem
+    raised by the lash and no lash (``LinkageScene.rocker_walk(..., no_lash=True)``)."""
+    out = resampled_linkage(walk, tappet, grid)
     table = np.ascontiguousarray(out[: rocker.ROW_VALVE_ACCELERATION + 1])
-    table[rocker.ROW_VALVE_LIFT] -= lash
+    table[rocker.ROW_VALVE_LIFT] -= walk.raised
     return table

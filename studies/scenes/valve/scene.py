@@ -214,10 +214,11 @@ class ValveScene(LinkageScene[ValveState]):
         start, stop = self.window(state, key) if span is None else span
         grid = (start, step / 2.0, stop)
         if unclipped:
-            i = int(state.groups[key][0])
             table = self.linkage_cache.get(
                 ("unclipped", key, step_deg(state.settings["tappet_step"]), grid),
-                lambda: unclipped_valve_lift(state.points, i, self.tappet_table(state, key), grid),
+                lambda: unclipped_valve_lift(
+                    self.rocker_walk(state, key, no_lash=True), self.tappet_table(state, key), grid
+                ),
             )
         else:
             linkage = self.linkage(state, key, grid)
