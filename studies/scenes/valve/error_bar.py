@@ -19,9 +19,9 @@ kernel as ``lanes`` and ``lanes_f32`` run without a tolerance (double precision:
 kernel's numbers to round-off; single precision for ``lanes_f32``, whose round-off is then in
 the bar); switch-aware RK4's come from the one-case kernel. On sample A's 48 points tiled 5×
 (one linkage) the first rung's runs took 50-53 µs per point instead of 127-234 one case at a
-time; where every point has a linkage of its own
-(sample B) 0.9-1.3 ms instead of 0.2-0.5 (a block integrates 32 lanes however few cases fill
-it), about 4 % of the ~20 ms such a point costs under a tolerance.
+time; where every point has a linkage of its own (sample B) 0.9-1.3 ms instead of 0.2-0.5 (a
+block integrates 32 lanes however few cases fill it), a third of the 2.9-3.4 ms such a point
+costs under a 1e-3 mm tolerance.
 
 **Derived outputs** (max lift, jump start, seating velocity, bounce height) are located
 between the grid points by the kernels (:mod:`engine_kernels.valvetrain.valve.located`), but their
@@ -143,9 +143,10 @@ def lift_runs(
     forced: np.ndarray,
     precision: type = np.float64,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Outputs (n, O_*) and lift at every grid point [m] of plain RK4 in double precision
-    (the lane kernel, as ``lanes`` runs without a tolerance: the same numbers whatever
-    the chunk), or of switch-aware RK4 (the one-case kernel) under ``flags[S_SWITCH_AWARE]``.
+    """Outputs (n, O_*) and lift at every grid point [m] of plain RK4 (the lane kernel in
+    ``precision``, as ``lanes`` and ``lanes_f32`` run without a tolerance: the same numbers
+    whatever the chunk), or of switch-aware RK4 (the one-case kernel) under
+    ``flags[S_SWITCH_AWARE]``.
 
     forced    : sub-steps per grid step of each row (0: the guard's count), rows with the
                 same count run as one batch.
