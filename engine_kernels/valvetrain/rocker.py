@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from engine_kernels._jit import jit
+from engine_kernels._jit import jit, jit_inline
 from engine_kernels.valvetrain.rk4 import hermite_slope, hermite_value
 
 PAD_AHEAD = 1
@@ -307,13 +307,7 @@ def rocker_walk(phi, lift, lift_velocity, lift_acceleration, geometry, side, wal
     arm0 = valve_arm_base_angle(lb, geometry[G_BALL_RADIUS], geometry[G_STEM_HEIGHT], lash)
     nose_angle = cam_centre_angle(la, lc, r0 + rs + _nose_lift(phi, lift, lift_velocity))
 
-    rotation = walk[W_ROTATION]
-    valve = walk[W_VALVE]
-    valve_slope = walk[W_VALVE_SLOPE]
-    angle = walk[W_ANGLE]
-    angle_slope = walk[W_ANGLE_SLOPE]
-    tappet_slope = walk[W_TAPPET_SLOPE]
-    ratio = walk[W_RATIO]
+    rotation, valve, valve_slope, angle, angle_slope, tappet_slope, ratio = _walk_rows(walk)
     for j in range(n):
         h = lift[j]
         dh = lift_velocity[j]
@@ -353,18 +347,26 @@ def rocker_walk(phi, lift, lift_velocity, lift_acceleration, geometry, side, wal
     return status
 
 
+@jit_inline
+def _walk_rows(walk):
+    """The rows ``W_ROTATION`` … ``W_RATIO`` of a walk, in that order (views)."""
+    return (
+        walk[W_ROTATION],
+        walk[W_VALVE],
+        walk[W_VALVE_SLOPE],
+        walk[W_ANGLE],
+        walk[W_ANGLE_SLOPE],
+        walk[W_TAPPET_SLOPE],
+        walk[W_RATIO],
+    )
+
+
 @jit
 def rocker_resample(phi, walk, theta, out):
     """The ``ROW_*`` curves of :func:`rocker_valve_lift` on ``theta`` from a :func:`rocker_walk`
     of the tappet points ``phi``."""
     n = phi.shape[0]
-    rotation = walk[W_ROTATION]
-    valve = walk[W_VALVE]
-    valve_slope = walk[W_VALVE_SLOPE]
-    angle = walk[W_ANGLE]
-    angle_slope = walk[W_ANGLE_SLOPE]
-    tappet_slope = walk[W_TAPPET_SLOPE]
-    ratio = walk[W_RATIO]
+    rotation, valve, valve_slope, angle, angle_slope, tappet_slope, ratio = _walk_rows(walk)
     m = theta.shape[0]
     j = 0
     for q in range(m):

@@ -69,9 +69,9 @@ def test_the_figure_server_starts_before_anything_heavy_is_imported() -> None:
     # run and analyze start the figure server first so that it imports matplotlib while the
     # study computes; a heavy import on the way to it (xarray through the results module
     # held it back 0.5 s) delays every figure.
-    probe = "import sys\nimport studies.report.figure_pool\n" + PROBE.split("\n")[-2]
+    probe = f"import sys\nimport studies.report.figure_pool\nprint(*(m for m in {HEAVY!r} if m in sys.modules))"
     done = subprocess.run(
-        [sys.executable, "-c", probe.format(heavy=HEAVY)],
+        [sys.executable, "-c", probe],
         capture_output=True,
         text=True,
         check=True,

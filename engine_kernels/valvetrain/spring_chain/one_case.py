@@ -66,7 +66,7 @@ from engine_kernels.valvetrain.spring_chain.model import (
     chain_energy,
     surge_displacement,
 )
-from engine_kernels.valvetrain.valve.lane_batch import block_starts, spread_order
+from engine_kernels.valvetrain.valve.lane_batch import block_schedule, scheduled_block
 from engine_kernels.valvetrain.valve.model import excitation_lift_slope, positive_part
 
 # Rows of the per-case scratch array: state, the three inner RK4 stages, segment forces.
@@ -275,12 +275,9 @@ def spring_chain_response_batch(excitation, table_step, table_start, params, set
     for i in prange(n_cases):
         substeps = prepare_chain_case(excitation, table_step, params[i], settings, out[i])
         keys[i] = block_key(substeps, params[i])
-    order = np.argsort(keys, kind="mergesort")
-    starts = block_starts(keys, order)
-    schedule = spread_order(starts.shape[0] - 1)
+    order, starts, schedule = block_schedule(keys)
     for i in prange(schedule.shape[0]):
-        b = schedule[i]
-        block = order[starts[b] : starts[b + 1]]
+        block = scheduled_block(order, starts, schedule, i)
         if block.shape[0] >= MIN_BLOCK_CASES:
             lane_block(excitation, table_step, table_start, params, block, keys[block[0]], out)
             continue

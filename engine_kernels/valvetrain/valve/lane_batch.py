@@ -162,6 +162,22 @@ def spread_order(n):
 
 
 @jit
+def block_schedule(keys):
+    """Cases sorted by block key (stable), the block boundaries in that order
+    (:func:`block_starts`) and the order to run the blocks in (:func:`spread_order`)."""
+    order = np.argsort(keys, kind="mergesort")
+    starts = block_starts(keys, order)
+    return order, starts, spread_order(starts.shape[0] - 1)
+
+
+@jit
+def scheduled_block(order, starts, schedule, i):
+    """The case indices of the ``i``-th block to run (:func:`block_schedule`)."""
+    b = schedule[i]
+    return order[starts[b] : starts[b + 1]]
+
+
+@jit
 def _lift_block(excitation, table_step, table_start, params, block, substeps, out, lifts):
     """:func:`_lane_block` without the error estimate, keeping each case's lift at every grid
     point in its row of ``lifts``."""
@@ -192,12 +208,9 @@ def valve_lift_lanes(excitation, table_step, table_start, params, settings, out,
         substeps[i] = prepare_case(excitation, table_step, params[i], settings, out[i])
         if substeps[i] == 0:
             lifts[i, :] = np.nan
-    order = np.argsort(substeps, kind="mergesort")
-    starts = block_starts(substeps, order)
-    schedule = spread_order(starts.shape[0] - 1)
+    order, starts, schedule = block_schedule(substeps)
     for i in prange(schedule.shape[0]):
-        b = schedule[i]
-        block = order[starts[b] : starts[b + 1]]
+        block = scheduled_block(order, starts, schedule, i)
         _lift_block(
             excitation, table_step, table_start, params, block, substeps[block[0]], out, lifts
         )
@@ -215,12 +228,9 @@ def valve_response_lanes(excitation, table_step, table_start, params, settings, 
     substeps = np.empty(n_cases, dtype=np.int64)
     for i in prange(n_cases):
         substeps[i] = prepare_case(excitation, table_step, params[i], settings, out[i])
-    order = np.argsort(substeps, kind="mergesort")
-    starts = block_starts(substeps, order)
-    schedule = spread_order(starts.shape[0] - 1)
+    order, starts, schedule = block_schedule(substeps)
     for i in prange(schedule.shape[0]):
-        b = schedule[i]
-        block = order[starts[b] : starts[b + 1]]
+        block = scheduled_block(order, starts, schedule, i)
         _lane_block(
             excitation, table_step, table_start, params, settings, block, substeps[block[0]], out
         )
