@@ -49,7 +49,8 @@ def _compile_sources(session: nox.Session, python: Path | str) -> None:
     """Byte-compile the package's sources (only files changed since their last compile).
     The install is editable, so its modules are read from the checkout; where the
     environment forbids writing bytecode (``PYTHONDONTWRITEBYTECODE``) every command would
-    otherwise compile its ~300 modules again (0.2 s of each run)."""
+    otherwise compile the modules it imports again (85 for a cam study: importing the
+    pipeline took 1.31 s instead of 1.15 s, mean of 5 interleaved)."""
     sources = [str(HERE / name) for name in ("studies", "engine_kernels")]
     session.run(str(python), "-m", "compileall", "-q", *sources, external=True, silent=True)
 
