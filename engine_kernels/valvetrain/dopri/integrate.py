@@ -325,7 +325,15 @@ def dopri_response(
         if not on_grid and next_grid < n_grid:
             if which >= 0:
                 observe_point(
-                    record, excitation, table_step, table_start, time, lift, velocity, which == 0
+                    record,
+                    excitation,
+                    table_step,
+                    table_start,
+                    time,
+                    lift,
+                    velocity,
+                    which == 0,
+                    which == 0 and mode[0],
                 )
             if observe_closure(record, 0, 1, lift, table_start + time * speed >= nose):
                 # A located seat switch ends this step on the seat plane: the seating

@@ -121,6 +121,21 @@ def separation_angle(record, at, w, angle, drive):
 
 
 @jit_inline
+def drive_force_rate(velocity, acceleration, slope, curvature, c):
+    """Time derivative of the drive force per unit mass [N/(kg·s)], ``k'(ωY' − ẏ) + b'(ω²Y'' − ÿ)``.
+
+    velocity, acceleration : float  ẏ [m/s] and ÿ [m/s²].
+    slope, curvature       : float  Excitation Y' [m/rad] and Y'' [m/rad²].
+    c                      : Coefficients ``K_*`` of the case
+                             (:func:`engine_kernels.valvetrain.valve.model.case_coefficients`).
+    """
+    speed = c[K_SPEED]
+    return c[K_STIFFNESS] * (speed * slope - velocity) + c[K_DAMPING] * (
+        speed * speed * curvature - acceleration
+    )
+
+
+@jit_inline
 def specific_jerk(velocity, acceleration, slope, curvature, drive, c):
     """Time derivative ⃛y [m/s³] of the acceleration off the seat [V2] (a located seat landing
     follows it, :func:`seating_speed`).
@@ -131,28 +146,32 @@ def specific_jerk(velocity, acceleration, slope, curvature, drive, c):
     c                      : Coefficients ``K_*`` of the case
                              (:func:`engine_kernels.valvetrain.valve.model.case_coefficients`).
     """
-    speed = c[K_SPEED]
-    rate = c[K_STIFFNESS] * (speed * slope - velocity) + c[K_DAMPING] * (
-        speed * speed * curvature - acceleration
-    )
+    rate = drive_force_rate(velocity, acceleration, slope, curvature, c)
     free = -(c[K_SPRING_RATE] * velocity + c[K_EXTERNAL_DAMPING] * acceleration)
     return free + (rate if drive > ZERO else ZERO)
 
 
 @jit
+def excitation_curvature(excitation, table_step, position):
+    """Excitation Y [m], Y' [m/rad] and Y'' [m/rad²] at a fractional table position: Y and Y'
+    as :func:`engine_kernels.valvetrain.valve.model.excitation_lift_slope` reads them, Y''
+    linear between nodes, all clipped at the lash take-up."""
+    drive_lift, slope = excitation_lift_slope(excitation, table_step, position)
+    index = min(int(position), excitation.shape[1] - 2)
+    s = position - index
+    curvature = excitation[2, index] + s * (excitation[2, index + 1] - excitation[2, index])
+    return drive_lift, slope, curvature if drive_lift > ZERO else ZERO
+
+
+@jit
 def jerk_at(excitation, table_step, position, lift, velocity, acceleration, c):
-    """:func:`specific_jerk` at a fractional table position (the excitation's Y'' linear
-    between nodes, as :func:`engine_kernels.valvetrain.valve.model.excitation_lift_slope` reads it).
+    """:func:`specific_jerk` at a fractional table position (:func:`excitation_curvature`).
 
     excitation : 2-D array  Rows Y [m], Y' [m/rad], Y'' [m/rad²] at spacing ``table_step`` [rad].
     position   : float      Position in table intervals from the first node [-].
     lift, velocity, acceleration : float  y [m], ẏ [m/s], ÿ [m/s²] there.
     """
-    drive_lift, slope = excitation_lift_slope(excitation, table_step, position)
-    index = min(int(position), excitation.shape[1] - 2)
-    s = position - index
-    curvature = excitation[2, index] + s * (excitation[2, index + 1] - excitation[2, index])
-    curvature = curvature if drive_lift > ZERO else ZERO  # clipped at the lash take-up
+    drive_lift, slope, curvature = excitation_curvature(excitation, table_step, position)
     drive = specific_forces(lift, velocity, drive_push(drive_lift, slope, c), c)[0]
     return specific_jerk(velocity, acceleration, slope, curvature, drive, c)
 
