@@ -150,14 +150,16 @@ def test_tolerance_met_is_never_claimed_above_the_tolerance(
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("tolerance", [1e-3, 1e-4])
 def test_slow_valves_the_first_dopri_rung_leaves_above_are_met_by_the_second(
-    reference: xr.Dataset, monkeypatch: pytest.MonkeyPatch
+    reference: xr.Dataset, monkeypatch: pytest.MonkeyPatch, tolerance: float
 ) -> None:
     # Points 81 and 120 of sample A (726 and 544 rpm, a stiff seat): dopri at a tenth of
-    # 1e-3 mm per step leaves its bar above the tolerance (a bounce on landing shorter than a
+    # the tolerance per step leaves its bar above it (a bounce on landing shorter than a
     # step). The second dopri rung, as for a 100x tighter tolerance, must meet it with a bar
     # that bounds the true error (scipy reference), so that the switch-aware ladder (50-400
-    # times a dopri run per point) is not reached.
+    # times a dopri run per point) is not reached. At 1e-4 mm since dopri dates a jump at
+    # the drive force's root (tests/studies/test_dopri_jump_start.py).
     from studies.scenes.valve import error_bar
 
     which = np.array([81, 120])
@@ -170,7 +172,7 @@ def test_slow_valves_the_first_dopri_rung_leaves_above_are_met_by_the_second(
         return ladder
 
     monkeypatch.setattr(error_bar, "dopri_ladder", recorded)
-    plan = sample_plan(RESPONSES, "lanes", 1e-3)
+    plan = sample_plan(RESPONSES, "lanes", tolerance)
     points = {k: v[which] for k, v in sample_points(plan, "A").items()}
     scalars = plan.scene.evaluate(points, plan.settings, RESPONSES, ["actual_lift"])
     assert [(t, met.tolist()) for t, met in rungs[:2]] == [
@@ -182,7 +184,7 @@ def test_slow_valves_the_first_dopri_rung_leaves_above_are_met_by_the_second(
     assert (scalars.scalars["integrator_used"] == INTEGRATORS.index("dopri")).all()
     assert (scalars.scalars["tolerance_met"] == 1.0).all()
     assert (error <= scalars.scalars["error_estimate"]).all()
-    assert (scalars.scalars["error_estimate"] <= 1e-3).all()
+    assert (scalars.scalars["error_estimate"] <= tolerance).all()
 
 
 @pytest.mark.slow
