@@ -367,12 +367,16 @@ def test_valve_benchmark_reports_lanes_one_case_c_and_scipy(tmp_path: Path) -> N
     path = run_benchmark("valve", cases=40, step=0.5, repeat=1, outputs=tmp_path)
     figures = json.loads(path.read_text(encoding="utf-8"))["figures"]
     scene = ("scene_lanes", "scene_lanes_f32", "scene_rk4", "scene_rk4_switch_aware")
-    for name in (*scene, "scipy_dop853_rtol_1e-10"):
+    accurate = ("scene_dopri", "scene_tolerance_1e-3", "scene_tolerance_1e-4")
+    for name in (*scene, *accurate, "scipy_dop853_rtol_1e-10"):
         assert figures[name]["cases"] > 0
         assert figures[name]["cases_per_s"] > 0.0
     assert figures["scene_lanes"]["cases"] == 40
     ratio = figures["scene_lanes"]["cases_per_s"] / figures["scene_rk4"]["cases_per_s"]
     assert figures["scene_lanes_over_one_case"] == pytest.approx(ratio)
+    for name in accurate:
+        ratio = figures["scene_lanes"]["cases_per_s"] / figures[name]["cases_per_s"]
+        assert figures[f"{name}_cost_over_lanes"] == pytest.approx(ratio)
     kernel = figures["kernel"]
     assert kernel["window_span_deg"] < 360.0
     for span in ("window", "revolution"):

@@ -35,6 +35,7 @@ design = "full_factorial"
 [settings]
 integrator = "{integrator}"
 angle_step = {step}
+tolerance = {tolerance}
 [factors.cam_speed]
 levels = {speeds}
 [factors.spring_preload]
@@ -42,16 +43,27 @@ levels = {preloads}
 """
 VALVE_PRELOADS = 20
 SWITCH_AWARE_CASES = 1000
+ACCURATE = {
+    "dopri": ("dopri", 0.0),
+    "tolerance_1e-3": ("lanes", 1e-3),
+    "tolerance_1e-4": ("lanes", 1e-4),
+}
+"""The accurate settings timed end to end beside the default: label → (integrator, tolerance
+[mm]); as many cases as the switch-aware RK4."""
 SCIPY_SPEEDS = (3000.0, 4500.0, 6000.0)
 SCIPY_RTOLS = (1e-10, 1e-6)
 
 
-def _valve_plan(kit: BenchKit, integrator: str, cases: int, step: float) -> Any:
+def _valve_plan(
+    kit: BenchKit, integrator: str, cases: int, step: float, tolerance: float = 0.0
+) -> Any:
     """The default valve train at camshaft speeds 3000–6000 rpm × spring preloads."""
     preloads = min(VALVE_PRELOADS, cases)
     speeds = np.linspace(3000.0, 6000.0, max(cases // preloads, 1)).round(6).tolist()
     levels = np.linspace(180.0, 240.0, preloads).round(6).tolist()
-    text = VALVE_STUDY.format(integrator=integrator, step=step, speeds=speeds, preloads=levels)
+    text = VALVE_STUDY.format(
+        integrator=integrator, step=step, speeds=speeds, preloads=levels, tolerance=tolerance
+    )
     return kit.plan(text)
 
 
@@ -60,23 +72,27 @@ def bench_valve(kit: BenchKit, cases: int, step: float, repeat: int) -> dict[str
     iteration and vs the C reference of the lane kernel on identical inputs (kernels alone,
     over the scene's window and over a whole revolution, and end to end through the study
     engine), the multi-mass spring kernel [V4] for N = 1 … 24 against the lumped lanes on the
-    same rows (:mod:`.multi_mass`), the switch-aware RK4, and scipy's event-restarted
-    DOP853 (the accuracy reference)."""
+    same rows (:mod:`.multi_mass`), the switch-aware RK4, the accurate settings (``ACCURATE``:
+    ``dopri`` and the tolerance mode, each with its cost per case over the default's,
+    ``scene_<label>_cost_over_lanes``), and scipy's event-restarted DOP853 (the accuracy
+    reference)."""
     figures: dict[str, Any] = {
         "lanes_per_vector_float64": host_lanes(np.float64),
         "lanes_per_vector_float32": host_lanes(np.float32),
         "kernel": _valve_kernels(kit, cases, step, repeat),
         "multi_mass": _multi_mass(kit, cases, step, repeat),
     }
-    for integrator, n in [
-        ("lanes", cases),
-        ("lanes_f32", cases),
-        ("rk4", cases),
-        ("rk4_switch_aware", min(cases, SWITCH_AWARE_CASES)),
+    fewer = min(cases, SWITCH_AWARE_CASES)
+    for label, integrator, n, tolerance in [
+        ("lanes", "lanes", cases, 0.0),
+        ("lanes_f32", "lanes_f32", cases, 0.0),
+        ("rk4", "rk4", cases, 0.0),
+        ("rk4_switch_aware", "rk4_switch_aware", fewer, 0.0),
+        *((label, method, fewer, tolerance) for label, (method, tolerance) in ACCURATE.items()),
     ]:
-        plan = _valve_plan(kit, integrator, n, step)
+        plan = _valve_plan(kit, integrator, n, step, tolerance)
         seconds = best_time(partial(kit.evaluate, plan, slice(0, plan.runs)), repeat)
-        figures[f"scene_{integrator}"] = {
+        figures[f"scene_{label}"] = {
             "cases": plan.runs,
             "seconds": seconds,
             "cases_per_s": plan.runs / seconds,
@@ -85,10 +101,18 @@ def bench_valve(kit: BenchKit, cases: int, step: float, repeat: int) -> dict[str
         figures[f"scene_{name}_over_one_case"] = (
             figures[f"scene_{name}"]["cases_per_s"] / figures["scene_rk4"]["cases_per_s"]
         )
+    for label in ACCURATE:
+        figures[f"scene_{label}_cost_over_lanes"] = (
+            figures["scene_lanes"]["cases_per_s"] / figures[f"scene_{label}"]["cases_per_s"]
+        )
     scene, state, key, idx = _valve_case(
         kit,
         VALVE_STUDY.format(
-            integrator="rk4", step=step, speeds=list(SCIPY_SPEEDS), preloads=[205.8]
+            integrator="rk4",
+            step=step,
+            speeds=list(SCIPY_SPEEDS),
+            preloads=[205.8],
+            tolerance=0.0,
         ),
     )
     excitation = scene.excitation(state, key, step)
