@@ -416,28 +416,31 @@ def test_results_do_not_depend_on_the_chunk_size() -> None:
 
 
 @pytest.mark.parametrize("integrator", ["lanes", "lanes_f32"])
-def test_asking_for_an_error_bar_does_not_change_the_answer(integrator: str) -> None:
+def test_asking_for_an_error_bar_or_curves_does_not_change_the_answer(integrator: str) -> None:
     # Brute-force alternative: the same points without a bar (the integrator's own run).
     # With a bar the run is the first rung of the step-halving ladder: the same kernel in
     # the same precision, so every output is the same to the last bit; lanes_f32 stays in
-    # single precision (it differs from lanes somewhere).
+    # single precision (it differs from lanes somewhere). Stored curves come from the
+    # one-case double-precision kernel, the outputs beside them still from the lanes.
     asked = '["max_lift", "seating_velocity", "jump_start", "status"]'
     factors = (
         "[factors.cam_speed]\nlevels = [3000.0, 4500.0, 6000.0, 7500.0]\n"
         "[factors.spring_rate]\nlevels = [20.0, 30.0, 40.0]"
     )
     answers = []
-    for responses, chosen in (
-        (asked, integrator),
-        (asked[:-1] + ', "error_estimate"]', integrator),
-        (asked, "lanes"),
+    for responses, chosen, curves in (
+        (asked, integrator, "[]"),
+        (asked[:-1] + ', "error_estimate"]', integrator, "[]"),
+        (asked, "lanes", "[]"),
+        (asked, integrator, '["actual_lift"]'),
     ):
-        plan = plan_text(study(responses, settings=f'integrator = "{chosen}"', factors=factors))
-        answers.append(evaluate(plan, progress=False).scalars)
-    plain, barred, double = answers
+        text = study(responses, curves, settings=f'integrator = "{chosen}"', factors=factors)
+        answers.append(evaluate(plan_text(text), progress=False).scalars)
+    plain, barred, double, curved = answers
     assert np.isfinite(barred["error_estimate"]).all()
     for name in ("max_lift", "seating_velocity", "jump_start", "status"):
         np.testing.assert_array_equal(barred[name], plain[name])
+        np.testing.assert_array_equal(curved[name], plain[name])
     if integrator == "lanes_f32":
         assert not np.array_equal(plain["max_lift"], double["max_lift"])
 

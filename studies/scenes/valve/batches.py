@@ -72,20 +72,25 @@ def integrate(
     flags: np.ndarray,
     curves: bool,
 ) -> tuple[np.ndarray, np.ndarray | None]:
-    """Run one integrator over the rows on one excitation; outputs (n, O_*) and curves."""
+    """Run one integrator over the rows on one excitation; outputs (n, O_*) and curves.
+
+    Curves come from the one-case kernel in double precision (the lane kernels keep none);
+    the outputs are still the integrator's own, so storing curves never changes them (for
+    ``lanes_f32`` they stay single precision, for ``lanes`` the lane kernel's round-off).
+    """
     table, table_step, start = excitation
     out = np.empty((rows.shape[0], N_OUT))
+    trace = None
     if curves:
         trace = np.empty((rows.shape[0], N_CURVES, (table.shape[1] - 1) // 2 + 1))
         for j in range(rows.shape[0]):
             valve.valve_response(table, table_step, start, rows[j], flags, out[j], trace[j])
-        return out, trace
     if integrator in LANE_PRECISION:
         lanes = table.astype(LANE_PRECISION[integrator])
         valve_lanes.valve_response_lanes(lanes, table_step, start, rows, flags, out)
-    else:
+    elif trace is None:
         valve.valve_response_batch(table, table_step, start, rows, flags, out)
-    return out, None
+    return out, trace
 
 
 def integrate_dopri(

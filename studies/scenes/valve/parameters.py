@@ -10,7 +10,8 @@ rate 30 N/mm, seat stiffness 5e4 N/mm with 900 N s/m of seat damping, no externa
 
 * ``integrator`` — ``lanes`` (plain fixed-step RK4, 32 cases per SIMD block, double
   precision), ``lanes_f32`` (the same in single precision, twice the lanes per vector: the
-  fastest; curves, when stored, still come from the double-precision one-case kernel),
+  fastest; curves, when stored, come from the double-precision one-case kernel, the outputs
+  beside them still from the lanes),
   ``rk4`` (the same scheme one case per prange iteration), ``rk4_switch_aware`` (contact and
   seat switches located inside steps: fourth order, much slower per step) or ``dopri``
   (adaptive Dormand–Prince 5(4), one case per prange iteration, contact and seat switches
