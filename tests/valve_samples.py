@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -35,6 +36,8 @@ from studies.scenes.valve.reference.valve_outputs import reference_outputs
 from studies.scenes.valve.scene import valve_rows
 from study_text import scene_study
 
+REFERENCE_FILE = Path(__file__).parent / "studies" / "data" / "valve_error_bar_reference.nc"
+"""The stored reference of both samples (made by tests/studies/refresh_error_bar_reference.py)."""
 SIZE = 200
 SEEDS = {"A": 15, "B": 26}
 RPM = math.pi / 30.0

@@ -28,7 +28,7 @@ from studies.scenes.valve.reference import valve_ivp
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # tests/, pytest's path
 import valve_samples
 
-FILE = Path(__file__).parent / "data" / "valve_error_bar_reference.nc"
+FILE = valve_samples.REFERENCE_FILE
 LIFT_QUANTUM = 1e-11
 """Resolution of the stored lift [m]: far below the smallest error the test compares."""
 INT32_FILL = -(2**31)

@@ -14,18 +14,16 @@ run's own drive-force curve on a 1/256° grid.
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import xarray as xr
-from valve_samples import sample_plan, sample_points
+from valve_samples import REFERENCE_FILE, sample_plan, sample_points
 
 from engine_kernels.valvetrain.valve.layout import C_DRIVE_FORCE, O_JUMP_START, P_PRELOAD
 from engine_kernels.valvetrain.valve.model import TRANSITION_BAND
 from studies.scenes.valve.batches import integrate_dopri
 from studies.scenes.valve.scene import valve_rows
 
-REFERENCE = Path(__file__).parent / "data" / "valve_error_bar_reference.nc"
 POINTS = np.array([67, 90, 132, 153])
 """Points of sample B that separate, with drive-force slopes of 3–27 N/deg at the jump."""
 FINE_DEG = 1.0 / 256.0
@@ -35,7 +33,7 @@ agreed to 4e-8° on these points)."""
 
 
 def test_converged_jump_start_is_where_the_drive_force_reaches_zero() -> None:
-    with xr.open_dataset(REFERENCE) as stored:
+    with xr.open_dataset(REFERENCE_FILE) as stored:
         exact = np.degrees(stored["jump_start"].sel(sample="B").values[POINTS])
     plan = sample_plan(["jump_start"], "dopri", 0.0)
     points = {k: v[POINTS] for k, v in sample_points(plan, "B").items()}

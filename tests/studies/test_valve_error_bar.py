@@ -13,20 +13,25 @@ output, |output − reference output| (0 where neither has the event, inf where 
 from __future__ import annotations
 
 import math
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 import xarray as xr
-from valve_samples import OUTPUTS, points_digest, reference_of, sample_plan, sample_points
+from valve_samples import (
+    OUTPUTS,
+    REFERENCE_FILE,
+    points_digest,
+    reference_of,
+    sample_plan,
+    sample_points,
+)
 
 from engine_kernels import valvetrain as valve
 from studies.scenes.valve.parameters import INTEGRATORS
 from studies.scenes.valve.reference import accuracy as acc
 from studies.scenes.valve.scene import valve_rows
 
-REFERENCE = Path(__file__).parent / "data" / "valve_error_bar_reference.nc"
 RPM = math.pi / 30.0
 BARS = {f"{name}_error": name for name in OUTPUTS}
 """Error bar response -> the output it bounds."""
@@ -54,13 +59,13 @@ MODES = {
 @pytest.fixture(scope="module")
 def reference() -> xr.Dataset:
     """The stored reference, after checking it belongs to the samples of valve_samples.py."""
-    with xr.open_dataset(REFERENCE) as stored:
+    with xr.open_dataset(REFERENCE_FILE) as stored:
         ds = stored.load()
     plan = sample_plan(RESPONSES, "lanes", 0.0)
     digests = dict(item.split(":") for item in ds.attrs["points_digest"].split(","))
     for name in ds["sample"].values:
         assert digests[name] == points_digest(sample_points(plan, name)), (
-            f"{REFERENCE.name} was made for other points of sample {name}: run "
+            f"{REFERENCE_FILE.name} was made for other points of sample {name}: run "
             "tests/studies/refresh_error_bar_reference.py"
         )
     return ds

@@ -85,6 +85,17 @@ def lift_trace_lanes(excitation, table_step, table_start, params, settings, trac
 
 
 @jit
+def block_cases(block):
+    """Parameter rows of the ``LANES`` lanes of a block: its cases, then its first case again
+    in the lanes past them (their results are not written)."""
+    count = block.shape[0]
+    cases = np.empty(LANES, dtype=np.int64)
+    for l in range(LANES):
+        cases[l] = block[l if l < count else 0]
+    return cases
+
+
+@jit
 def _lane_block(excitation, table_step, table_start, params, settings, block, substeps, out):
     """Integrate and report one block: up to ``LANES`` cases with the same sub-step count.
 
@@ -92,9 +103,7 @@ def _lane_block(excitation, table_step, table_start, params, settings, block, su
     Lanes past the block's cases repeat its first case; their results are not written.
     """
     count = block.shape[0]
-    cases = np.empty(LANES, dtype=np.int64)
-    for l in range(LANES):
-        cases[l] = block[l if l < count else 0]
+    cases = block_cases(block)
     data = block_data(excitation, params, cases)
     estimate = settings[S_ESTIMATE_ERROR] != 0 and excitation.shape[1] >= 5
     trace = np.empty(((excitation.shape[1] - 1) // 2 + 1 if estimate else 0, LANES))
@@ -182,9 +191,7 @@ def _lift_block(excitation, table_step, table_start, params, block, substeps, ou
     """:func:`_lane_block` without the error estimate, keeping each case's lift at every grid
     point in its row of ``lifts``."""
     count = block.shape[0]
-    cases = np.empty(LANES, dtype=np.int64)
-    for l in range(LANES):
-        cases[l] = block[l if l < count else 0]
+    cases = block_cases(block)
     data = block_data(excitation, params, cases)
     trace = np.empty((lifts.shape[1], LANES), excitation.dtype)
     lane_pass(excitation, table_step, table_start, False, substeps, params, cases, data, trace)

@@ -86,7 +86,7 @@ def integrate(
         for j in range(rows.shape[0]):
             valve.valve_response(table, table_step, start, rows[j], flags, out[j], trace[j])
     if integrator in LANE_PRECISION:
-        lanes = table.astype(LANE_PRECISION[integrator])
+        lanes = table.astype(LANE_PRECISION[integrator], copy=False)
         valve_lanes.valve_response_lanes(lanes, table_step, start, rows, flags, out)
     elif trace is None:
         valve.valve_response_batch(table, table_step, start, rows, flags, out)

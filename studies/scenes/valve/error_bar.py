@@ -157,7 +157,7 @@ def lift_runs(
     table, table_step, start = excitation
     lanes = not flags[valve.S_SWITCH_AWARE]
     if lanes:
-        table = table.astype(precision)
+        table = table.astype(precision, copy=False)
     out = np.full((rows.shape[0], len(valve.VALVE_OUTPUT_NAMES)), np.nan)
     lifts = np.full((rows.shape[0], (table.shape[1] - 1) // 2 + 1), np.nan)
     for count in np.unique(forced):
