@@ -262,9 +262,13 @@ def full_factorial_size_problem(
         f"full factorial of {shape} = {runs:.4g} design points needs about "
         f"{runs * per_point / 1e9:.3g} GB to plan, run and analyse and about "
         f"{duration(runs * seconds_per_point)} to compute ({seconds_per_point:g} s per point); "
-        f"this machine allows {limit:.4g} points ({available / 1e9:.3g} GB of memory available"
-        + (f", {MAX_POINTS_VARIABLE}={override}" if override else "")
-        + '). Use fewer levels, an orthogonal array (type = "auto"), or raise the limit '
+        + (
+            f"the limit is {limit:.4g} points ({MAX_POINTS_VARIABLE}={override})"
+            if override
+            else f"this machine allows {limit:.4g} points ({available / 1e9:.3g} GB of memory "
+            "available)"
+        )
+        + '. Use fewer levels, an orthogonal array (type = "auto"), or raise the limit '
         f"with the environment variable {MAX_POINTS_VARIABLE}"
     )
 

@@ -27,6 +27,7 @@ from hypothesis import strategies as st
 
 from studies.cli import main
 from studies.common.units import UNITS
+from studies.define import plan as planning
 from studies.scenes import get_scene
 from studies.scenes.checks import LATER_ADVICE
 
@@ -372,8 +373,12 @@ def test_a_quick_check_says_nothing_the_full_check_contradicts(
     """Reference: ``check --full`` (what ``run`` checks before computing) on the same file.
     Every problem the quick check reports, the full one reports (but those it found at a noise
     study's nominal values, which it says: the full check sees the noise cases instead);
-    where the quick check left nothing out, both answers are the same, word for word."""
+    where the quick check left nothing out, both answers are the same, word for word.
+    Both see the same machine: its free memory is read once (a live reading changes between
+    the two checks, and a refusal states it)."""
     monkeypatch.setenv("ENGINE_STUDIES_MAX_POINTS", str(MAX_POINTS))
+    free = planning.available_memory()
+    monkeypatch.setattr(planning, "available_memory", lambda: free)
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
 

@@ -64,6 +64,22 @@ def test_the_limit_can_be_raised_or_lowered(monkeypatch: pytest.MonkeyPatch) -> 
     assert full_factorial_size_problem({"a": 10**6, "b": 10**6}, responses=1) == ""
 
 
+def test_a_limit_set_by_the_user_is_stated_without_the_memory_it_does_not_depend_on(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The quick and the full check print the same refusal: with the limit set by the user, the
+    machine's free memory (which changes between two calls) is not part of the message."""
+    monkeypatch.setenv("ENGINE_STUDIES_MAX_POINTS", "1e3")
+    counts = dict(zip(FACTORS, (10, 10, 10, 2), strict=True))
+    answers = set()
+    for free in (1 * GB, 3 * GB):
+        monkeypatch.setattr(planning, "available_memory", lambda free=free: free)
+        answers.add(full_factorial_size_problem(counts, responses=1))
+    (message,) = answers
+    assert "the limit is 1000 points (ENGINE_STUDIES_MAX_POINTS=1e3)" in message
+    assert "memory available" not in message
+
+
 def test_a_bad_limit_names_the_variable(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("ENGINE_STUDIES_MAX_POINTS", "lots")
     with pytest.raises(ValueError, match="ENGINE_STUDIES_MAX_POINTS='lots' must be a number"):
