@@ -299,7 +299,7 @@ def test_a_noise_study_larger_than_the_machine_allows_is_refused(
     assert "noise study of 4 design points x 1048576 noise cases = 4.194e+06 design points" in (
         problems
     )
-    assert "this machine allows 1e+06 points" in problems
+    assert "the limit is 1e+06 points (ENGINE_STUDIES_MAX_POINTS=1000000)" in problems
 
 
 def test_the_noise_table_prints_each_design_points_own_statistics(
