@@ -12,7 +12,7 @@ repeated runs, or ``noise``: the noise cases of a study's [noise]; n = 1 without
 dB (Phadke 1989, ch. 5):
 
 * smaller is better  η = -10 log10( (1/n) Σ y_i² )
-* larger is better   η = -10 log10( (1/n) Σ 1/y_i² )
+* larger is better   η = -10 log10( (1/n) Σ 1/y_i² ) for y_i > 0; -∞ if any y_i ≤ 0
 * nominal is best    η = 10 log10( ȳ² / s² ), s² the sample variance (divisor n - 1)
 
 References: M. S. Phadke, *Quality Engineering Using Robust Design*, 1989; P. J. Ross,
@@ -49,7 +49,10 @@ def signal_to_noise(y: xr.DataArray, kind: str) -> xr.DataArray:
 
     ``kind`` is "smaller", "larger" or "nominal" (is best). NaN observations are left out (n
     counts the finite ones); a run without any is NaN. Nominal-is-best needs n ≥ 2 (NaN
-    otherwise; ValueError when no run has two observations).
+    otherwise; ValueError when no run has two observations). Larger-is-better is defined for
+    y > 0 and falls to −∞ as a value falls to 0: a run with a value ≤ 0 (a violated margin,
+    a concave cam's radius, −∞ where a point has no value) gets −∞, the worst S/N, not the
+    S/N of |y| (1/y² is the same for −y and y).
     """
     if kind not in SN_KINDS:
         msg = f"S/N kind must be one of {SN_KINDS}, got {kind!r}"
@@ -65,6 +68,7 @@ def signal_to_noise(y: xr.DataArray, kind: str) -> xr.DataArray:
             eta = -10.0 * np.log10(xr.where(seen, y**2, 0.0).sum(dim) / n)
         elif kind == "larger":
             eta = -10.0 * np.log10(xr.where(seen, 1.0 / y**2, 0.0).sum(dim) / n)
+            eta = xr.where((seen & (y <= 0.0)).any(dim), -np.inf, eta)
         else:
             if int(n.max()) < 2:
                 msg = "nominal-is-best S/N needs at least 2 observations (replicates) per run"

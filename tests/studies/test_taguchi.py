@@ -100,6 +100,23 @@ def test_sn_without_replicates_and_bad_kinds() -> None:
         taguchi.signal_to_noise(y, "biggest")
 
 
+def test_larger_is_better_sn_of_a_value_at_or_below_zero_is_the_worst() -> None:
+    # -10 log10 mean(1/y²) is defined for y > 0 and falls to -∞ as y falls to 0; 1/y² is the
+    # same for -7 and 7, so a violated margin (or a concave cam's -∞) must not read as good.
+    y = xr.DataArray([[7.0, 7.0], [-7.0, 7.0], [0.0, 7.0], [-np.inf, 7.0], [np.inf, np.inf]],
+                     dims=("run", "replicate"))  # fmt: skip
+    eta = taguchi.signal_to_noise(y, "larger").values
+    assert eta[0] == pytest.approx(20 * math.log10(7.0), rel=1e-12)
+    assert np.all(eta[1:4] == -np.inf)
+    assert eta[4] == np.inf  # 1/∞² = 0: the best
+    # the level of an L9 whose runs all have a negative value is never the S/N's best level
+    design = oa("L9", "ABC", errors=["D"])
+    values = np.where(design.levels["A"] == 0, -50.0, 1.0 + design.levels["A"])
+    ds = taguchi.with_sn(make_dataset(design, values[:, None] * [1.0, 1.1]), "y", {"y": "larger"})
+    ra = range_analysis(ds, "y_sn")
+    assert int(ra.best_level.sel(factor="A")) == 2  # the largest positive values, not |-50|
+
+
 @settings(max_examples=40, deadline=None)
 @given(
     st.lists(st.floats(0.01, 1e3), min_size=2, max_size=6),
