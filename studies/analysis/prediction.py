@@ -31,7 +31,7 @@ import pandas as pd
 import xarray as xr
 
 from studies.analysis.statistics import SENSES, f_quantile
-from studies.analysis.sums_of_squares import level_sums
+from studies.analysis.sums_of_squares import ROUND_OFF, level_sums
 from studies.analysis.taguchi import (
     ALPHA,
     anova_table,
@@ -221,6 +221,16 @@ def predict(
     return model.prediction(levels, sense, alpha, confirmation_runs, held)
 
 
+def _best_level(scores: np.ndarray) -> int:
+    """The lowest level whose score is the least up to round-off (``ROUND_OFF`` of the largest
+    |score|, the tolerance of R = 0 in the range analysis): levels equal in exact arithmetic
+    are a tie, not a choice made by the last bits of their means."""
+    finite = np.where(np.isnan(scores), np.inf, scores)
+    seen = np.abs(finite[np.isfinite(finite)])
+    tolerance = ROUND_OFF * seen.max() if seen.size else 0.0
+    return int(np.argmax(finite <= finite.min() + tolerance))
+
+
 def predict_optimum(
     ds: xr.Dataset,
     response: str,
@@ -250,8 +260,7 @@ def predict_optimum(
     each = conditions(ds)
     levels = {}
     for f in factors:
-        scores = sign * model.level_means(f)
-        levels[f] = int(np.where(np.isnan(scores), np.inf, scores).argmin())
+        levels[f] = _best_level(sign * model.level_means(f))
     linked = [f for f in factors if any(f in model.pairs.get(t, ()) for t in model.terms)]
     if linked:
         best, best_levels = math.inf, levels

@@ -141,6 +141,16 @@ def _range_and_best(k: np.ndarray, sense: str) -> tuple[np.ndarray, np.ndarray]:
     return r, np.argmax(near, axis=1).astype(np.int64)
 
 
+def _rank(r: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """Rank of each range (1 = largest); ranges within round-off of each other (``ROUND_OFF``
+    of the largest |k|, the tolerance of R = 0) share the best of their ranks."""
+    finite = np.abs(k[np.isfinite(k)])
+    tolerance = ROUND_OFF * finite.max() if finite.size else 0.0
+    with np.errstate(invalid="ignore"):
+        above = r[None, :] > r[:, None] + tolerance
+    return 1 + np.count_nonzero(above, axis=1).astype(np.int64)
+
+
 def range_analysis(
     ds: xr.Dataset,
     response: str,
@@ -176,11 +186,7 @@ def range_analysis(
         {
             "k": (("factor", "level"), k, {"units": units, "long_name": f"mean {long_name}"}),
             "R": ("factor", r, {"units": units, "long_name": "range of level means"}),
-            "rank": (
-                "factor",
-                pd.Series(r).rank(ascending=False, method="min").to_numpy(dtype=np.int64),
-                {"long_name": "rank of R (1 = largest)"},
-            ),
+            "rank": ("factor", _rank(r, k), {"long_name": "rank of R (1 = largest)"}),
             "best_level": (
                 "factor",
                 best,

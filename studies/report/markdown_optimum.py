@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from studies.analysis.sums_of_squares import ROUND_OFF
 from studies.common.text_safety import Markup, md_escape
 from studies.report.markdown_format import levels_of, num, table, units_of, value_text
 from studies.report.markdown_ran import ran_note, ran_text, replaced
@@ -44,17 +45,22 @@ def _worst_condition(an: xr.Dataset, at: np.ndarray, sense: str) -> str:
     """The label of the worst condition; "" when there is none to name (no value, or every
     condition gives the same value)."""
     finite = at[np.isfinite(at)]
-    if not finite.size or (finite == finite[0]).all():
+    if not finite.size or np.ptp(finite) <= ROUND_OFF * np.abs(finite).max():
         return ""
     i = int(np.nanargmax(at) if sense == "smaller" else np.nanargmin(at))
     return str(an["condition"].values[i])
 
 
 def _levels_table(
-    view: xr.Dataset, an: xr.Dataset, levels: dict[str, int], runs: Sequence[int] = ()
+    view: xr.Dataset,
+    an: xr.Dataset,
+    levels: dict[str, int],
+    runs: Sequence[int] = (),
+    tied: Sequence[str] = (),
 ) -> list[str]:
     """The chosen levels; a level that some of ``runs`` did not run with is marked as a
-    request (:mod:`studies.report.markdown_ran`)."""
+    request (:mod:`studies.report.markdown_ran`), a factor in ``tied`` (R = 0: every level
+    gives the same) as any level."""
     if not levels:
         return [_nothing_to_choose(an), ""]
     instead: set[str] = set()
@@ -63,7 +69,7 @@ def _levels_table(
     rows = [
         [
             f,
-            level + 1,
+            f"{level + 1} (any: R = 0)" if f in tied else level + 1,
             Markup(
                 value_text(levels_of(an, f)[level], units_of(view, f))
                 + (" (requested; what ran: below)" if f in instead else "")
@@ -315,7 +321,8 @@ def _predicted(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, shown: str) -> l
     levels = optimum_levels(an, name)
     terms = [t for t in str(r.model_terms.values).split(",") if t]
     alpha = float(an.attrs["alpha"])
-    lines = ["### Predicted optimum", "", *_levels_table(view, an, levels)]
+    tied = [t for t in levels if float(r["R"].sel(term=t)) == 0.0]
+    lines = ["### Predicted optimum", "", *_levels_table(view, an, levels, tied=tied)]
     lines.append(
         f"Predicted {md_escape(shown)} at these levels: **{num(float(r.predicted))}{units}**"
         + (" (mean over the operating conditions)" if an.sizes["condition"] > 1 else "")

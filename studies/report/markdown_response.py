@@ -116,15 +116,25 @@ def _anova_lines(view: xr.Dataset, an: xr.Dataset, name: str, units: str) -> lis
             row[-1] = f"({row[-1]})"
     pooled = [str(t) for t, p in zip(an["source"].values, r.pooled.values, strict=True) if p]
     pooling = f"Pooled into error: {', '.join(pooled)}." if pooled else "No term pooled into error."
-    errors = json.loads(view.attrs.get("error_columns", "[]"))
-    source = (
-        f"Error from the empty column(s) {', '.join(errors)}"
-        if errors
-        else "Error from the dof the terms leave"
-    )
+    source = _error_source(view, r, pooled)
     note = str(r.anova_note.values)
     share = f" {pooled_note()}" if pooled else ""
     return [table(header, rows), "", md_escape(f"{source}. {pooling}{share} {note}".rstrip()), ""]
+
+
+def _error_source(view: xr.Dataset, r: xr.Dataset, pooled: list[str]) -> str:
+    """Where the error row's degrees of freedom come from: the empty columns, and the dof the
+    array's columns leave beyond them (an L18's 2: the interaction of its first two columns)."""
+    errors = json.loads(view.attrs.get("error_columns", "[]"))
+    dof = dict(zip(map(str, r["source"].values), r.dof.values.astype(int), strict=True))
+    empty = sum(int(np.max(view[f"{e}_level"].values)) for e in errors)  # levels - 1 each
+    left = dof.get("error", 0) - sum(dof[p] for p in pooled) - empty
+    if not errors:
+        return "Error from the dof the terms leave"
+    text = f"Error from the empty column(s) {', '.join(errors)} ({empty} dof)"
+    if left > 0:
+        text += f" and the {left} dof the array's columns leave"
+    return text
 
 
 def _decomposition_lines(an: xr.Dataset, name: str) -> list[str]:

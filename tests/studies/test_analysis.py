@@ -215,6 +215,22 @@ def test_range_analysis_matches_numpy_level_means():
     assert (ra["rank"].values[order] == np.arange(1, 4)).all()
 
 
+def test_ranges_equal_to_round_off_share_their_rank() -> None:
+    # y = 0.1·a + 0.1·b + 0.3·c on an L9 (levels 0, 1, 2): R_A and R_B are 0.2 in exact
+    # arithmetic; with 1e-15 added to one level mean they differ by round-off only, and must
+    # not be ranked 2 and 3 (the luffing study ranked two identical k tables 1 and 2).
+    table = orthogonal_array("L9")
+    y = 0.1 * table[:, 0] + 0.1 * table[:, 1] + 0.3 * table[:, 2] + 1e-15 * (table[:, 0] == 2)
+    ds = make_dataset(table, ["A", "B", "C"], ["D"], y)
+    ra = range_analysis(ds, "stress")
+    assert abs(float(ra.R.sel(factor="A")) - float(ra.R.sel(factor="B"))) > 0.0
+    assert ra["rank"].sel(factor=["C", "A", "B"]).values.tolist() == [1, 2, 2]
+    # a real difference of 1e-6 relative still ranks
+    y[table[:, 0] == 2] += 1e-7
+    ra = range_analysis(make_dataset(table, ["A", "B", "C"], ["D"], y), "stress")
+    assert ra["rank"].sel(factor=["C", "A", "B"]).values.tolist() == [1, 2, 3]
+
+
 def test_best_level_respects_sense(l9):
     y = l9["stress"].values
     for sense, pick in [("smaller", np.argmin), ("larger", np.argmax)]:

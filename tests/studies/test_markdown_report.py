@@ -137,6 +137,35 @@ def test_report_of_a_replicated_response_uses_run_means() -> None:
     assert f"| {means[0]:.4g} |" in section(text, "## Runs")
 
 
+@pytest.mark.parametrize(
+    ("array", "factors", "empty", "left"),
+    [("L9", "ABC", 2, 0), ("L18", "ABCDEF", 4, 2)],  # L18: 17 dof, columns 1 + 7 x 2 = 15
+)
+def test_the_error_row_says_where_its_dof_come_from(
+    array: str, factors: str, empty: int, left: int, tmp_path: Path
+) -> None:
+    # Counted by hand: the empty columns' dof are (levels - 1) each; what the array's columns
+    # leave is runs - 1 - Σ columns' dof (an L18's first two columns interact in 2 dof).
+    counts = {f: 2 if (array == "L18" and f == "A") else 3 for f in factors}
+    levels = "".join(
+        f"[factors.{f}]\nlevels = {[10.0 * (i + 1) for i in range(n)]}\n" for f, n in counts.items()
+    )
+    study = tmp_path / "s.toml"
+    study.write_text(
+        f'name = "s"\nscene = "cam"\nresponses = ["y"]\n[design]\ntype = "{array}"\n{levels}',
+        encoding="utf-8",
+    )
+    ds = study_dataset(study)
+    an = analyze(ds, ["y"])
+    text = report_text(ds, an, ["y"])
+    assert int(an.dof.sel(response="y", source="error")) == empty + left
+    expected = f"Error from the empty column(s) {', '.join(json.loads(ds.attrs['error_columns']))}"
+    expected += f" ({empty} dof)" + (
+        f" and the {left} dof the array's columns leave" if left else ""
+    )
+    assert expected + ". " in text
+
+
 def test_several_responses_get_a_tradeoff_summary() -> None:
     ds = study_dataset(CATALOG / "isac_l9.toml", seed=3)
     responses = json.loads(ds.attrs["responses"])

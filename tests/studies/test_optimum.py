@@ -180,6 +180,33 @@ def test_an_array_predicts_per_operating_condition() -> None:
     assert "(runs " in text
 
 
+def test_a_factor_without_effect_is_not_chosen_by_round_off() -> None:
+    """isac_l9 with max_jerk = 1 + 0.2·(seg2_width level) + 1e-15·(seg6_amplitude level == 2)
+    under the operating factor seg2_amplitude, whose conditions differ by round-off only. By
+    hand: seg6_amplitude's level means are equal in exact arithmetic (R = 0), so its level is
+    a tie, taken at the lowest level (the documented rule), never level 3 for the 1e-15 (the
+    L18 audit saw levels picked by the last bits); the report says any level will do, and no
+    operating condition is named the worst for a difference of 1e-15."""
+    ds = study_dataset(CATALOG / "isac_l9.toml", seed=5)
+    ds.attrs["operating_factors"] = json.dumps(["seg2_amplitude"])
+    width = ds["seg2_width_level"].values
+    bump = 1e-15 * (
+        (ds["seg6_amplitude_level"].values == 0) + (ds["seg2_amplitude_level"].values == 1)
+    )
+    ds["max_jerk"].values = 1.0 + 0.2 * width + bump
+    an = analyze(ds, ["max_jerk"])
+    r = an.sel(response="max_jerk")
+    assert float(r["R"].sel(term="seg6_amplitude")) == 0.0
+    assert np.ptp(r.optimum_at.values) > 0.0  # the conditions differ, by round-off
+    assert int(r.optimum_level.sel(term="seg6_amplitude")) == 0
+    assert int(r.optimum_level.sel(term="seg2_width")) == 0  # smaller is better
+    text = report_text(ds, an, ["max_jerk"])
+    assert "| seg6_amplitude | 1 (any: R = 0) |" in text
+    assert "| seg2_width | 1 |" in text
+    assert "in every one" in text
+    assert "worst **" not in text
+
+
 def test_a_tied_optimum_takes_the_levels_with_the_best_main_effects() -> None:
     """Five control combinations tie at 0 (smaller is better). Brute force: the main effect of
     each level is the mean of its row or column; among the tied cells the one with the smallest
