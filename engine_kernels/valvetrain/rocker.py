@@ -325,7 +325,9 @@ def rocker_walk(phi, lift, lift_velocity, lift_acceleration, geometry, side, wal
         arm = arm0 - (w - base_angle)
         valve[j] = valve_lift_from_rocker_angle(w, base_angle, arm0, lb, lash)
         angle[j] = w
-        ratio[j] = force_ratio(lc, side * k, psi, big_r, lb, arm)
+        # pad behind: d with κ = −K is the moment arm of the mirror image's normal with its
+        # sign reversed; both forces push either way (i > 0)
+        ratio[j] = side * force_ratio(lc, side * k, psi, big_r, lb, arm)
 
         r_slope = dh * (radial + ddh) / big_r
         psi_slope = (ddh * radial - dh * dh) / (big_r * big_r)

@@ -149,14 +149,16 @@ def test_chain_matches_brute_force(side):
     )
 
 
-def test_force_ratio_matches_cam_side_virtual_work():
+@pytest.mark.parametrize("side", [rocker.PAD_AHEAD, rocker.PAD_BEHIND])
+def test_force_ratio_matches_cam_side_virtual_work(side):
     # Power balance (frictionless): cam torque F h' times omega = valve force times dY/dt, so
     # i = h'(phi_contact)/Y'(theta), with phi_contact and Y' taken from the brute-force oracle.
+    # Both forces push, so i > 0 on either side (the pad behind gave -i until 2026-12-07).
     step = math.radians(0.1)
-    theta = np.arange(math.radians(-60.0), math.radians(75.0), step)
+    theta = np.arange(math.radians(-75.0), math.radians(75.0), step)
     height = rocker.tappet_lift_for_valve_lift(TARGET_VALVE_LIFT, GEOMETRY)
-    _, out = chain(rocker.PAD_AHEAD, theta)
-    angle, touching = brute_force(rocker.PAD_AHEAD, theta, height)
+    _, out = chain(side, theta)
+    angle, touching = brute_force(side, theta, height)
     valve_velocity = np.gradient(valve_lift_from_angle(angle), step)
     tappet_velocity = synthetic_law(touching, height, EVENT_HALF_ANGLE)[1]
     usable = np.abs(valve_velocity) > 2.0 * MM
