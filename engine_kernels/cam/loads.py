@@ -182,9 +182,10 @@ def cam_loads_batch(params, theta, curves, out, curves_out):
     curves_out: array  (n, 3, m) output contact force [N], Hertz stress [Pa], minimum film
                        thickness [m]; last dimension 0 to skip.
 
-    A concave or cusped cam (radius of curvature ≤ 0 under load) gives max stress +inf, stress
-    margin -inf and stress_ok 0; its film thickness is 0 there (see
-    ``film_thickness_dowson_higginson``).
+    A cam that is not convex (radius of curvature ≤ 0 anywhere, loaded or not: a flat tappet
+    cannot follow it, [C1]) gives max stress +inf, stress margin -inf and stress_ok 0; where
+    it is loaded its film thickness is 0 (see ``film_thickness_dowson_higginson``). The stress
+    curve stays pointwise (0 where the tappet lifts off).
     """
     nose = nose_index(theta)
     store = curves_out.shape[2] > 0
@@ -208,10 +209,12 @@ def cam_loads_batch(params, theta, curves, out, curves_out):
         min_force = math.inf
         max_stress = 0.0
         min_film = math.inf
+        convex = True
         for j in range(theta.shape[0]):
             h = curves[i, 0, j]
             h2 = curves[i, 2, j]
             rho = radius_of_curvature(r0, h, h2)
+            convex = convex and rho > 0.0
             force = contact_force(preload, rate, mass, speed, h, h2)
             stress = hertz_line_contact_stress(force, modulus, width, rho)
             max_force = max(max_force, force)
@@ -234,6 +237,8 @@ def cam_loads_batch(params, theta, curves, out, curves_out):
                     curves_out[i, LC_STRESS, j] = stress
                     curves_out[i, LC_FILM, j] = film
         margin = spring_margin(curves[i, 0], curves[i, 2], preload, rate, mass, speed)
+        if not convex:
+            max_stress = math.inf
         stress_margin = params[i, P_STRESS_LIMIT] - max_stress
         out[i, L_MAX_FORCE] = max_force
         out[i, L_MIN_FORCE] = min_force

@@ -319,6 +319,30 @@ def test_cusped_cam_gives_numbers_and_failed_flags(results):
         assert not np.isnan(table[i]).any()
 
 
+def test_a_cam_concave_only_where_the_tappet_lifts_off_still_fails_the_stress_check():
+    """Cycloidal rise, 10 mm in 0.5 rad on a 0.5 mm base circle at 3000 rad/s. Closed form
+    (x = θ/β): h = H(x − sin 2πx / 2π), h'' = (2πH/β²) sin 2πx, ρ = r0 + h + h'' and the
+    contact force F = P + k h + m ω² h''. Wherever ρ ≤ 0 here F ≤ 0 too, so no loaded point
+    is concave: the stress used to be finite with stress_ok = 1 (an audit found 16 of 114
+    random cams that were not convex reported so). A flat tappet cannot follow such a cam
+    ([C1]): infinite stress, stress_ok 0."""
+    lift, beta, r0, speed = 10.0 * MM, 0.5, 0.5 * MM, 3000.0
+    params = np.array([_case(LAW_CYCLOIDAL, lift, beta, base_radius=r0, speed=speed)])
+    x = np.linspace(0.0, 1.0, 100_001)
+    h = lift * (x - np.sin(2 * np.pi * x) / (2 * np.pi))
+    h2 = 2 * np.pi * lift / beta**2 * np.sin(2 * np.pi * x)
+    rho = r0 + h + h2
+    force = 400.0 + 40e3 * h + 0.3 * speed**2 * h2
+    assert rho.min() < 0.0  # the case is what it says
+    assert force[rho <= 0.0].max() <= 0.0
+    shapes = SHAPES_12V150[None, :].copy()
+    _, _, _, geo, _, load, _ = _run_all(params, shapes, np.zeros((6, NCOEF)), THETA, store=False)
+    assert geo[0, cam_loads.G_MIN_RADIUS] < 0.0
+    assert load[0, cam_loads.L_MAX_STRESS] == math.inf
+    assert load[0, cam_loads.L_STRESS_MARGIN] == -math.inf
+    assert load[0, cam_loads.L_STRESS_OK] == 0.0
+
+
 def test_unknown_law_is_flagged_not_raised():
     params = np.array([_case(42.0, 10.0 * MM, 1.0)])
     shapes = SHAPES_12V150[None, :].copy()
