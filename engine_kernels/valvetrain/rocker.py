@@ -265,7 +265,8 @@ def rocker_valve_lift(phi, lift, lift_velocity, lift_acceleration, geometry, sid
     ``dY/dφr``, ``dW/dφr``, ``dφ/dφr`` at every tappet point (:func:`rocker_walk`), then
     resamples onto ``theta`` with cubic Hermite pieces (:func:`rocker_resample`: values exact at
     the tappet points, error O(Δφ⁴)). The valve acceleration is the central difference of the
-    resampled velocity. Outside the mapped range the end values are held (the table should
+    resampled velocity of the unclipped lift, zero while the lash is open (the take-up is a step
+    in velocity, not an acceleration that grows as the grid is refined). Outside the mapped range the end values are held (the table should
     start and end on the base circle).
 
     phi               : 1-D array  Tappet angles φ, increasing, nose at 0 [rad].
@@ -370,6 +371,8 @@ def rocker_resample(phi, walk, theta, out):
     n = phi.shape[0]
     rotation, valve, valve_slope, angle, angle_slope, tappet_slope, ratio = _walk_rows(walk)
     m = theta.shape[0]
+    slope = np.empty(m)  # of the unclipped lift
+    shut = np.empty(m, dtype=np.bool_)  # the unclipped lift below zero: the lash is open
     j = 0
     for q in range(m):
         t = theta[q]
@@ -400,7 +403,15 @@ def rocker_resample(phi, walk, theta, out):
             )
         out[ROW_VALVE_LIFT, q] = max(0.0, y_raw)
         out[ROW_VALVE_VELOCITY, q] = y_slope if y_raw > 0.0 else 0.0
-    _central_difference(theta, out[ROW_VALVE_VELOCITY], out[ROW_VALVE_ACCELERATION])
+        slope[q] = y_slope
+        shut[q] = y_raw < 0.0
+    # The acceleration is that of the unclipped lift, zero while the lash is open: differenced
+    # across the lash take-up, the clipped velocity's step (the take-up velocity) made a spike
+    # that grew as 1/step.
+    _central_difference(theta, slope, out[ROW_VALVE_ACCELERATION])
+    for q in range(m):
+        if shut[q]:
+            out[ROW_VALVE_ACCELERATION, q] = 0.0
 
 
 @jit
