@@ -97,10 +97,11 @@ def test_v12_torque_runs_with_curves_figures_and_energy_balance(tmp_path: Path) 
     for name in ("torque_curve.png", "torque_harmonics.png"):
         assert (result.folder / name).stat().st_size > 10_000
     # The peak of the single-zone cycle is the max_pressure factor (the heat input is found
-    # from it, kernel docstring): the stored pressure curve must reach it.
-    np.testing.assert_allclose(
-        ds["cylinder_pressure"].max("crank_angle"), ds["max_pressure"], rtol=1e-9
-    )
+    # from it, kernel docstring), located between the grid points: the stored curve (1°)
+    # comes within its sampling of it and never above.
+    grid_peak = ds["cylinder_pressure"].max("crank_angle")
+    assert (grid_peak <= ds["max_pressure"] * (1 + 1e-12)).all()
+    np.testing.assert_allclose(grid_peak, ds["max_pressure"], rtol=1e-3)
     # Energy balance: mean torque × 4π = z × indicated work per cycle = 12 imep V_d; the
     # reciprocating inertia does no net work over a cycle (1° grid: sums, not integrals).
     v_d = math.pi / 4 * 0.150**2 * ds["stroke"].values * 1e-3

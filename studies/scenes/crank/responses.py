@@ -65,7 +65,12 @@ RESPONSES: tuple[Response, ...] = (
     Response(
         "approx_error_acceleration_relative", "1", "two-term acceleration error over r ω²", KIN
     ),
-    Response("peak_pressure", "MPa", "peak cylinder pressure (on the grid)", PRESSURE),
+    Response(
+        "peak_pressure",
+        "MPa",
+        "peak cylinder pressure (cycle: located between the grid points; table: on the grid)",
+        PRESSURE,
+    ),
     Response(
         "peak_pressure_angle",
         "degree",
