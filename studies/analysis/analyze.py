@@ -132,7 +132,13 @@ def analyzed(ds: xr.Dataset, responses: Sequence[str]) -> tuple[xr.Dataset, list
     present = [r for r in present if not is_status(ds[r])]
     view = taguchi.with_sn(taguchi.with_means(ds, present), taguchi.sn_responses(ds, present))
     names = [taguchi.mean_name(view, r) for r in present]
-    names += [taguchi.sn_name(r) for r in present if taguchi.sn_name(r) in view]
+    # an S/N that is -inf in every run (larger is better, no run without a value ≤ 0) has
+    # nothing to analyse: it is left out, not an error that stops the analysis
+    names += [
+        taguchi.sn_name(r)
+        for r in present
+        if taguchi.sn_name(r) in view and np.isfinite(view[taguchi.sn_name(r)].values).any()
+    ]
     return view, names, ran
 
 

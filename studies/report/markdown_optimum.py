@@ -344,6 +344,12 @@ def _predicted(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, shown: str) -> l
         )
     else:
         lines.append("No interval: the error term has no degrees of freedom.")
+    if int(r.pass_fail) and not 0.0 <= float(r.predicted) <= 1.0:
+        lines.append(
+            f"{num(float(r.predicted))} lies outside the flag's range 0 (fail) … 1 (pass): a "
+            "pass/fail flag is not additive, so the model cannot say how often these levels "
+            "pass; the confirmation run can."
+        )
     if shown != name:  # a replicated response, analysed as its run means
         lines.append(
             "Replicated responses are analysed as run means: the interval of a confirmation run "

@@ -166,6 +166,29 @@ def test_the_error_row_says_where_its_dof_come_from(
     assert expected + ". " in text
 
 
+def test_an_sn_without_a_finite_value_is_left_out_and_a_flag_beyond_0_1_is_said() -> None:
+    # max_jerk made negative in every run with larger is better: its larger-the-better S/N is
+    # -inf in every run (defined for y > 0 only), which stopped the whole analysis with "no
+    # finite value"; it is left out. max_contact_stress made a pass/fail flag (1 in 7 of 9
+    # runs): by hand the additive prediction at the best levels exceeds 1 (grand mean 7/9 plus
+    # two effects of 2/9), which the report must not state as a pass rate.
+    ds = study_dataset(CATALOG / "isac_l9.toml", seed=3)
+    ds["max_jerk"] = -ds["max_jerk"] - 1.0
+    ds["max_jerk"].attrs["better"] = "larger"
+    flag = np.ones(9)
+    flag[[0, 1]] = 0.0
+    ds["max_contact_stress"] = ("run", flag, {"flag_values": [-1, 0, 1],
+                                              "flag_meanings": "not_evaluated fails passes",
+                                              "better": "larger", "units": "1"})  # fmt: skip
+    responses = ["max_jerk", "max_contact_stress"]
+    an = analyze(ds, responses)
+    assert "max_jerk_sn" not in json.loads(an.attrs["analysed"])
+    text = report_text(ds, an, responses)
+    predicted = float(an.predicted.sel(response="max_contact_stress"))
+    assert predicted > 1.0
+    assert "lies outside the flag's range 0 (fail) … 1 (pass)" in text
+
+
 def test_several_responses_get_a_tradeoff_summary() -> None:
     ds = study_dataset(CATALOG / "isac_l9.toml", seed=3)
     responses = json.loads(ds.attrs["responses"])
