@@ -330,6 +330,28 @@ def open_range(linkage: LinkageCurves) -> tuple[float, float]:
     return float(linkage.theta_deg[open_idx[0]]), float(linkage.theta_deg[open_idx[-1]])
 
 
+def located_open_range(linkage: LinkageCurves) -> tuple[float, float]:
+    """Cam angles [deg] where the valve opens and closes, located between the grid points: a
+    Newton step back (forward) from the first (last) open grid point on its lift and velocity,
+    kept inside the grid interval; NaN if the valve never opens. (The grid points themselves
+    made the duration short by up to two steps.)"""
+    theta, c = linkage.theta_deg, linkage.curves
+    lift, velocity = c[rocker.ROW_VALVE_LIFT], c[rocker.ROW_VALVE_VELOCITY]
+    open_idx = np.flatnonzero(lift > 0.0)
+    if open_idx.size == 0:
+        return math.nan, math.nan
+    first, last = int(open_idx[0]), int(open_idx[-1])
+
+    def root(i: int, neighbour: int) -> float:
+        edge = float(theta[neighbour]) if 0 <= neighbour < theta.size else float(theta[i])
+        if not velocity[i] * (i - neighbour) > 0.0:  # rising into the open side
+            return edge
+        guess = float(theta[i]) - math.degrees(float(lift[i]) / float(velocity[i]))
+        return float(np.clip(guess, min(edge, theta[i]), max(edge, theta[i])))
+
+    return root(first, first - 1), root(last, last + 1)
+
+
 def _kinematic_value(response: str, state: LinkageState, key: tuple) -> float:
     if response in ("max_tappet_lift", "min_radius_of_curvature", "cam_convex"):
         table = state.tappet[key]
@@ -340,7 +362,7 @@ def _kinematic_value(response: str, state: LinkageState, key: tuple) -> float:
     c = linkage.curves
     lift = c[rocker.ROW_VALVE_LIFT]
     is_open = lift > 0.0
-    opening, closing = open_range(linkage)
+    opening, closing = located_open_range(linkage)
     values: dict[str, Callable[[], float]] = {
         "max_valve_lift": lambda: lift.max() * MM,
         "max_valve_velocity": lambda: c[rocker.ROW_VALVE_VELOCITY].max() * MM,
