@@ -56,7 +56,7 @@ only those that still miss go down the switch-aware ladder. The budget is not sp
 Measured against the scipy reference on two samples of 200 random points
 (``tests/studies/test_valve_error_bar.py``: the six-segment cam with speed, seat, preload and
 drive varied; every lift law with lash, damping, mass, spring and drive varied too): the lift
-bar bounds the true error in 98.5/99.5 % (``lanes`` at 0.5°), 99.5/99.5 % (switch-aware),
+bar bounds the true error in 98.5/99.5 % (``lanes`` at 0.5°), 99.5/100 % (switch-aware),
 99.5/100 % (``dopri``), 99/100 % (tolerance 1e-3 mm) and 99.5/100 % (1e-4 mm) of the points;
 every derived bar in at least 95.7 % (1e-4 mm's jump start on the first sample), and every bar
 is within 10× of the true error in at least 91.5 %. No point reports ``tolerance_met`` = 1
