@@ -139,36 +139,16 @@ def wiebe_burned_fraction(angle_from_start, duration, efficiency, form):
 
 
 @jit
-def wiebe_burn_rate(angle_from_start, duration, efficiency, form):
-    """Normalised Wiebe burn rate dx_b/dθ [1/rad].
-
-    angle_from_start: float  Crank angle since start of combustion θ [rad].
-    duration        : float  Combustion duration Δθ [rad].
-    efficiency      : float  Wiebe a [-].
-    form            : float  Wiebe m [-].
-    Reference: Heywood (2018) §9.2, derivative of :func:`wiebe_burned_fraction`.
-    """
-    if angle_from_start <= 0.0 or angle_from_start >= duration:
-        return 0.0
-    tau = angle_from_start / duration
-    return (
-        efficiency
-        * (form + 1.0)
-        / duration
-        * tau**form
-        * math.exp(-efficiency * tau ** (form + 1.0))
-        / -math.expm1(-efficiency)
-    )
-
-
-@jit
 def wiebe_angle(fraction, duration, efficiency, form):
     """Crank angle since the start of combustion at which the normalised Wiebe law has burned
     ``fraction`` (the inverse of :func:`wiebe_burned_fraction`) [rad]."""
-    argument = fraction * math.expm1(-efficiency)
-    # 1 − e^(−a) rounds to 1 for a ≳ 37: the last bit of x_b then spans the end of the burn
-    tau = -math.log1p(argument) / efficiency if argument > -1.0 else 1.0
-    return duration * min(1.0, tau) ** (1.0 / (form + 1.0))
+    # τ^(m+1) = −ln(1 − x_b (1 − e^(−a)))/a, its argument written as (1 − x_b) + x_b e^(−a)
+    # above one half: exact at x_b = 1 however small e^(−a) is
+    if fraction < 0.5:
+        power = -math.log1p(fraction * math.expm1(-efficiency)) / efficiency
+    else:
+        power = -math.log((1.0 - fraction) + fraction * math.exp(-efficiency)) / efficiency
+    return duration * min(1.0, power) ** (1.0 / (form + 1.0))
 
 
 @jit
