@@ -251,3 +251,17 @@ def test_a_sampling_design_is_refused_with_one_message(
 ) -> None:
     text = SAMPLED.format(kind=kind, samples=samples, extra=extra, factor=factor)
     assert refusal(tmp_path, capsys, text, command) == expected
+
+
+def test_a_ramp_velocity_at_the_smallest_normal_number_is_a_problem_not_a_warning(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # Found by the fuzz test in CI: ramp_height / ramp_velocity = 2e-3 / 2.2e-308 is finite,
+    # twice it overflows, and numpy's overflow warning (an error under the test-suite's
+    # filterwarnings) escaped the check. The ramp is refused with one readable problem.
+    text = (
+        'name = "ramp"\nscene = "valve"\nresponses = ["max_tappet_lift"]\n[parameters]\nramp_height = 2.0\n'
+        "ramp_width = 1.0\n[factors.ramp_velocity]\nlevels = [2.2250738585072014e-308]\n"
+    )
+    problem = refusal(tmp_path, capsys, text)
+    assert problem.startswith("design point 0: ramp_width = 1 deg cannot carry a 2 mm ramp")

@@ -134,9 +134,9 @@ def _six_segment_problems(p: dict[str, np.ndarray], six: np.ndarray, found: Loop
         [height],
         lambda i: f"ramp_height = {height[i] * MM:g} mm needs ramp_width > 0 and ramp_velocity > 0",
     )
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # 2e-3 / 2e-308
         shortest = height / velocity
-    fits_ramp = (shortest <= width) & (width <= 2.0 * shortest)
+        fits_ramp = (shortest <= width) & (width <= 2.0 * shortest)
     found.add(
         6,
         ramp & ~stopped & ~fits_ramp,
@@ -145,7 +145,7 @@ def _six_segment_problems(p: dict[str, np.ndarray], six: np.ndarray, found: Loop
             f"ramp_width = {math.degrees(width[i]):g} deg cannot carry a {height[i] * MM:g} mm "
             f"ramp ending at {velocity[i] * MM:g} mm/rad: constant acceleration then constant "
             f"velocity needs {math.degrees(shortest[i]):.4g} ≤ ramp_width ≤ "
-            f"{math.degrees(2.0 * shortest[i]):.4g} deg"
+            f"{math.degrees(2.0 * float(shortest[i])):.4g} deg"
         ),
     )
 
