@@ -29,8 +29,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from engine_kernels._jit import batch, jit, prange
 from engine_kernels.crank.kinematics import CYCLE_ANGLE
 from engine_kernels.crank.piston import piston_displacement_exact
@@ -312,12 +310,13 @@ def _located(row, c0, heat, target, lo, integral_lo, hi):
 
 
 @jit
-def _closed_bracket(j, m, integrals):
+def _closed_bracket(j, m, integral_before):
     """The grid angles either side of grid point ``j`` inside the closed cycle [π, 3π], and
-    the heat-release integral at the first (``integrals`` on the grid, 0 before π)."""
+    the heat-release integral at the first (``integral_before`` at grid point j − 1, 0 before
+    π)."""
     lo = max(math.pi, CYCLE_ANGLE * (j - 1) / m)
     hi = min(3.0 * math.pi, CYCLE_ANGLE * (j + 1) / m)
-    return lo, hi, integrals[j - 1] if CYCLE_ANGLE * (j - 1) / m >= math.pi else 0.0
+    return lo, hi, integral_before if CYCLE_ANGLE * (j - 1) / m >= math.pi else 0.0
 
 
 @batch
@@ -350,7 +349,6 @@ def cycle_pressure_batch(params, out, pressure_out):
         heat_for_target = math.inf
         limiting = -1  # the grid point whose pressure reaches the target first
         motoring_max = 0.0
-        integrals = np.zeros(m)
         for j in range(m):
             alpha = CYCLE_ANGLE * j / m
             if alpha < math.pi or alpha > 3.0 * math.pi:
@@ -363,7 +361,7 @@ def cycle_pressure_batch(params, out, pressure_out):
                 )
                 ** k
             )
-            integrals[j] = integral
+            prow[j] = integral  # until the pressure replaces it
             motoring_max = max(motoring_max, c0 / v_k)
             per_joule = (k - 1.0) * integral / v_k
             if per_joule > 0.0 and (target - c0 / v_k) / per_joule < heat_for_target:
@@ -373,7 +371,7 @@ def cycle_pressure_batch(params, out, pressure_out):
         if int(row[HEAT_INPUT_MODE]) == HEAT_MODE_PEAK_PRESSURE:
             ok = motoring_max <= target and heat_for_target < math.inf
             if ok:  # the target is the peak between the grid points too, not only on them
-                lo, hi, integral_lo = _closed_bracket(limiting, m, integrals)
+                lo, hi, integral_lo = _closed_bracket(limiting, m, prow[limiting - 1])
                 heat_for_target = min(
                     heat_for_target, _located(row, c0, math.nan, target, lo, integral_lo, hi)[0]
                 )
@@ -383,26 +381,32 @@ def cycle_pressure_batch(params, out, pressure_out):
         peak = -math.inf
         peak_angle = math.nan
         peak_index = -1
+        previous_integral = 0.0  # at grid point j − 1, before its pressure replaced it
+        peak_integral = 0.0  # that of the peak's grid point − 1
         for j in range(m):
             alpha = CYCLE_ANGLE * j / m
+            integral = 0.0
             if alpha < math.pi:
                 prow[j] = p_a
             elif alpha > 3.0 * math.pi:
                 prow[j] = row[EXHAUST_PRESSURE]
             else:
+                integral = prow[j]
                 volume = cylinder_volume(
                     row[BORE], row[CRANK_RADIUS], row[ROD_RATIO], row[COMPRESSION_RATIO], alpha
                 )
-                prow[j] = (c0 + (k - 1.0) * heat * integrals[j]) / volume**k
+                prow[j] = (c0 + (k - 1.0) * heat * integral) / volume**k
             if prow[j] > peak:
                 peak = prow[j]
                 peak_angle = alpha - 2.0 * math.pi
                 peak_index = j
+                peak_integral = previous_integral
+            previous_integral = integral
         if math.isnan(heat):
             peak = math.nan
             peak_angle = math.nan
         elif math.pi <= CYCLE_ANGLE * peak_index / m <= 3.0 * math.pi:
-            lo, hi, integral_lo = _closed_bracket(peak_index, m, integrals)
+            lo, hi, integral_lo = _closed_bracket(peak_index, m, peak_integral)
             value, angle = _located(row, c0, heat, target, lo, integral_lo, hi)
             if -value > peak:
                 peak, peak_angle = -value, angle - 2.0 * math.pi

@@ -31,7 +31,7 @@ import pandas as pd
 import xarray as xr
 
 from studies.analysis.statistics import SENSES, f_quantile
-from studies.analysis.sums_of_squares import ROUND_OFF, level_sums
+from studies.analysis.sums_of_squares import level_sums, round_off_of
 from studies.analysis.taguchi import (
     ALPHA,
     anova_table,
@@ -226,9 +226,7 @@ def _best_level(scores: np.ndarray) -> int:
     |score|, the tolerance of R = 0 in the range analysis): levels equal in exact arithmetic
     are a tie, not a choice made by the last bits of their means."""
     finite = np.where(np.isnan(scores), np.inf, scores)
-    seen = np.abs(finite[np.isfinite(finite)])
-    tolerance = ROUND_OFF * seen.max() if seen.size else 0.0
-    return int(np.argmax(finite <= finite.min() + tolerance))
+    return int(np.argmax(finite <= finite.min() + round_off_of(finite)))
 
 
 def predict_optimum(

@@ -31,6 +31,7 @@ from studies.analysis.sums_of_squares import (
     ROUND_OFF,
     Centred,
     level_sums_in_blocks,
+    round_off_of,
     term_sums_of_squares,
     without_round_off,
 )
@@ -144,10 +145,8 @@ def _range_and_best(k: np.ndarray, sense: str) -> tuple[np.ndarray, np.ndarray]:
 def _rank(r: np.ndarray, k: np.ndarray) -> np.ndarray:
     """Rank of each range (1 = largest); ranges within round-off of each other (``ROUND_OFF``
     of the largest |k|, the tolerance of R = 0) share the best of their ranks."""
-    finite = np.abs(k[np.isfinite(k)])
-    tolerance = ROUND_OFF * finite.max() if finite.size else 0.0
     with np.errstate(invalid="ignore"):
-        above = r[None, :] > r[:, None] + tolerance
+        above = r[None, :] > r[:, None] + round_off_of(k)
     return 1 + np.count_nonzero(above, axis=1).astype(np.int64)
 
 

@@ -29,6 +29,13 @@ RANK_TOLERANCE = 1e-9  # relative pivot below which a dummy column counts as dep
 ROUND_OFF = 1e-12
 
 
+def round_off_of(values: np.ndarray) -> float:
+    """The round-off level of ``values``: ``ROUND_OFF`` of their largest finite magnitude (0
+    when none is finite); values closer than this are equal in exact arithmetic."""
+    finite = np.abs(values[np.isfinite(values)])
+    return ROUND_OFF * float(finite.max()) if finite.size else 0.0
+
+
 def without_round_off(ss: np.ndarray, total: float) -> np.ndarray:
     """``ss`` with the entries at round-off level of ``total`` set to exactly zero."""
     return np.where(np.abs(ss) <= ROUND_OFF * total, 0.0, ss)

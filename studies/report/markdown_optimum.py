@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from studies.analysis.sums_of_squares import ROUND_OFF
+from studies.analysis.sums_of_squares import round_off_of
 from studies.common.text_safety import Markup, md_escape
 from studies.report.markdown_format import levels_of, num, table, units_of, value_text
 from studies.report.markdown_ran import ran_note, ran_text, replaced
@@ -45,7 +45,7 @@ def _worst_condition(an: xr.Dataset, at: np.ndarray, sense: str) -> str:
     """The label of the worst condition; "" when there is none to name (no value, or every
     condition gives the same value)."""
     finite = at[np.isfinite(at)]
-    if not finite.size or np.ptp(finite) <= ROUND_OFF * np.abs(finite).max():
+    if not finite.size or np.ptp(finite) <= round_off_of(finite):
         return ""
     i = int(np.nanargmax(at) if sense == "smaller" else np.nanargmin(at))
     return str(an["condition"].values[i])

@@ -11,7 +11,7 @@ import numpy as np
 import xarray as xr
 
 from studies.analysis import taguchi
-from studies.common.blocks import blocks
+from studies.common.blocks import blocks, level_count
 from studies.common.text_safety import md_escape
 from studies.report import plots
 from studies.report.markdown_format import (
@@ -127,7 +127,7 @@ def _error_source(view: xr.Dataset, r: xr.Dataset, pooled: list[str]) -> str:
     array's columns leave beyond them (an L18's 2: the interaction of its first two columns)."""
     errors = json.loads(view.attrs.get("error_columns", "[]"))
     dof = dict(zip(map(str, r["source"].values), r.dof.values.astype(int), strict=True))
-    empty = sum(int(np.max(view[f"{e}_level"].values)) for e in errors)  # levels - 1 each
+    empty = sum(level_count(view[f"{e}_level"].variable) - 1 for e in errors)
     left = dof.get("error", 0) - sum(dof[p] for p in pooled) - empty
     if not errors:
         return "Error from the dof the terms leave"
