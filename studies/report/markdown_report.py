@@ -202,7 +202,13 @@ def _header(
     rows = [
         ("study", code_span(a["study_name"]) if a.get("study_name") else "—"),
         ("run", code_span(a["run_id"]) if a.get("run_id") else "—"),
-        ("design", f"{a.get('design', '?')}, {ds.sizes['run']} runs"),
+        (
+            "design",
+            Markup(
+                f"{md_escape(str(a.get('design', '?')))}, {ds.sizes['run']} runs, numbered from "
+                f"1 here (run k is index k − 1 of {code_span('run')} in results.nc)"
+            ),
+        ),
         ("scene", a.get("scene", "—")),
         ("commit", (commit + (" (dirty)" if a.get("git_dirty") else "")) or "—"),
         ("created", a.get("created", "—")),

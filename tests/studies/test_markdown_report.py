@@ -302,6 +302,26 @@ def test_full_factorial_report_shows_the_observed_run_and_no_sn(tmp_path: Path) 
     assert "## Trade-off summary" not in text  # only one response varies
 
 
+def test_a_run_number_in_the_report_is_the_header_s_index_into_results() -> None:
+    # The header says run k is index k - 1 of results.nc's run; the best run named in the text
+    # must then hold the smallest value there (numpy's argmin over a random response).
+    design = designs.full_factorial({"a": 4, "b": 3})
+    a, b = design.levels["a"], design.levels["b"]
+    y = np.random.default_rng(20261210).permutation(12) + 1.0
+    coords = {
+        "a": ("run", a * 1.0),
+        "a_level": ("run", a),
+        "b": ("run", b * 1.0),
+        "b_level": ("run", b),
+    }
+    ds = xr.Dataset({"y": ("run", y, {"units": "MPa", "better": "smaller"})}, coords=coords)
+    ds.attrs = {"design": "full_factorial", "factors": '["a", "b"]', "responses": '["y"]'}
+    text = report_text(ds, analyze(ds, ["y"]), ["y"])
+    assert "numbered from 1 here (run k is index k − 1 of `run` in results.nc)" in text
+    named = int(re.search(r"Best y: \*\*1 MPa\*\* in run (\d+)", text).group(1))
+    assert named - 1 == int(np.argmin(y))
+
+
 @pytest.mark.parametrize("design", ["L9", "sweep"])
 def test_response_nan_in_every_run_is_reported_not_fatal(design: str, tmp_path: Path) -> None:
     # No design point separating leaves jump_start NaN everywhere: a result to state, while
