@@ -11,7 +11,7 @@ Signal-to-noise ratios over the n observations y_i of one run (dimension ``repli
 repeated runs, or ``noise``: the noise cases of a study's [noise]; n = 1 without either), in
 dB (Phadke 1989, ch. 5):
 
-* smaller is better  η = -10 log10( (1/n) Σ y_i² )
+* smaller is better  η = -10 log10( (1/n) Σ y_i² ) for y_i ≥ 0; none if any y_i < 0
 * larger is better   η = -10 log10( (1/n) Σ 1/y_i² ) for y_i > 0; -∞ if any y_i ≤ 0
 * nominal is best    η = 10 log10( ȳ² / s² ), s² the sample variance (divisor n - 1)
 
@@ -52,7 +52,10 @@ def signal_to_noise(y: xr.DataArray, kind: str) -> xr.DataArray:
     otherwise; ValueError when no run has two observations). Larger-is-better is defined for
     y > 0 and falls to −∞ as a value falls to 0: a run with a value ≤ 0 (a violated margin,
     a concave cam's radius, −∞ where a point has no value) gets −∞, the worst S/N, not the
-    S/N of |y| (1/y² is the same for −y and y).
+    S/N of |y| (1/y² is the same for −y and y). Smaller-is-better measures the distance from 0
+    (target 0, values ≥ 0): where any value is below 0 it would rate −y as y, against the
+    level means, so every run's S/N is NaN and the analysis leaves it out
+    (:func:`sn_left_out`).
     """
     if kind not in SN_KINDS:
         msg = f"S/N kind must be one of {SN_KINDS}, got {kind!r}"
@@ -66,6 +69,8 @@ def signal_to_noise(y: xr.DataArray, kind: str) -> xr.DataArray:
     with np.errstate(divide="ignore", invalid="ignore"):
         if kind == "smaller":
             eta = -10.0 * np.log10(xr.where(seen, y**2, 0.0).sum(dim) / n)
+            if bool((seen & (y < 0.0)).any()):
+                eta = xr.full_like(eta, np.nan)
         elif kind == "larger":
             eta = -10.0 * np.log10(xr.where(seen, 1.0 / y**2, 0.0).sum(dim) / n)
             eta = xr.where((seen & (y <= 0.0)).any(dim), -np.inf, eta)
@@ -78,6 +83,29 @@ def signal_to_noise(y: xr.DataArray, kind: str) -> xr.DataArray:
             eta = xr.where(n >= 2, 10.0 * np.log10(mean**2 / var), np.nan)
     eta.attrs = {"units": "dB", "long_name": f"S/N ratio ({kind} is better)"}
     return eta
+
+
+def sn_left_out(ds: xr.Dataset, response: str) -> str:
+    """Why ``response`` has no S/N to analyse although its design gives it one
+    (:func:`sn_responses`): a sentence, or "" when it has one (or gets none anyway)."""
+    if not sn_responses(ds, [response]):
+        return ""
+    kind = ds[response].attrs.get("better", "smaller")
+    if (
+        kind not in ("smaller", "larger")
+        or np.isfinite(signal_to_noise(ds[response], kind).values).any()
+    ):
+        return ""
+    if kind == "smaller":
+        return (
+            "No S/N ratio: the smaller-the-better S/N measures the distance from 0 (it rates "
+            f"−y as y), and {response} is below 0 in some runs; the level means above say which "
+            "level gives the smaller value."
+        )
+    return (
+        "No S/N ratio: the larger-the-better S/N is −∞ (the worst) for a value ≤ 0, and "
+        f"{response} is ≤ 0 in every run."
+    )
 
 
 def observation_dim(y: xr.DataArray) -> str | None:

@@ -188,6 +188,8 @@ def response_section(
     sn = taguchi.sn_name(response)
     if sn in an["response"].values:
         lines += _sn_lines(view, an, response, figures)
+    elif why := taguchi.sn_left_out(view, response):
+        lines += ["### Signal-to-noise ratio", "", md_escape(why), ""]
     lines += optimum_section(view, an, mean, _shown(view, response))
     return lines
 

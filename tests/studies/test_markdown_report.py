@@ -187,6 +187,18 @@ def test_an_sn_without_a_finite_value_is_left_out_and_a_flag_beyond_0_1_is_said(
     predicted = float(an.predicted.sel(response="max_contact_stress"))
     assert predicted > 1.0
     assert "lies outside the flag's range 0 (fail) … 1 (pass)" in text
+    assert "max_jerk is ≤ 0 in every run" in text
+
+
+def test_a_smaller_is_better_response_below_zero_gets_no_sn_and_the_report_says_why() -> None:
+    # max_jerk shifted to take negative values in some runs: its smaller-the-better S/N (the
+    # distance from 0) would rate -y as y, so the analysis leaves it out and the report says so.
+    ds = study_dataset(CATALOG / "isac_l9.toml", seed=3)
+    ds["max_jerk"] = ds["max_jerk"] - float(ds["max_jerk"].median())
+    an = analyze(ds, ["max_jerk"])
+    assert "max_jerk_sn" not in json.loads(an.attrs["analysed"])
+    text = report_text(ds, an, ["max_jerk"])
+    assert "No S/N ratio: the smaller-the-better S/N measures the distance from 0" in text
 
 
 def test_several_responses_get_a_tradeoff_summary() -> None:

@@ -117,6 +117,24 @@ def test_larger_is_better_sn_of_a_value_at_or_below_zero_is_the_worst() -> None:
     assert int(ra.best_level.sel(factor="A")) == 2  # the largest positive values, not |-50|
 
 
+def test_smaller_is_better_sn_is_none_where_a_value_is_below_zero() -> None:
+    # -10 log10 mean(y²) is the distance from a target of 0: for y < 0 it rates -y as y, so
+    # on an L9 whose level 1 of A holds the most negative (smallest) values it would call
+    # that level the worst while the level means call it the best. Left out instead, and said.
+    y = xr.DataArray([[3.0, 4.0], [0.0, 2.0]], dims=("run", "replicate"))
+    eta = taguchi.signal_to_noise(y, "smaller").values
+    assert eta[0] == pytest.approx(-10 * math.log10(12.5), rel=1e-12)  # mean(9, 16)
+    assert eta[1] == pytest.approx(-10 * math.log10(2.0), rel=1e-12)
+    design = oa("L9", "ABC", errors=["D"])
+    values = np.where(design.levels["A"] == 0, -50.0, 1.0 + design.levels["A"])
+    ds = make_dataset(design, values[:, None] * [1.0, 1.1])
+    assert np.isnan(taguchi.with_sn(ds, "y", {"y": "smaller"})["y_sn"].values).all()
+    ds["y"].attrs["better"] = "smaller"
+    assert "y is below 0 in some runs" in taguchi.sn_left_out(ds, "y")
+    ds["y"] = abs(ds["y"])
+    assert taguchi.sn_left_out(ds, "y") == ""
+
+
 @settings(max_examples=40, deadline=None)
 @given(
     st.lists(st.floats(0.01, 1e3), min_size=2, max_size=6),
