@@ -12,6 +12,7 @@ result computed by the code before it.
 from __future__ import annotations
 
 import hashlib
+import importlib.util
 import json
 import platform
 import subprocess
@@ -131,7 +132,8 @@ def engine_code() -> dict[str, str]:
 
 def scene_code(scene_class: type) -> dict[str, Any]:
     """The code of a scene: for a built-in scene the engine's, for a plugin its distribution,
-    version and the hash of its top-level package (or module) source."""
+    version and the hash of the source of every top-level package and module the distribution
+    provides (the scene's own package whatever its distribution)."""
     name = str(getattr(scene_class, "name", scene_class.__name__))
     source = Path(sys.modules[scene_class.__module__].__file__ or "").resolve()
     if source.is_relative_to(SOURCE_ROOT / "studies"):
@@ -143,13 +145,19 @@ def scene_code(scene_class: type) -> dict[str, Any]:
 def _plugin_code(scene_class: type, source: Path) -> dict[str, str]:
     top = scene_class.__module__.split(".", 1)[0]
     distribution = _distribution_of(top)
-    root = Path(getattr(sys.modules.get(top), "__file__", None) or source).resolve()
-    package = root.parent if root.name == "__init__.py" else root
-    base = package.parent
+    names = _import_names(distribution) if distribution else []
+    roots = {name: _source_root(name) for name in sorted({top, *names})}
+    roots[top] = roots[top] or source
+    digest = hashlib.sha256()
+    for name, root in roots.items():
+        if root is not None:
+            package = root.parent if root.name == "__init__.py" else root
+            files = source_files(package)
+            digest.update(f"{name}\0{tree_sha256(package.parent, files)}\n".encode())
     return {
         "distribution": distribution,
         "version": _version(distribution) if distribution else "",
-        "source_sha256": tree_sha256(base, source_files(package)),
+        "source_sha256": digest.hexdigest(),
     }
 
 
@@ -157,6 +165,31 @@ def _distribution_of(top_level: str) -> str:
     """The installed distribution that provides the import name ``top_level`` ("" if none)."""
     names = metadata.packages_distributions().get(top_level, [])
     return names[0] if names else ""
+
+
+def _import_names(distribution: str) -> list[str]:
+    """Every top-level import name ``distribution`` provides: a plugin's scene may import a
+    module of its own distribution beside its package, whose edit must count too."""
+    provided = metadata.packages_distributions()
+    return [name for name, owners in provided.items() if distribution in owners]
+
+
+def _source_root(name: str) -> Path | None:
+    """The file of the top-level module ``name`` or its package's ``__init__.py`` (the folder
+    of a namespace package), found without importing it; None if it cannot be found."""
+    module = sys.modules.get(name)
+    if module is not None and getattr(module, "__file__", None):
+        return Path(module.__file__).resolve()
+    try:
+        spec = importlib.util.find_spec(name)
+    except (ImportError, ValueError):
+        return None
+    if spec is None:
+        return None
+    if spec.origin and spec.origin not in ("built-in", "frozen", "namespace"):
+        return Path(spec.origin).resolve()
+    locations = list(spec.submodule_search_locations or [])
+    return Path(locations[0]).resolve() if locations else None
 
 
 def libraries() -> dict[str, str]:

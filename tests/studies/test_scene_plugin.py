@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -149,3 +150,41 @@ def test_editing_the_plugins_source_invalidates_the_cache_and_compare_names_it(
     ), compared.stdout
     assert "moved: amplitude" in compared.stdout
     assert "definitions, code and versions: identical" not in compared.stdout
+
+
+def test_editing_a_module_beside_the_plugins_package_invalidates_the_cache(tmp_path: Path) -> None:
+    # An audit's case: the scene imports a module its distribution installs beside the package
+    # (py-modules); only the package was hashed, so an edit of the module was served the
+    # result of the code before it, as "identical code".
+    plugin = tmp_path / "plugin"
+    shutil.copytree(PLUGIN, plugin, ignore=shutil.ignore_patterns("build", "*.egg-info"))
+    (plugin / "oscillator_gain.py").write_text("GAIN = 1e3\n", encoding="utf-8")
+    source = plugin / "oscillator_scene" / "__init__.py"
+    text = source.read_text(encoding="utf-8").replace(
+        "np.hypot(a, b) * 1e3", "np.hypot(a, b) * GAIN"
+    )
+    text = text.replace("import math\n", "import math\n\nfrom oscillator_gain import GAIN\n")
+    source.write_text(text, encoding="utf-8")
+    project = plugin / "pyproject.toml"
+    text = project.read_text(encoding="utf-8")
+    project.write_text(text + 'py-modules = ["oscillator_gain"]\n', encoding="utf-8")
+    site = tmp_path / "site"
+    subprocess.run(
+        [sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--target", str(site),
+         str(plugin)],
+        check=True, capture_output=True,
+    )  # fmt: skip
+    study = tmp_path / "oscillator_grid.toml"
+    study.write_text(STUDY, encoding="utf-8")
+    outputs = tmp_path / "out"
+    argv = ["run", str(study), "--outputs", str(outputs), "--no-progress"]
+    assert studies(site, *argv).returncode == 0
+    (old,) = (outputs / "oscillator_grid").iterdir()
+    module = site / "oscillator_gain.py"
+    module.write_text(module.read_text(encoding="utf-8").replace("1e3", "1e6"), "utf-8")
+    edited = studies(site, *argv)
+    assert edited.returncode == 0, edited.stderr
+    assert "reusing run" not in edited.stdout
+    new = next(p for p in (outputs / "oscillator_grid").iterdir() if p != old)
+    with xr.open_dataset(old / "results.nc") as a, xr.open_dataset(new / "results.nc") as b:
+        np.testing.assert_allclose(b["amplitude"].values, 1e3 * a["amplitude"].values)
