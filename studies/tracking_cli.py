@@ -94,7 +94,11 @@ def add_commands(sub: Any, outputs_help: str) -> None:
         "gc", "move runs older than AGE to the trash; delete what was trashed before AGE", _gc
     )
     gc.add_argument("--older-than", required=True, metavar="AGE", help="e.g. 30d, 12h, 2w")
-    gc.add_argument("--keep-tagged", action="store_true", help="never remove a tagged run")
+    gc.add_argument(
+        "--keep-tagged",
+        action="store_true",
+        help="never remove a tagged run, nor delete one from the trash",
+    )
     gc.add_argument("--dry-run", action="store_true", help="list what would be removed")
 
     command("reindex", "rebuild the registry from the run folders (keeps the old one)", _reindex)

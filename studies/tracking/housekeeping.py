@@ -136,7 +136,8 @@ def collect_garbage(
 ) -> Collected:
     """Move the runs of ``store`` that started more than ``older_than`` ago to the trash (not
     running ones; not tagged ones with ``keep_tagged``), delete for good the runs removed more
-    than ``older_than`` ago, and what killed processes left behind."""
+    than ``older_than`` ago (with ``keep_tagged``, not a tagged one: it stays in the trash), and
+    what killed processes left behind."""
     cutoff = dt.datetime.now(dt.UTC) - older_than
     tags, _ = store.tags_and_notes()
     chosen = []
@@ -147,7 +148,9 @@ def collect_garbage(
         if current_status(row)[0] == "running":
             continue
         chosen.append(row)
-    expired = [e for e in store.trash_entries() if e.removed < cutoff]
+    expired = [
+        e for e in store.trash_entries() if e.removed < cutoff and not (keep_tagged and e.tags())
+    ]
     if dry_run:
         return Collected(chosen, expired)
     done = Collected()

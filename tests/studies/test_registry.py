@@ -311,6 +311,21 @@ def test_gc_moves_old_runs_to_the_trash_and_empties_it_by_age(
     assert main(["gc", "--older-than", "99999999999w", "--dry-run", *out]) == 2  # > 1000 years
 
 
+def test_gc_keep_tagged_never_deletes_a_tagged_run_from_the_trash(tmp_path: Path) -> None:
+    # An audit's case: a tagged run removed with rm (tags travel into the trash) was deleted
+    # for good by `gc --keep-tagged`, whose help says it never removes a tagged run.
+    outputs = tmp_path / "out"
+    tagged, plain = (tiny_run(tmp_path, outputs, s) for s in (1000.0, 1100.0))
+    RunStore(outputs).set_tag(tagged, "baseline")
+    out = ["--outputs", str(outputs)]
+    assert main(["rm", tagged, "--force", *out]) == 0
+    assert main(["rm", plain, "--force", *out]) == 0
+    assert main(["gc", "--older-than", "0s", "--keep-tagged", *out]) == 0
+    assert [e.run_id for e in RunStore(outputs).trash_entries()] == [tagged]
+    assert main(["restore", "baseline", *out]) == 0
+    assert RunStore(outputs).find_run(tagged) is not None
+
+
 def test_gc_collects_what_killed_processes_left_and_nothing_else(tmp_path: Path) -> None:
     outputs = tmp_path / "out"
     tiny_run(tmp_path, outputs)
