@@ -24,6 +24,7 @@ from studies.compare.regress import (
     format_checks,
 )
 from studies.compare.runs import matched_points, point_label
+from studies.run.results import readable
 
 ToleranceSpec = float | dict[str, float] | Tolerance
 
@@ -67,7 +68,7 @@ def assert_results_close(
 def _dataset(value: xr.Dataset | str | Path) -> xr.Dataset:
     if isinstance(value, xr.Dataset):
         return value
-    with xr.open_dataset(value) as ds:
+    with readable(value) as ds:
         return ds.load()
 
 

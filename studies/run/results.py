@@ -31,7 +31,7 @@ from xarray.backends import NetCDF4DataStore
 from xarray.backends.netCDF4_ import NETCDF4_PYTHON_LOCK
 
 from studies.common.blocks import code_range, first_runs, run_slices
-from studies.common.errors import StudyError
+from studies.common.errors import OutputsError, StudyError
 from studies.define.plan import Plan, noise_label
 from studies.run.runner import Evaluation
 
@@ -59,7 +59,25 @@ def open_results(path: Path) -> xr.Dataset:
     and not kept (``cache=False``), with a small chunk cache, and no pandas index is built
     for ``run`` (10⁷ runs: 100 MB; runs are selected by position, ``isel``)."""
     small_chunk_cache()
-    return xr.open_dataset(path, cache=False, create_default_indexes=False)
+    return readable(path, cache=False, create_default_indexes=False)
+
+
+def readable(path: Path | str, **options: Any) -> xr.Dataset:
+    """``xr.open_dataset(path, **options)`` of a results file, or :class:`OutputsError` naming
+    the file when it is none: a file no netCDF reader recognises (empty, damaged header) or
+    a netCDF file without the ``run`` dimension every results file has."""
+    try:
+        ds = xr.open_dataset(path, **options)
+    except ValueError:
+        size = Path(path).stat().st_size
+        what = "it is empty" if size == 0 else f"no netCDF reader recognises its {size} bytes"
+        msg = f"{path} cannot be read as a results file: {what} (a damaged or foreign file)"
+        raise OutputsError(msg) from None
+    if "run" not in ds.dims:
+        ds.close()
+        msg = f"{path} is not a results file: it has no 'run' dimension (a damaged or foreign file)"
+        raise OutputsError(msg)
+    return ds
 
 
 def build_dataset(plan: Plan, ev: Evaluation, attrs: dict[str, Any]) -> xr.Dataset:

@@ -19,6 +19,7 @@ import pandas as pd
 import xarray as xr
 
 from studies.common.errors import StudyError
+from studies.run.results import readable
 
 FORMATS = ("csv", "parquet")
 CURVE_CHUNK = 1024  # design points per written block of the curve table
@@ -70,7 +71,7 @@ def export_results(results: Path, to: Path, file_format: str) -> list[Path]:
     if file_format not in FORMATS:
         raise StudyError(f"unknown format {file_format!r}: use one of {', '.join(FORMATS)}")
     to.parent.mkdir(parents=True, exist_ok=True)
-    with xr.open_dataset(results) as ds:
+    with readable(results) as ds:
         frame = results_table(ds.load())
         written = [_write(iter([frame]), to, file_format, index=True)]
         if curve_names(ds):

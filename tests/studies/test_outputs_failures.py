@@ -194,3 +194,24 @@ def test_an_unreadable_checkpoint_is_named_and_the_run_resumes_once_readable(
     locked.chmod(0o644)
     assert resume(folder.name, outputs) == 0
     assert_identical_to_an_uninterrupted_run(outputs, study, tmp_path)
+
+
+@pytest.mark.parametrize("content", [b"", b"CDF\x01garbage"])
+def test_a_results_file_that_is_none_is_one_line_for_every_command(
+    tmp_path: Path, study: Path, content: bytes, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # An audit's case: an empty file and one with a netCDF magic number but nothing else gave
+    # a traceback and exit 1, the code by which regress says that a response moved.
+    outputs = tmp_path / "outputs"
+    assert run(study, outputs) == 0
+    (row,) = RunStore(outputs).list_runs()
+    good = Path(row["folder"]) / "results.nc"
+    bad = tmp_path / "bad.nc"
+    bad.write_bytes(content)
+    capsys.readouterr()
+    for argv in (["analyze", str(bad)], ["regress", str(good), str(bad)]):
+        assert main(argv) == EXIT_OUTPUT_ERROR
+        assert f"error: {bad} " in one_line_error(capsys)
+    good.write_bytes(content)
+    assert main(["export", row["run_id"], "--outputs", str(outputs)]) == EXIT_OUTPUT_ERROR
+    assert f"error: {good} " in one_line_error(capsys)
