@@ -28,6 +28,7 @@ import xarray as xr
 
 from studies.analysis.analyze import ANALYSIS_NAME
 from studies.common.errors import RunNotFound, RunStateError
+from studies.common.text_safety import printable_attributes
 from studies.define.definition import parse_study
 from studies.define.plan import Plan, plan_study
 from studies.report.write import write_analysis
@@ -249,7 +250,7 @@ def _execute(
         started = time.perf_counter()
         files = [writer.close({"timings": ev.timings})]
         phases = {**ev.timings, "results_s": time.perf_counter() - started}
-        ds = open_results(files[0])
+        ds = printable_attributes(open_results(files[0]))  # as analyze reads it
         record.warnings = []  # this attempt's (a resume draws every figure again)
         files += write_analysis(ds, folder, timings=phases, problems=record.warnings)
         with xr.open_dataset(folder / ANALYSIS_NAME) as an:

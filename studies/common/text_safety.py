@@ -49,17 +49,26 @@ def printable(text: str, keep: str = "") -> str:
     )
 
 
-def printable_dataset(ds: xr.Dataset) -> xr.Dataset:
-    """``ds`` with control characters dropped from every text attribute and text coordinate
-    (a results file from elsewhere: its text reaches figures, tables and the terminal)."""
-    import numpy as np  # noqa: PLC0415  (on use: the CLI imports this module for --help)
-
+def printable_attributes(ds: xr.Dataset) -> xr.Dataset:
+    """``ds`` with control characters dropped from every text attribute (O(1) in the runs: a
+    description or a unit from a study file reaches analysis.txt and the terminal)."""
     ds.attrs = {k: printable(v, "\n\t") if isinstance(v, str) else v for k, v in ds.attrs.items()}
     for name in list(ds.variables):
         variable = ds[name]
         variable.attrs = {
             k: printable(v) if isinstance(v, str) else v for k, v in variable.attrs.items()
         }
+    return ds
+
+
+def printable_dataset(ds: xr.Dataset) -> xr.Dataset:
+    """``ds`` with control characters dropped from every text attribute and text coordinate
+    (a results file from elsewhere: its text reaches figures, tables and the terminal)."""
+    import numpy as np  # noqa: PLC0415  (on use: the CLI imports this module for --help)
+
+    ds = printable_attributes(ds)
+    for name in list(ds.variables):
+        variable = ds[name]
         if variable.dtype.kind in "OU" and name in ds.coords:
             cleaned = [printable(str(v)) for v in variable.values.ravel()]
             ds = ds.assign_coords(

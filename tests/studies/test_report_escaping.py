@@ -127,6 +127,14 @@ def test_report_md_renders_the_description_as_text(run_folder: Path, renderer: s
     assert "\x07" not in report
 
 
+def test_the_runs_analysis_txt_has_no_terminal_control_characters(run_folder: Path) -> None:
+    # An audit's case: `analyze` cleaned the text it writes, but the run's own analysis.txt
+    # kept the description's escape sequences, so `cat analysis.txt` retitled the terminal.
+    text = (run_folder / "analysis.txt").read_text(encoding="utf-8")
+    assert not [c for c in "\x1b\x07\r\x9b" if c in text]  # TERMINAL's control characters
+    assert "owned" in text  # the description is there, as text
+
+
 def test_report_html_is_inert_and_embeds_only_the_runs_figures(run_folder: Path) -> None:
     page = (run_folder / "report.html").read_text(encoding="utf-8")
     found = assert_inert(page, set(), own_script=True)
