@@ -242,18 +242,32 @@ SETTINGS: tuple[Parameter, ...] = (
 )
 
 DYN = ("tappet", "rocker", "dynamics")
+ON_GRID = (
+    ", read at the angle_step grid points (the peak between them can be larger: refine "
+    "angle_step to converge it)"
+)
+IN_WINDOW = (
+    ", within the integration window (to the closing angle + closing_window): a valve still "
+    "off its seat at the window's end has its later bounces and landing left out"
+)
 JUMP = ("tappet", "rocker", "jump_speed")
 
 DYNAMIC_RESPONSES: tuple[Response, ...] = (
     Response(
         "max_lift", "mm", "maximum actual valve lift y (located between grid points)", DYN, "larger"
     ),
-    Response("max_opening_velocity", "m/s", "largest valve velocity (opening)", DYN),
+    Response("max_opening_velocity", "m/s", f"largest valve velocity (opening){ON_GRID}", DYN),
     Response(
-        "max_closing_velocity", "m/s", "most negative valve velocity (closing)", DYN, "larger"
+        "max_closing_velocity",
+        "m/s",
+        f"most negative valve velocity (closing){ON_GRID}",
+        DYN,
+        "larger",
     ),
-    Response("max_acceleration", "m/s^2", "largest valve acceleration", DYN),
-    Response("min_acceleration", "m/s^2", "most negative valve acceleration", DYN, "larger"),
+    Response("max_acceleration", "m/s^2", f"largest valve acceleration{ON_GRID}", DYN),
+    Response(
+        "min_acceleration", "m/s^2", f"most negative valve acceleration{ON_GRID}", DYN, "larger"
+    ),
     Response(
         "follows_cam",
         "1",
@@ -276,12 +290,13 @@ DYNAMIC_RESPONSES: tuple[Response, ...] = (
         "bounce_count",
         "1",
         "seat contacts lost again after the first closure (on a very stiff seat a contact "
-        "lasts about one RK4 sub-step: check the count converges with a finer angle_step)",
+        f"lasts about one RK4 sub-step: check the count converges with a finer angle_step)"
+        f"{IN_WINDOW}",
         DYN,
     ),
-    Response("bounce_height", "mm", "largest bounce height off the seat", DYN),
-    Response("seating_velocity", "m/s", "valve speed at the first closure", DYN),
-    Response("max_contact_force", "N", "largest drive (rocker–valve) force", DYN),
+    Response("bounce_height", "mm", f"largest bounce height off the seat{IN_WINDOW}", DYN),
+    Response("seating_velocity", "m/s", f"valve speed at the first closure{IN_WINDOW}", DYN),
+    Response("max_contact_force", "N", f"largest drive (rocker–valve) force{ON_GRID}", DYN),
     Response("substeps", "1", "RK4 sub-steps per step used by the stability guard", DYN),
     Response("step_ratio", "1", "largest |h λ| per sub-step (RK4 bound about 2.6)", DYN),
     Response("mode_transitions", "1", "contact and seat mode changes on the grid", DYN),
