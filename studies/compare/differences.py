@@ -50,7 +50,7 @@ def definition_differences(
 ) -> list[Difference]:
     """Differences of the TOML definitions (values compared in SI when the registry has them)."""
     indexed = all(values)
-    flat = [_flatten(_structure(d) if indexed else d) for d in definitions]
+    flat = [flatten(_structure(d) if indexed else d) for d in definitions]
     keys = list(dict.fromkeys(k for f in flat for k in f))
     out = []
     for key in keys:
@@ -169,12 +169,12 @@ def version_differences(records: list[dict[str, Any]]) -> list[Difference]:
     ]
 
 
-def _flatten(table: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+def flatten(table: dict[str, Any], prefix: str = "") -> dict[str, Any]:
     out: dict[str, Any] = {}
     for key, value in table.items():
         name = f"{prefix}{key}"
         if isinstance(value, dict):
-            out |= _flatten(value, f"{name}.")
+            out |= flatten(value, f"{name}.")
         else:
             out[name] = value
     return out

@@ -2,8 +2,10 @@
 
 A point passes when ``|value - baseline| <= atol + rtol * |baseline|`` (the criterion of
 ``numpy.isclose`` and ``xarray.testing.assert_allclose``; NaN matches NaN). Points are matched
-by the factor values (:func:`studies.compare.runs.matched_points`); a baseline point that the run
-does not have fails, and so do differing units. Tolerances per response come from a TOML file::
+by the factor values (:func:`studies.compare.runs.matched_points`); under ``[noise]`` every
+(design point, noise case) value is a point, matched on the noise case too. A baseline point
+that the run does not have fails, and so do differing units. Tolerances per response come from
+a TOML file::
 
     [max_contact_stress]   # MPa
     rtol = 1e-6
@@ -30,7 +32,7 @@ from studies.compare.tolerances import (
     deviations,
     read_tolerances,
 )
-from studies.run.results import is_status
+from studies.run.results import is_scalar, is_status
 
 __all__ = ["DEFAULT_ATOL", "DEFAULT_RTOL", "Tolerance", "read_tolerances"]
 
@@ -56,7 +58,7 @@ class Check:
 
 def compared_responses(ds: xr.Dataset) -> list[str]:
     names = json.loads(ds.attrs.get("responses", "[]")) or list(ds.data_vars)
-    return [str(n) for n in names if n in ds and ds[n].dims == ("run",)]
+    return [str(n) for n in names if n in ds and is_scalar(ds[n])]
 
 
 def check_results(
@@ -91,21 +93,17 @@ def check_results(
             problems.append(f"units {results[r].attrs.get('units', '')!r} ≠ baseline {units!r}")
         if len(common) < expected_points:
             problems.append(f"{expected_points - len(common)} baseline points missing")
-        checks.append(
-            _check(common, r, units, tol, factors, "; ".join(problems), is_status(baseline[r]))
-        )
+        checks.append(_check(common, r, units, tol, "; ".join(problems), is_status(baseline[r])))
     return checks
 
 
-def _check(
-    common, response: str, units: str, tol: Tolerance, factors: list[str], problem: str, exact: bool
-) -> Check:
+def _check(common, response: str, units: str, tol: Tolerance, problem: str, exact: bool) -> Check:
     expected = common[response].to_numpy(np.float64)
     actual = common[f"{response}_other"].to_numpy(np.float64)
     tol = Tolerance(0.0, 0.0) if exact else tol
     inside, diff, rel = deviations(expected, actual, tol)
     worst = int(np.argmax(diff)) if diff.size else 0
-    where = point_label(common.index[worst], factors) if diff.size and diff[worst] > 0 else ""
+    where = point_label(common, worst) if diff.size and diff[worst] > 0 else ""
     if where:
         where += f": {expected[worst]:.8g} → {actual[worst]:.8g}"
     return Check(

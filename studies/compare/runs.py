@@ -4,8 +4,10 @@ Everything is read from the run folders (``study.toml``, ``run.json``, ``results
 registry, never from scene code, so runs of scenes that are no longer installed still compare.
 Design points are matched by the values of the factors the runs share, in SI (so levels written
 in mm and in m match): two different designs over the same factors compare on the points they
-have in common. A response "moved" when a common point differs beyond its tolerance
-(:mod:`studies.compare.tolerances`; by default rtol 1e-7).
+have in common. Under ``[noise]`` every (design point, noise case) value is compared, matched
+on the factor values and the noise case, which is the same case in both runs only when their
+``[noise]`` tables agree (else nothing is compared). A response "moved" when a common value
+differs beyond its tolerance (:mod:`studies.compare.tolerances`; by default rtol 1e-7).
 """
 
 from __future__ import annotations
@@ -23,14 +25,16 @@ import xarray as xr
 from studies.common.errors import RunStateError, StudyError
 from studies.common.units import UNITS, to_si
 from studies.compare.differences import (
+    MISSING,
     Difference,
     code_differences,
     definition_differences,
+    flatten,
     short,
     version_differences,
 )
 from studies.compare.tolerances import DEFAULT, Tolerance, deviations
-from studies.run.results import is_status, open_results
+from studies.run.results import NOISE, is_scalar, is_status, open_results
 from studies.tracking.store import RunStore
 
 
@@ -49,13 +53,14 @@ class RecordedRun:
         return list(json.loads(self.results.attrs.get("factors", "[]")))
 
     def responses(self) -> list[str]:
-        """Numeric responses on ``run`` (status codes and bit masks excluded)."""
+        """Numeric responses on ``run`` or ``run × noise`` (status codes and bit masks
+        excluded)."""
         names = json.loads(self.results.attrs.get("responses", "[]"))
         return [
             n
             for n in names
             if n in self.results
-            and self.results[n].dims == ("run",)
+            and is_scalar(self.results[n])
             and self.results[n].dtype.kind in "fiu"
             and not is_status(self.results[n])
         ]
@@ -179,11 +184,16 @@ def shared_factors(runs: list[RecordedRun]) -> list[str]:
 
 
 def point_table(ds: xr.Dataset, factors: list[str], responses: list[str]) -> pd.DataFrame:
-    """Responses indexed by the values of ``factors`` in SI (ValueError if they repeat)."""
-    frame = pd.DataFrame({f: _si(ds[f]) for f in factors})
+    """Responses indexed by the values of ``factors`` in SI, a row per design point; under
+    ``[noise]`` a row per design point and noise case, indexed by the case too (ValueError if
+    the factor values repeat)."""
+    cases = ds.sizes.get(NOISE, 1)
+    frame = pd.DataFrame({f: np.repeat(_si(ds[f]), cases) for f in factors})
+    if NOISE in ds.dims:
+        frame[NOISE] = np.tile(ds[NOISE].values, ds.sizes["run"])
     for r in responses:
-        frame[r] = ds[r].values.astype(np.float64)
-    indexed = frame.set_index(factors)
+        frame[r] = ds[r].values.astype(np.float64).ravel()  # run-major: as repeat and tile
+    indexed = frame.set_index(factors + ([NOISE] if NOISE in ds.dims else []))
     if not indexed.index.is_unique:
         msg = (
             f"run {ds.attrs.get('run_id', '?')} has several design points with the same values "
@@ -195,9 +205,11 @@ def point_table(ds: xr.Dataset, factors: list[str], responses: list[str]) -> pd.
 
 def matched_points(reference: xr.Dataset, other: xr.Dataset, factors: list[str]) -> pd.DataFrame:
     """The design points both runs have, columns ``<response>`` (reference) and
-    ``<response>_other``, indexed by the factor values."""
-    names = [n for n in reference.data_vars if n in other.data_vars and other[n].dims == ("run",)]
-    names = [n for n in names if reference[n].dims == ("run",)]
+    ``<response>_other``, indexed by the factor values (and the noise case: StudyError when
+    the runs' noise cases differ)."""
+    same_noise(reference, other)
+    names = [n for n in reference.data_vars if n in other.data_vars]
+    names = [n for n in names if is_scalar(reference[n]) and is_scalar(other[n])]
     a = point_table(reference, factors, [str(n) for n in names])
     b = point_table(other, factors, [str(n) for n in names])
     common = a.join(b.add_suffix("_other"), how="inner")
@@ -205,6 +217,42 @@ def matched_points(reference: xr.Dataset, other: xr.Dataset, factors: list[str])
         msg = f"the runs have no design point in common over {', '.join(factors)}"
         raise StudyError(msg)
     return common
+
+
+def noise_table(ds: xr.Dataset) -> dict[str, Any] | None:
+    """The ``[noise]`` table of the study that made ``ds``, flattened (None without noise)."""
+    if NOISE not in ds.dims:
+        return None
+    try:
+        study = tomllib.loads(str(ds.attrs.get("study_toml", "")))
+    except tomllib.TOMLDecodeError:
+        study = {}
+    return flatten(study.get("noise", {}))
+
+
+def same_noise(reference: xr.Dataset, other: xr.Dataset) -> None:
+    """StudyError unless noise case k is the same case in both runs: neither has ``[noise]``,
+    or both have the same ``[noise]`` table."""
+    a, b = noise_table(reference), noise_table(other)
+    if a == b:
+        return
+    ids = [str(ds.attrs.get("run_id", "?")) for ds in (reference, other)]
+    if a is None or b is None:
+        what = [
+            f"{ds.attrs.get('noise_design') or 'no [noise]'} in {i}"
+            for ds, i in zip((reference, other), ids, strict=True)
+        ]
+    else:
+        keys = [k for k in dict.fromkeys([*a, *b]) if a.get(k, MISSING) != b.get(k, MISSING)]
+        what = [
+            f"{k} = {short(a.get(k, MISSING))} in {ids[0]}, {short(b.get(k, MISSING))} in {ids[1]}"
+            for k in keys
+        ]
+    msg = (
+        f"the runs' [noise] tables differ ({'; '.join(what)}): their noise cases are not the "
+        "same cases, so nothing is compared; compare runs whose [noise] tables agree"
+    )
+    raise StudyError(msg)
 
 
 def _si(coordinate: xr.DataArray) -> np.ndarray:
@@ -216,10 +264,13 @@ def _si(coordinate: xr.DataArray) -> np.ndarray:
     return values
 
 
-def point_label(index: Any, factors: list[str]) -> str:
-    """A design point as ``factor=value`` pairs (values in SI, as matched)."""
+def point_label(common: pd.DataFrame, row: int) -> str:
+    """Row ``row`` of a :func:`matched_points` table as ``factor=value`` pairs (values in SI,
+    as matched; ``noise=k`` its noise case)."""
+    index = common.index[row]
     values = index if isinstance(index, tuple) else (index,)
-    return ", ".join(f"{f}={short(v)}" for f, v in zip(factors, values, strict=True))
+    names = [str(n) for n in common.index.names]
+    return ", ".join(f"{n}={short(v)}" for n, v in zip(names, values, strict=True))
 
 
 def _change(
@@ -232,8 +283,7 @@ def _change(
     worst = None
     if not inside.all():
         i = int(np.argmax(beyond))
-        factors = [str(n) for n in common.index.names]
-        worst = (point_label(common.index[i], factors), float(a[i]), float(b[i]))
+        worst = (point_label(common, i), float(a[i]), float(b[i]))
     return ResponseChange(
         response,
         units,
@@ -265,9 +315,10 @@ def format_comparison(c: Comparison) -> str:
         )
     tolerances = sorted({(ch.tolerance.rtol, ch.tolerance.atol) for ch in c.changes})
     limits = "; ".join(f"rtol {r:g}, atol {a:g}" for r, a in tolerances)
+    noise = " and the noise case" if NOISE in c.runs[0].results.dims else ""
     lines += [
         "",
-        f"responses (matched on {', '.join(c.matched_on)} in SI; moved: beyond {limits}):",
+        f"responses (matched on {', '.join(c.matched_on)} in SI{noise}; moved: beyond {limits}):",
     ]
     moved = [ch for ch in c.changes if ch.changed]
     if moved:

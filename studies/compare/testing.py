@@ -85,7 +85,7 @@ def _on_common_points(actual: xr.Dataset, expected: xr.Dataset) -> xr.Dataset:
     (``<response>`` from the baseline, ``<response>_other`` from the run)."""
     factors = json.loads(expected.attrs.get("factors", "[]"))
     common = matched_points(expected, actual, factors)
-    labels = [point_label(i, factors) for i in common.index]
+    labels = [point_label(common, i) for i in range(len(common))]
     return xr.Dataset(
         {str(k): ("point", v.to_numpy(np.float64)) for k, v in common.items()}
     ).assign_coords(point=labels)

@@ -32,7 +32,7 @@ from studies.report import markdown_report, plots
 from studies.report import text as analysis_text
 from studies.report.figure_pool import Drawing
 from studies.report.uncertainty import noise_report, sample_report, sobol_report
-from studies.run.results import NOISE
+from studies.run.results import NOISE, is_scalar
 from studies.scenes import SCENES, get_scene
 
 
@@ -57,7 +57,7 @@ def write_analysis(
     clock = Phases(timings if timings is not None else {})
     drawing = Drawing(clock.timings, problems if problems is not None else [])
     names = responses or json.loads(ds.attrs.get("responses", "[]")) or list(ds.data_vars)
-    scalar = [r for r in names if r in ds and ds[r].dims in (("run",), ("run", NOISE))]
+    scalar = [r for r in names if r in ds and is_scalar(ds[r])]
     missing = [r for r in names if r not in ds]
     if missing:
         raise StudyError(

@@ -108,6 +108,12 @@ def run_dims(plan: Plan) -> tuple[str, ...]:
     return ("run", NOISE) if plan.definition.noise is not None else ("run",)
 
 
+def is_scalar(variable: xr.DataArray) -> bool:
+    """Whether ``variable`` is laid out as a scalar response: a value per design point
+    (``run``), or per design point and noise case (``run × noise``)."""
+    return variable.dims in (("run",), ("run", NOISE))
+
+
 @dataclass(frozen=True)
 class RunCoordinate:
     """A coordinate with a value per design point (or per point and noise case): its values

@@ -97,8 +97,10 @@ def _definition_values(study: Path) -> list[Value]:
 
 
 def response_values(results: Path) -> list[Value]:
-    """min, mean and max of every floating-point response of a results file, in SI."""
-    from studies.run.results import open_results  # noqa: PLC0415  (xarray only when indexing)
+    """min, mean and max of every floating-point response of a results file, in SI: over
+    every design point, and under ``[noise]`` every noise case of each."""
+    # xarray only when indexing
+    from studies.run.results import is_scalar, open_results  # noqa: PLC0415
 
     try:
         ds = open_results(results)  # lazily, one response at a time: flat memory
@@ -108,7 +110,7 @@ def response_values(results: Path) -> list[Value]:
         names = json.loads(ds.attrs.get("responses", "[]"))
         rows = []
         for name in names:
-            if name not in ds or ds[name].dims != ("run",) or ds[name].dtype.kind != "f":
+            if name not in ds or not is_scalar(ds[name]) or ds[name].dtype.kind != "f":
                 continue
             seen = finite_summary(ds[name].variable)  # a block of runs at a time
             units = str(ds[name].attrs.get("units", ""))

@@ -5,7 +5,9 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
+import xarray as xr
 
 from studies.cli import main
 from studies.compare.plots import overlay_figure
@@ -177,3 +179,67 @@ def test_runs_differing_only_in_how_units_are_written_are_identical(
     # regress: within a zero tolerance
     assert main(["regress", a, b, "--rtol", "0", "--outputs", str(outputs)]) == 0
     assert "all within tolerance" in capsys.readouterr().out
+
+
+CAM_NOISE = """
+name = "cam_noise"
+scene = "cam"
+responses = ["max_contact_stress", "max_jerk"]
+design = "full_factorial"
+[parameters]
+cam_speed = {cam_speed}
+[factors.base_radius]
+levels = [30.0, 35.0]
+units = "mm"
+[noise]
+type = "L4"
+[noise.spring_rate]
+distribution = "uniform"
+half_width = 5
+relative = true
+"""
+
+
+def test_noise_runs_compare_regress_and_are_found_by_their_response_summaries(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # was: compare "the runs share no response: …: none", regress "the run has none of the
+    # baseline's responses ()" (both exit 2), and runs --where "which no run records"
+    outputs = tmp_path / "out"
+    a = run_text(tmp_path, outputs, "a", CAM_NOISE.format(cam_speed=1000))
+    b = run_text(tmp_path, outputs, "b", CAM_NOISE.format(cam_speed=1500))
+    folders = {r["run_id"]: Path(r["folder"]) for r in RunStore(outputs).list_runs()}
+    with xr.open_dataset(folders[a] / "results.nc") as ds:
+        before = ds["max_contact_stress"].values  # run × noise, the same design in both runs
+    with xr.open_dataset(folders[b] / "results.nc") as ds:
+        after = ds["max_contact_stress"].values
+    assert before.shape == (2, 4)
+    rel = np.abs(after - before) / np.abs(before)
+
+    assert main(["compare", a, b, "--outputs", str(outputs)]) == 0
+    out = capsys.readouterr().out
+    assert "matched on base_radius in SI and the noise case" in out
+    # every design point × noise case moved; the largest changes are numpy's
+    max_abs, max_rel = re.search(
+        r"max_contact_stress \[MPa\] +\S+ +8/8 +(\S+) +(\S+)", out
+    ).groups()
+    assert float(max_abs) == pytest.approx(np.abs(after - before).max(), rel=5e-4)
+    assert float(max_rel) == pytest.approx(rel.max(), rel=5e-3)
+    assert "moved: max_contact_stress" in out
+
+    def regress(rtol: float) -> int:
+        return main(["regress", a, b, "--rtol", repr(float(rtol)), "--outputs", str(outputs)])
+
+    assert regress(rel.max() * (1 - 1e-6)) == 1
+    assert "FAILED: max_contact_stress moved beyond tolerance" in capsys.readouterr().out
+    assert regress(rel.max() * (1 + 1e-6)) == 0
+    assert "all within tolerance" in capsys.readouterr().out
+
+    # the registry summarises every value: the largest is that of some noise case
+    top = float(before.max())
+    for where, found in ((f"<{top * (1 + 1e-9)!r}", True), (f"<{top * (1 - 1e-9)!r}", False)):
+        assert (
+            main(["runs", "--outputs", str(outputs), "--where", f"max_contact_stress.max{where}"])
+            == 0
+        )
+        assert (a in capsys.readouterr().out) is found

@@ -10,6 +10,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 import xarray as xr
 
@@ -171,3 +172,94 @@ def test_regress_takes_a_results_file_and_compare_names_the_changed_engine_sourc
     assert "moved: max_contact_stress" in out
     (line,) = [x for x in out.splitlines() if x.strip().startswith("max_contact_stress [MPa]")]
     assert "9/9" in line  # one line for the moved response, every point beyond 1e-3
+
+
+NOISE_STUDY = """
+name = "cam_noise"
+scene = "cam"
+responses = ["max_contact_stress"]
+design = "full_factorial"
+[factors.base_radius]
+levels = [30.0, 35.0, 40.0]
+units = "mm"
+[noise]
+type = "L4"
+[noise.spring_rate]
+distribution = "uniform"
+half_width = {half_width}
+relative = true
+"""
+
+
+def noise_results(stress: np.ndarray, order: list[int], half_width: int = 5) -> xr.Dataset:
+    """Results laid out as a [noise] study writes them (run × noise), design points in
+    ``order``: ``stress[i, k]`` is the value at base radius 30 + 5 i mm, noise case k."""
+    radius = np.array([30.0, 35.0, 40.0])[order]
+    return xr.Dataset(
+        {"max_contact_stress": (("run", "noise"), stress[order], {"units": "MPa"})},
+        coords={
+            "run": np.arange(3),
+            "noise": np.arange(4),
+            "spring_rate_noise": (("run", "noise"), np.tile([0.95, 0.95, 1.05, 1.05], (3, 1))),
+            "base_radius": ("run", radius, {"units": "mm"}),
+            "base_radius_level": ("run", np.array(order, dtype=np.int32)),
+        },
+        attrs={
+            "factors": '["base_radius"]',
+            "responses": '["max_contact_stress"]',
+            "noise_factors": '["spring_rate"]',
+            "noise_design": "L4 over 'spring_rate'",
+            "study_toml": NOISE_STUDY.format(half_width=half_width),
+            "run_id": f"noise-{half_width}-{''.join(map(str, order))}",
+        },
+    )
+
+
+def test_regress_under_noise_checks_every_noise_case_of_every_design_point(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # was: "the run has none of the baseline's responses ()", exit 2 (only responses on
+    # ("run",) were compared)
+    rng = np.random.default_rng(7)
+    before = rng.uniform(200.0, 300.0, (3, 4))
+    after = before * (1 + rng.uniform(-0.01, 0.01, (3, 4)))
+    after[2, 3] = before[2, 3] * 1.03  # the largest change: base radius 40 mm, noise case 3
+    rel = np.abs(after - before) / np.abs(before)
+    baseline, run = tmp_path / "baseline.nc", tmp_path / "run.nc"
+    noise_results(before, [0, 1, 2]).to_netcdf(baseline)
+    noise_results(after, [2, 0, 1]).to_netcdf(run)  # the same points, in another order
+
+    def regress(rtol: float) -> int:
+        argv = ["regress", str(baseline), str(run), "--rtol", repr(float(rtol))]
+        return main([*argv, "--outputs", str(tmp_path / "out")])
+
+    assert regress(rel.max() * (1 - 1e-6)) == 1
+    out = capsys.readouterr().out
+    line = next(x for x in out.splitlines() if x.startswith("✗ max_contact_stress [MPa]"))
+    beyond, max_abs, max_rel = line.split()[-3:]
+    assert beyond == "1/12"  # 3 design points × 4 noise cases
+    assert float(max_abs) == pytest.approx(np.abs(after - before).max(), rel=5e-3)
+    assert float(max_rel) == pytest.approx(rel.max(), rel=5e-3)
+    assert "base_radius=0.04, noise=3:" in out
+    assert regress(rel.max() * (1 + 1e-6)) == 0
+    assert "all within tolerance" in capsys.readouterr().out
+
+
+def test_regress_refuses_unlike_noise_cases_in_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    stress = np.full((3, 4), 250.0)
+    files = {"5": tmp_path / "5.nc", "8": tmp_path / "8.nc", "none": tmp_path / "none.nc"}
+    noise_results(stress, [0, 1, 2], 5).to_netcdf(files["5"])
+    noise_results(stress, [0, 1, 2], 8).to_netcdf(files["8"])
+    plain = noise_results(stress, [0, 1, 2]).isel(noise=0, drop=True)
+    plain = plain.drop_vars("spring_rate_noise").assign_attrs(noise_design="", run_id="plain")
+    plain.to_netcdf(files["none"])
+    for other, words in (
+        ("8", "spring_rate.half_width = 5 in noise-5-012, 8 in noise-8-012"),
+        ("none", "L4 over 'spring_rate' in noise-5-012; no [noise] in plain"),
+    ):
+        argv = ["regress", str(files["5"]), str(files[other]), "--outputs", str(tmp_path)]
+        assert main(argv) == 2
+        (err,) = capsys.readouterr().err.strip().splitlines()
+        assert f"the runs' [noise] tables differ ({words}): their noise cases" in err
