@@ -177,9 +177,9 @@ def _import_names(distribution: str) -> list[str]:
 def _source_root(name: str) -> Path | None:
     """The file of the top-level module ``name`` or its package's ``__init__.py`` (the folder
     of a namespace package), found without importing it; None if it cannot be found."""
-    module = sys.modules.get(name)
-    if module is not None and getattr(module, "__file__", None):
-        return Path(module.__file__).resolve()
+    file = getattr(sys.modules.get(name), "__file__", None)
+    if file:
+        return Path(file).resolve()
     try:
         spec = importlib.util.find_spec(name)
     except (ImportError, ValueError):
