@@ -299,6 +299,7 @@ def _run_plans(args: argparse.Namespace, plans: list[Plan], executor: Executor |
         key = records.definition_hash(plan.definition.text, plan.definition.input_files())
         code = provenance.code_hash(provenance.code(type(plan.scene)))
         earlier = None if args.force else runs.finished_identical(key, code)
+        warned = _warn(plan) > 0  # true of a reused result too: same definition, same code
         if earlier is not None:
             print(
                 f"{plan.definition.name}: identical definition already ran on identical code "
@@ -307,8 +308,8 @@ def _run_plans(args: argparse.Namespace, plans: list[Plan], executor: Executor |
             )
             print(f"  {Path(earlier['folder']) / 'results.nc'}")
             track_run(args, Path(earlier["folder"]), earlier["run_id"])
+            flagged += warned or _points_without_value(Path(earlier["folder"])) > 0
             continue
-        warned = _warn(plan) > 0
         result = run_plan(
             plan,
             args.outputs,
@@ -327,6 +328,16 @@ def _run_plans(args: argparse.Namespace, plans: list[Plan], executor: Executor |
         )
         return EXIT_POINTS_NOT_RUN
     return 0
+
+
+def _points_without_value(folder: Path) -> int:
+    """The design points of a finished run that gave no value (its run.json; 0 if unreadable:
+    the reuse check found the run finished)."""
+    try:
+        record = json.loads((folder / "run.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return 0
+    return int(record.get("points_without_value", 0))
 
 
 def _report(result: RunResult) -> None:

@@ -62,6 +62,10 @@ def test_poly345_study_is_warned_at_check_and_strict_fails(
     args = ["run", str(study), "--outputs", str(outputs), "--no-progress", "--strict", "--force"]
     assert main(args) == 3  # warned at check: --strict fails, as for a concave rocker cam
     assert "--strict" in capsys.readouterr().err
+    assert main(args[:-1]) == 3  # the same result reused: the same warning, the same exit
+    err = capsys.readouterr().err
+    assert "--strict" in err
+    assert "gives a concave cam" in err
     folder = max(outputs.glob("poly345_concave/*"))
     report = (folder / "report.md").read_text(encoding="utf-8")
     header = report[: report.index("## Design")]
