@@ -41,7 +41,7 @@ from studies.common.errors import (
 )
 from studies.common.text_safety import TerminalText, printable_dataset
 from studies.tracking.registry_file import REGISTRY, RegistryUnusable, unusable
-from studies.tracking_cli import add_commands, check_mlflow, track_run
+from studies.tracking_cli import add_commands, check_mlflow, label_run, track_run
 
 if TYPE_CHECKING:
     from concurrent.futures import Executor
@@ -271,6 +271,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if args.resume:
         check_mlflow(args)
         result = resume_run(args.resume, args.outputs, progress=not args.no_progress)
+        label_run(args, result.record.run_id)
         _report(result)
         track_run(args, Path(result.folder), result.record.run_id)
         return 0
@@ -301,6 +302,7 @@ def _run_plans(args: argparse.Namespace, plans: list[Plan], executor: Executor |
         earlier = None if args.force else runs.finished_identical(key, code)
         warned = _warn(plan) > 0  # true of a reused result too: same definition, same code
         if earlier is not None:
+            label_run(args, earlier["run_id"])
             print(
                 f"{plan.definition.name}: identical definition already ran on identical code "
                 f"(engine and scene sources, library versions): reusing run "
@@ -317,6 +319,7 @@ def _run_plans(args: argparse.Namespace, plans: list[Plan], executor: Executor |
             not args.no_progress,
             executor,
         )
+        label_run(args, result.record.run_id)
         _report(result)
         track_run(args, result.folder, result.record.run_id)
         flagged += warned or result.record.points_without_value > 0

@@ -343,16 +343,24 @@ def check_mlflow(args: argparse.Namespace) -> None:
         check_store(args.mlflow)
 
 
-def track_run(args: argparse.Namespace, folder: Path, run_id: str) -> None:
-    """``run --tag/--note/--mlflow``: tag and note the run, then log it to MLflow."""
+def label_run(args: argparse.Namespace, run_id: str) -> None:
+    """``run --tag/--note``: tag and note the run, before anything about it is printed (a
+    pipe closed by ``| head`` ends the command at the next print)."""
     from studies.tracking.records import now
 
     store = _store(args)
     for tag in args.tag:
         store.set_tag(run_id, tag)
-        print(f"  tagged {tag}")
     if args.note:
         store.add_note(run_id, now(), args.note)
+
+
+def track_run(args: argparse.Namespace, folder: Path, run_id: str) -> None:
+    """``run --tag/--mlflow``: say the run's new tags (:func:`label_run` set them), then log
+    it to MLflow."""
+    store = _store(args)
+    for tag in args.tag:
+        print(f"  tagged {tag}")
     if args.mlflow:
         from studies.tracking.mlflow_export import log_run
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import json
 import os
 import shutil
@@ -74,6 +75,38 @@ def test_identical_definition_on_clean_commit_is_reused(
     assert len(RunStore(outputs).list_runs()) == 1
     assert main([*args, "--force"]) == 0
     assert len(RunStore(outputs).list_runs()) == 2
+
+
+class ClosedPipe:
+    """Standard output after ``| head -1`` has exited: every write raises BrokenPipeError."""
+
+    def write(self, text: str) -> int:
+        raise BrokenPipeError
+
+    def flush(self) -> None:
+        raise BrokenPipeError
+
+
+@pytest.mark.parametrize("reused", [False, True])
+def test_tag_and_note_survive_an_output_pipe_closed_before_they_are_printed(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, reused: bool
+) -> None:
+    # An audit's case: `run STUDY --tag keep --note precious | head -1` exited 0 with no tag
+    # and no note: the first print after the run raised BrokenPipeError, which ends the
+    # command with 0, and the tag and note were only set after the printing.
+    study = tmp_path / "resumable.toml"
+    study.write_text(STUDY)
+    outputs = tmp_path / "outputs"
+    args = ["run", str(study), "--outputs", str(outputs), "--no-progress"]
+    if reused:
+        assert main(args) == 0
+    monkeypatch.setattr("sys.stdout", ClosedPipe())
+    monkeypatch.setattr("sys.stderr", io.StringIO())  # main closes it on a broken pipe
+    assert main([*args, "--tag", "keep", "--note", "precious"]) == 0
+    (row,) = RunStore(outputs).list_runs()
+    tags, notes = RunStore(outputs).tags_and_notes()
+    assert tags[row["run_id"]] == ["keep"]
+    assert [n for n in notes[row["run_id"]] if "precious" in n]
 
 
 def failed_run(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
