@@ -111,6 +111,18 @@ def install_plugin(target: Path) -> Path:
     return target
 
 
+def recomputed_x1000(site: Path, argv: list[str], outputs: Path, old: Path) -> Path:
+    """Run ``argv`` after an edit that multiplies the amplitude by 1000: it must recompute
+    (not reuse ``old``) and give 1000 × the old amplitude; the new run's folder."""
+    edited = studies(site, *argv)
+    assert edited.returncode == 0, edited.stderr
+    assert "reusing run" not in edited.stdout
+    new = next(p for p in (outputs / "oscillator_grid").iterdir() if p != old)
+    with xr.open_dataset(old / "results.nc") as a, xr.open_dataset(new / "results.nc") as b:
+        np.testing.assert_allclose(b["amplitude"].values, 1e3 * a["amplitude"].values)
+    return new
+
+
 def test_editing_the_plugins_source_invalidates_the_cache_and_compare_names_it(
     tmp_path: Path,
 ) -> None:
@@ -133,12 +145,7 @@ def test_editing_the_plugins_source_invalidates_the_cache_and_compare_names_it(
     text = source.read_text(encoding="utf-8")
     assert text.count("np.hypot(a, b) * 1e3") == 1
     source.write_text(text.replace("np.hypot(a, b) * 1e3", "np.hypot(a, b) * 1e6"), "utf-8")
-    edited = studies(site, *argv)
-    assert edited.returncode == 0, edited.stderr
-    assert "reusing run" not in edited.stdout
-    new = next(p for p in (outputs / "oscillator_grid").iterdir() if p != old)
-    with xr.open_dataset(old / "results.nc") as a, xr.open_dataset(new / "results.nc") as b:
-        np.testing.assert_allclose(b["amplitude"].values, 1e3 * a["amplitude"].values)
+    new = recomputed_x1000(site, argv, outputs, old)
 
     compared = studies(site, "compare", old.name, new.name, "--outputs", str(outputs))
     assert compared.returncode == 0, compared.stderr
@@ -182,9 +189,4 @@ def test_editing_a_module_beside_the_plugins_package_invalidates_the_cache(tmp_p
     (old,) = (outputs / "oscillator_grid").iterdir()
     module = site / "oscillator_gain.py"
     module.write_text(module.read_text(encoding="utf-8").replace("1e3", "1e6"), "utf-8")
-    edited = studies(site, *argv)
-    assert edited.returncode == 0, edited.stderr
-    assert "reusing run" not in edited.stdout
-    new = next(p for p in (outputs / "oscillator_grid").iterdir() if p != old)
-    with xr.open_dataset(old / "results.nc") as a, xr.open_dataset(new / "results.nc") as b:
-        np.testing.assert_allclose(b["amplitude"].values, 1e3 * a["amplitude"].values)
+    recomputed_x1000(site, argv, outputs, old)
