@@ -26,15 +26,15 @@ import os
 import re
 import sqlite3
 from collections.abc import Iterator
-from contextlib import closing
+from contextlib import closing, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from studies.common import labels
-from studies.tracking import registry, trash
+from studies.tracking import registry, registry_file, trash
 from studies.tracking.liveness import is_locked
-from studies.tracking.registry_file import REGISTRY, RegistryUnusable, writing
+from studies.tracking.registry_file import REGISTRY, RegistryUnusable, unusable, writing
 
 if TYPE_CHECKING:
     from studies.tracking.store import RunStore
@@ -133,11 +133,12 @@ def rebuild(store: RunStore) -> Reindexed:
     if path.exists() or path.is_symlink():
         stamp = dt.datetime.now(dt.UTC).strftime("%Y%m%dT%H%M%S%f")
         done.kept_as = path.with_name(f"{REGISTRY}.{stamp}.bak")
-        path.rename(done.kept_as)
-        for side in SIDE_FILES:  # a hot journal must never be replayed onto the new file
-            companion = path.with_name(REGISTRY + side)
-            if companion.exists():
-                companion.rename(done.kept_as.with_name(done.kept_as.name + side))
+        with _no_writer(path):
+            path.rename(done.kept_as)
+            for side in SIDE_FILES:  # a hot journal must never be replayed onto the new file
+                companion = path.with_name(REGISTRY + side)
+                if companion.exists():
+                    companion.rename(done.kept_as.with_name(done.kept_as.name + side))
     old_tags, old_notes = _salvage(done.kept_as)
     claims: dict[str, tuple[str, Path]] = {}  # tag → (when, folder): the latest claim wins
     with store.connection() as con:
@@ -169,6 +170,27 @@ def rebuild(store: RunStore) -> Reindexed:
         done.tags = con.execute("SELECT COUNT(*) FROM tags").fetchone()[0]
         done.notes = con.execute("SELECT COUNT(*) FROM notes").fetchone()[0]
     return done
+
+
+@contextmanager
+def _no_writer(path: Path) -> Iterator[None]:
+    """Hold the registry's write lock while it is moved aside, so that no other process is
+    inside a transaction on it (waiting for one up to ``BUSY_TIMEOUT_S``, then
+    :class:`RegistryUnusable`, nothing moved); a file SQLite cannot lock (damaged: what
+    reindex is for) is moved as it is."""
+    try:
+        con = sqlite3.connect(path, timeout=registry_file.BUSY_TIMEOUT_S, isolation_level=None)
+    except sqlite3.Error:
+        yield
+        return
+    with closing(con):
+        try:
+            con.execute("BEGIN IMMEDIATE")
+        except sqlite3.Error as exc:
+            code = (getattr(exc, "sqlite_errorcode", None) or sqlite3.SQLITE_ERROR) & 0xFF
+            if code in (sqlite3.SQLITE_BUSY, sqlite3.SQLITE_LOCKED):
+                raise unusable(exc, path) from None
+        yield
 
 
 def _salvage(old: Path | None) -> tuple[dict[str, str], dict[str, list[tuple[str, str]]]]:

@@ -181,6 +181,11 @@ def test_a_locked_registry_waits_a_bounded_time_then_says_so(
         line = one_line(capsys.readouterr().err)
         assert "is locked by another process (waited 0.3 s)" in line
     assert fingerprint(outputs) == before
+    # reindex too (an audit: it moved the locked file and its journal aside after 7 s, under
+    # the other process's open transaction, and said it had reindexed)
+    assert main(["reindex", "--outputs", str(outputs)]) == 4
+    assert "is locked by another process (waited 0.3 s)" in one_line(capsys.readouterr().err)
+    assert sorted(p.name for p in outputs.glob(f"{registry.REGISTRY}*")) == [registry.REGISTRY]
 
 
 def test_a_read_only_registry_is_read_and_refuses_writes_in_one_line(
