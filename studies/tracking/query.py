@@ -43,6 +43,7 @@ COLUMNS = {
     "started",
     "finished",
 }
+DATES = ("started", "finished")  # ISO 8601 in the registry: ordered as text
 TABLE_COLUMNS = ("run_id", "study", "status", "runs", "compile_s", "run_s", "git_commit", "tags")
 
 
@@ -72,6 +73,13 @@ class Condition:
             raise StudyError(msg)
         head = "EXISTS (SELECT 1 FROM run_values v WHERE v.run_id = runs.run_id AND v.name = ? "
         if not isinstance(self.value, float):
+            if kind == "response" or op not in ("=", "!="):
+                msg = (
+                    f"--where {self.name}{self.op}{self.value!r}: {self.value!r} is not a number"
+                    + (" (a response's summary is a number)" if kind == "response" else "")
+                    + "; < <= > >= compare numbers, text is compared with == or !="
+                )
+                raise StudyError(msg)
             return head + f"AND v.text {op} ?)", [self.name, self.value]
         si = self.si(declared)
         if op in ("=", "!="):
@@ -107,6 +115,8 @@ def parse_condition(text: str) -> Condition:
         raise StudyError(msg)
     name, op, raw = match.groups()
     raw = raw.strip("'\"")
+    if name in DATES:  # an ISO date or time, compared as text: 2026-12-07 < 2026-12-07T10:00
+        return Condition(name, op, raw)
     number = NUMBER.match(raw)
     if number is None:
         return Condition(name, op, raw)
