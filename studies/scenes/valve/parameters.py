@@ -297,8 +297,19 @@ DYNAMIC_RESPONSES: tuple[Response, ...] = (
     Response("bounce_height", "mm", f"largest bounce height off the seat{IN_WINDOW}", DYN),
     Response("seating_velocity", "m/s", f"valve speed at the first closure{IN_WINDOW}", DYN),
     Response("max_contact_force", "N", f"largest drive (rocker–valve) force{ON_GRID}", DYN),
-    Response("substeps", "1", "RK4 sub-steps per step used by the stability guard", DYN),
-    Response("step_ratio", "1", "largest |h λ| per sub-step (RK4 bound about 2.6)", DYN),
+    Response(
+        "substeps",
+        "1",
+        "RK4 sub-steps per step used by the stability guard (dopri: its accepted steps in all)",
+        DYN,
+    ),
+    Response(
+        "step_ratio",
+        "1",
+        "largest |h λ| per sub-step (RK4 bound about 2.6; dopri: of its steps, whose error "
+        "control keeps them stable, with no such bound)",
+        DYN,
+    ),
     Response("mode_transitions", "1", "contact and seat mode changes on the grid", DYN),
     Response(
         "status",
