@@ -1,6 +1,7 @@
 """Results for other tools: tables per run (CSV or Parquet, via pandas).
 
-One row per design point: the factor values, their level indices and every scalar response;
+One row per design point (under ``[noise]``: per design point and noise case, with the noise
+factors' values): the factor values, their level indices and every scalar response;
 column names carry the units (``max_jerk [mm/rad^3]``), so the file says what it holds without
 the netCDF beside it. A run that stored curves (run × ``cam_angle`` or another axis) gets a
 second table ``<name>_curves.<format>`` in long format: one row per design point and angle,
@@ -19,22 +20,33 @@ import pandas as pd
 import xarray as xr
 
 from studies.common.errors import StudyError
-from studies.run.results import readable
+from studies.run.results import NOISE, is_scalar, readable
 
 FORMATS = ("csv", "parquet")
 CURVE_CHUNK = 1024  # design points per written block of the curve table
 
 
 def results_table(ds: xr.Dataset) -> pd.DataFrame:
-    """The design points of a results Dataset as a DataFrame (index: design point)."""
+    """The design points of a results Dataset as a DataFrame (index: design point; under
+    ``[noise]`` one row per design point and noise case, index (run, noise), each design
+    point's values repeated over its noise cases)."""
+    cases = ds.sizes.get(NOISE, 0)
     columns = {}
     for name in [*ds.coords, *ds.data_vars]:
         da = ds[name]
-        if da.dims != ("run",) or name == "run":
+        if name in ("run", NOISE) or not is_scalar(da):
             continue
-        units = str(da.attrs.get("units", ""))
-        columns[f"{name} [{units}]" if units not in ("", "1") else str(name)] = da.values
-    frame = pd.DataFrame(columns, index=pd.Index(ds["run"].values, name="run"))
+        values = da.values
+        if cases and da.dims == ("run",):
+            values = values.repeat(cases)
+        columns[_label(da, name)] = values.reshape(-1)
+    runs = ds["run"].values
+    index = (
+        pd.MultiIndex.from_product([runs, np.arange(cases)], names=["run", NOISE])
+        if cases
+        else pd.Index(runs, name="run")
+    )
+    frame = pd.DataFrame(columns, index=index)
     frame.attrs = {k: v for k, v in ds.attrs.items() if k in ("run_id", "study_name", "scene")}
     return frame
 
@@ -46,7 +58,11 @@ def _label(da: xr.DataArray, name: Any) -> str:
 
 def curve_names(ds: xr.Dataset) -> list[str]:
     """The stored curves: variables on ``run`` × one axis."""
-    return [str(n) for n, da in ds.data_vars.items() if da.ndim == 2 and da.dims[0] == "run"]
+    return [
+        str(n)
+        for n, da in ds.data_vars.items()
+        if da.ndim == 2 and da.dims[0] == "run" and da.dims[1] != NOISE
+    ]
 
 
 def curve_blocks(ds: xr.Dataset, size: int = CURVE_CHUNK) -> Any:
