@@ -200,6 +200,9 @@ def finish_chain_lanes(block, count, masses, substeps, cases, out):
             (CO_SURGE_AMPLITUDE, LO_SURGE),
         ):
             row[column] = obs[r * LANES + l]
+        if obs[LO_PREV_LIFT * LANES + l] > block[0][LK_DEPTH * LANES + l]:  # off its seat
+            row[CO_BOUNCE_COUNT] = math.nan  # at the window's end: bounces unknown (physics §4)
+            row[CO_BOUNCE_HEIGHT] = math.nan
         clashes = 0.0
         finite = True
         for j in range(n + 2):

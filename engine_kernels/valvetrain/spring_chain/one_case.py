@@ -219,8 +219,10 @@ def spring_chain_response(excitation, table_step, table_start, params, settings,
     out[CO_JUMP_START] = jump_start
     out[CO_JUMP_DURATION] = jump_angle
     out[CO_JUMP_GAP] = jump_gap
-    out[CO_BOUNCE_COUNT] = bounces
-    out[CO_BOUNCE_HEIGHT] = bounce_height
+    off_seat = prev_lift > depth  # at the window's end: its bounces are unknown, the coils
+    # can feed energy back into the valve (physics §4)
+    out[CO_BOUNCE_COUNT] = math.nan if off_seat else bounces
+    out[CO_BOUNCE_HEIGHT] = math.nan if off_seat else bounce_height
     out[CO_SEATING_VELOCITY] = seating
     out[CO_MAX_CONTACT_FORCE] = max_contact
     out[CO_MIN_FORCE_MARGIN] = min_margin

@@ -37,8 +37,11 @@ from engine_kernels.valvetrain.valve.energy_balance import drive_power, energy_p
 from engine_kernels.valvetrain.valve.layout import (
     K_BAND,
     K_MASS,
+    K_PRELOAD,
     K_SEAT_DEPTH,
+    K_SEAT_STIFFNESS,
     K_SPEED,
+    K_STIFFNESS,
     N_RECORD,
     O_BOUNCE_COUNT,
     O_BOUNCE_HEIGHT,
@@ -301,11 +304,32 @@ def observe_transitions(record, at, w, lift, drive, seat):
 
 
 @jit
+def settling_energy(record, at, w, lift, velocity):
+    """Energy per unit mass [J/kg] of the valve at ``lift`` [m] and ``velocity`` [m/s] when the
+    window ends, counted from the seat plane δ0: ½ẏ² + g′(y − δ0), g′ = P_s0/M, plus the
+    energy its springs hold below it: ½k_z′(δ0 − y)² in the seat (y < δ0) and ½k′y² in the
+    drive, which after the cam has closed (Y ≤ 0) pushes only where y < Y ≤ 0. Nothing else
+    gives energy (the dampers take it), so the valve can rise at most this/g′ above δ0 (the
+    spring rate only lowers it) and can leave its seat only where this is > 0. At rest on its
+    seat it is −½g′δ0.
+    """
+    depth = record[at + K_SEAT_DEPTH * w]
+    energy = 0.5 * velocity * velocity + record[at + K_PRELOAD * w] * (lift - depth)
+    if lift < depth:
+        energy += 0.5 * record[at + K_SEAT_STIFFNESS * w] * (depth - lift) ** 2
+    if lift < 0.0:
+        energy += 0.5 * record[at + K_STIFFNESS * w] * lift * lift
+    return energy
+
+
+@jit
 def finish_observations(record, at, w, step_angle, lift, velocity, out):
     """Write the ``O_*`` outputs of one case from its observations and final state.
 
     step_angle : float      Grid step Δθ [rad] (jump duration = separated grid points × Δθ).
     out        : 1-D array  Output row (``O_*``).
+    Bounce count and height are unknown (NaN) where the valve's energy when the window ends
+    (:func:`settling_energy`) could still lift it off its seat, and above its largest bounce.
     The status is ``STATUS_NONFINITE`` for a non-finite final state, ``STATUS_UNSTABLE`` if
     the energy balance was broken (:func:`engine_kernels.valvetrain.valve.energy_balance.energy_pumped`),
     else ``STATUS_OK``. Other arguments as in :func:`start_observations`.
@@ -321,6 +345,11 @@ def finish_observations(record, at, w, step_angle, lift, velocity, out):
     out[O_JUMP_GAP] = record[at + ST_JUMP_GAP * w]
     out[O_BOUNCE_COUNT] = record[at + ST_BOUNCES * w]
     out[O_BOUNCE_HEIGHT] = record[at + ST_BOUNCE_HEIGHT * w]
+    energy = settling_energy(record, at, w, lift, velocity)
+    if energy > 0.0:  # it can still (or does) leave the seat: more bounces may follow
+        out[O_BOUNCE_COUNT] = math.nan
+    if energy > record[at + K_PRELOAD * w] * out[O_BOUNCE_HEIGHT]:  # and rise above them
+        out[O_BOUNCE_HEIGHT] = math.nan
     # Speed where the lift reaches δ0, from the last point above the seat along the motion
     # there (engine_kernels.valvetrain.valve.located.seating_speed): no seat force acts before the
     # crossing, while after it a stiff seat reverses the valve within a step, so

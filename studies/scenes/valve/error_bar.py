@@ -280,13 +280,7 @@ def dopri_ladder(
         np.abs(lifts[finished] - fine_lifts[finished]), axis=1
     )
     met = ((bar <= tolerance) & finished).astype(float)
-    derived = {}
-    for name, column in DERIVED_BARS.items():
-        derived[name] = np.where(
-            finished,
-            DOPRI_BAR_FACTOR * output_difference(out[:, column], fine_out[:, column]),
-            np.nan,
-        )
+    derived = derived_bars(out, fine_out, DOPRI_BAR_FACTOR, finished)
     return Ladder(
         out=out,
         level=np.zeros(n, dtype=np.int64),
@@ -322,14 +316,21 @@ def companion_bars(
     finished = (out[:, valve.O_STATUS] == valve.STATUS_OK) & (
         companion[:, valve.O_STATUS] == valve.STATUS_OK
     )
-    return {
-        name: np.where(
-            finished,
-            COMPANION_BAR_FACTOR * output_difference(out[:, column], companion[:, column]),
-            np.nan,
-        )
-        for name, column in DERIVED_BARS.items()
+    return derived_bars(out, companion, COMPANION_BAR_FACTOR, finished)
+
+
+def derived_bars(
+    out: np.ndarray, other: np.ndarray, factor: float, finished: np.ndarray
+) -> dict[str, np.ndarray]:
+    """``factor`` × the difference of each derived output of ``out`` from ``other`` (both
+    (n, O_*)); NaN where a run did not finish, and for a bounce height the run left unknown
+    (NaN: the valve had not settled, a value missing rather than no bounce)."""
+    bars = {
+        name: np.where(finished, factor * output_difference(out[:, c], other[:, c]), np.nan)
+        for name, c in DERIVED_BARS.items()
     }
+    bars["bounce_height_error"][np.isnan(out[:, valve.O_BOUNCE_HEIGHT])] = np.nan
+    return bars
 
 
 def tolerance_rungs(

@@ -246,9 +246,10 @@ ON_GRID = (
     ", read at the angle_step grid points (the peak between them can be larger: refine "
     "angle_step to converge it)"
 )
-IN_WINDOW = (
-    ", within the integration window (to the closing angle + closing_window): a valve still "
-    "off its seat at the window's end has its later bounces and landing left out"
+IN_WINDOW = " in the integration window (to the closing angle + closing_window)"
+UNSETTLED = (
+    "{IN_WINDOW}; NaN: unknown, when the window ended the valve's energy could still {what} "
+    "(multi-mass spring: it was off its seat): raise closing_window"
 )
 JUMP = ("tappet", "rocker", "jump_speed")
 
@@ -290,12 +291,20 @@ DYNAMIC_RESPONSES: tuple[Response, ...] = (
         "bounce_count",
         "1",
         "seat contacts lost again after the first closure (on a very stiff seat a contact "
-        f"lasts about one RK4 sub-step: check the count converges with a finer angle_step)"
-        f"{IN_WINDOW}",
+        "lasts about one RK4 sub-step: check the count converges with a finer angle_step)"
+        + UNSETTLED.format(IN_WINDOW=IN_WINDOW, what="lift it off its seat"),
         DYN,
     ),
-    Response("bounce_height", "mm", f"largest bounce height off the seat{IN_WINDOW}", DYN),
-    Response("seating_velocity", "m/s", f"valve speed at the first closure{IN_WINDOW}", DYN),
+    Response(
+        "bounce_height",
+        "mm",
+        "largest bounce height off the seat"
+        + UNSETTLED.format(IN_WINDOW=IN_WINDOW, what="lift it above its largest bounce"),
+        DYN,
+    ),
+    Response(
+        "seating_velocity", "m/s", f"valve speed at the first closure{IN_WINDOW} (NaN: none)", DYN
+    ),
     Response("max_contact_force", "N", f"largest drive (rocker–valve) force{ON_GRID}", DYN),
     Response(
         "substeps",
