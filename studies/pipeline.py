@@ -4,8 +4,9 @@ The run folder and registry row are created only after the study has passed vali
 malformed study writes nothing; a run the registry cannot record (damaged, locked, full) removes
 its folder again before computing anything. While the run lives it holds the lock on its folder
 and a thread keeps its heartbeat fresh (:mod:`studies.tracking.liveness`). Every finished chunk is
-checkpointed under ``chunks/`` in the run folder; a run that fails or is interrupted keeps its
-folder with ``run.json`` status ``failed`` and the error, and :func:`resume_run`
+checkpointed under ``chunks/`` in the run folder; a run that fails or is interrupted (Ctrl-C)
+keeps its folder with ``run.json`` status ``failed`` or ``interrupted`` and the error, and
+:func:`resume_run`
 (``python -m studies run --resume RUN_ID``) finishes it from its last finished chunk. A run is
 finished in one step, the atomic rewrite of ``run.json``; the checkpoints are removed and the
 registry updated after it (a registry that missed it catches up on sight).
@@ -260,7 +261,8 @@ def _execute(
         if writer is not None:
             writer.abandon()
         _remove_new_files(folder, before)
-        record.status, record.finished, record.error = "failed", records.now(), repr(exc)
+        ended = "interrupted" if isinstance(exc, KeyboardInterrupt) else "failed"
+        record.status, record.finished, record.error = ended, records.now(), repr(exc)
         try:
             record.write()
             store.register(record)

@@ -139,7 +139,7 @@ def liveness(record: dict[str, Any], folder: Path | None = None) -> str:
     "running" run is "interrupted" when its process is gone (same host) or its heartbeat is
     older than ``STALE_S`` (another host)."""
     status = str(record.get("status", ""))
-    if status in ("running", "failed") and folder is not None and is_locked(folder):
+    if status in ("running", "failed", "interrupted") and folder is not None and is_locked(folder):
         return "running"
     if status != "running":
         return status

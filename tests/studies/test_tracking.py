@@ -197,6 +197,10 @@ def test_ctrl_c_ends_with_one_line_naming_the_run_and_the_resume_command(
     assert len(err.splitlines()) == 1
     (row,) = RunStore(outputs).list_runs()
     assert f"python -m studies run --resume {row['run_id']} --outputs {outputs}" in err
+    # recorded as what the console said (an audit: "failed", so --status interrupted missed it)
+    assert row["status"] == "interrupted"
+    assert main(["runs", "--status", "interrupted", "--outputs", str(outputs)]) == 0
+    assert row["run_id"] in capsys.readouterr().out
     monkeypatch.setitem(plan.scene.stages, "geometry", original)
     assert main(["run", "--resume", row["run_id"], "--outputs", str(outputs), "--no-progress"]) == 0
 
