@@ -207,6 +207,13 @@ static inline void finish(const Block *s, int l, double step_angle, double *out)
     out[O_JUMP_GAP] = s->jump_gap[l];
     out[O_BOUNCE_COUNT] = s->bounces[l];
     out[O_BOUNCE_HEIGHT] = s->bounce_height[l];
+    /* unknown where the valve had not settled when the window ended (settling_energy) */
+    REAL y = s->y[l], v = s->v[l], depth = s->depth[l];
+    REAL settling = (REAL)0.5 * v * v + s->ps0[l] * (y - depth);
+    if (y < depth) settling += (REAL)0.5 * s->kz[l] * (depth - y) * (depth - y);
+    if (y < 0) settling += (REAL)0.5 * s->k[l] * y * y;
+    if (settling > 0) out[O_BOUNCE_COUNT] = NAN;
+    if (settling > s->ps0[l] * out[O_BOUNCE_HEIGHT]) out[O_BOUNCE_HEIGHT] = NAN;
     if (s->captured[l] == 1)
         out[O_SEATING_VELOCITY] = seating_speed(s->seat_y0[l] - s->depth[l], s->seat_v0[l],
                                                 s->seat_a0[l], s->seat_j0[l]);
