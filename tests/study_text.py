@@ -72,3 +72,23 @@ def recorded_stages(scene: Any) -> Iterator[list[str]]:
         yield calls
     finally:
         scene.stages.update(original)
+
+
+CAM_NOISE = """
+name = "cam_noise"
+scene = "cam"
+responses = ["max_contact_stress", "max_jerk"]
+design = "full_factorial"
+[parameters]
+cam_speed = {cam_speed}
+[factors.base_radius]
+levels = [30.0, 35.0]
+units = "mm"
+[noise]
+type = "L4"
+[noise.spring_rate]
+distribution = "uniform"
+half_width = 5
+relative = true
+"""
+"""A small cam study under [noise] (format ``cam_speed`` [rpm]): 2 design points x 4 cases."""

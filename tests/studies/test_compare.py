@@ -16,6 +16,7 @@ from studies.compare.tolerances import Tolerance
 from studies.define.definition import find_study
 from studies.pipeline import run_study
 from studies.tracking.store import RunStore
+from study_text import CAM_NOISE
 
 CAM = """
 name = "cam_grid"
@@ -179,25 +180,6 @@ def test_runs_differing_only_in_how_units_are_written_are_identical(
     # regress: within a zero tolerance
     assert main(["regress", a, b, "--rtol", "0", "--outputs", str(outputs)]) == 0
     assert "all within tolerance" in capsys.readouterr().out
-
-
-CAM_NOISE = """
-name = "cam_noise"
-scene = "cam"
-responses = ["max_contact_stress", "max_jerk"]
-design = "full_factorial"
-[parameters]
-cam_speed = {cam_speed}
-[factors.base_radius]
-levels = [30.0, 35.0]
-units = "mm"
-[noise]
-type = "L4"
-[noise.spring_rate]
-distribution = "uniform"
-half_width = 5
-relative = true
-"""
 
 
 def test_noise_runs_compare_regress_and_are_found_by_their_response_summaries(

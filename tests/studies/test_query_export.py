@@ -18,6 +18,7 @@ import xarray as xr
 from studies.cli import main
 from studies.pipeline import run_study
 from studies.scenes import get_scene
+from study_text import CAM_NOISE
 
 STUDY = """
 name = "speeds"
@@ -181,37 +182,18 @@ def test_export_has_every_design_point_with_units(
         assert list(table["max_jerk [mm/rad^3]"]) == pytest.approx(ds["max_jerk"].values.tolist())
 
 
-NOISE_STUDY = """
-name = "noisy"
-scene = "cam"
-responses = ["max_contact_stress", "max_jerk"]
-design = "full_factorial"
-[parameters]
-cam_speed = 1000.0
-[factors.base_radius]
-levels = [30.0, 35.0]
-units = "mm"
-[noise]
-type = "L4"
-[noise.spring_rate]
-distribution = "uniform"
-half_width = 5
-relative = true
-"""
-
-
 def test_export_under_noise_has_a_row_per_design_point_and_noise_case(tmp_path: Path) -> None:
     # An audit's case: a (run, noise) response was left out of the table and written to
     # <name>_curves.csv as a "curve" over the noise cases, without the noise factor's values.
-    study = tmp_path / "noisy.toml"
-    study.write_text(NOISE_STUDY, encoding="utf-8")
+    study = tmp_path / "cam_noise.toml"
+    study.write_text(CAM_NOISE.format(cam_speed=1000.0), encoding="utf-8")
     outputs = tmp_path / "out"
     run_id = run_study(study, outputs=outputs, progress=False).record.run_id
     to = tmp_path / "noisy.csv"
     assert main(["export", run_id, "--to", str(to), "--outputs", str(outputs)]) == 0
     assert not (tmp_path / "noisy_curves.csv").exists()
     table = pd.read_csv(to, index_col=["run", "noise"])
-    (folder,) = (outputs / "noisy").iterdir()
+    (folder,) = (outputs / "cam_noise").iterdir()
     with xr.open_dataset(folder / "results.nc") as ds:
         runs, cases = ds.sizes["run"], ds.sizes["noise"]
         assert len(table) == runs * cases

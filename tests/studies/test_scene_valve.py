@@ -167,6 +167,21 @@ def test_jump_speed_matches_the_rigid_drive_closed_form(integrator: str) -> None
 
 
 # --- tolerance ----------------------------------------------------------------------------------
+def reference_window_lifts(plan: Any) -> tuple[np.ndarray, list[np.ndarray]]:
+    """The curve grid points inside the window (a mask) and each point's valve lift [m] there,
+    by scipy's event-restarted DOP853 at rtol 1e-10 (studies.scenes.valve.reference.valve_ivp)."""
+    scene = plan.scene
+    state = scene.start(plan.points, plan.settings, [], [])
+    ((key, idx),) = state.groups.items()
+    fine = scene.excitation(state, key, 2.0 * acc.REFERENCE_TABLE_DEG, unclipped=True)
+    start, stop = scene.window(state, key)
+    axis = scene.curve_coordinate(plan.settings)
+    inside = (axis >= start) & (axis <= stop)
+    angles = np.radians(axis[inside])
+    rows = valve_rows(plan.points, idx)
+    return inside, [acc.reference_lift(fine, r, angles, "DOP853", 1e-10) for r in rows]
+
+
 def test_tolerance_picks_a_step_whose_error_is_within_it() -> None:
     # Expected: scipy's event-restarted DOP853 at rtol 1e-10 (studies.scenes.valve.reference.valve_ivp) on
     # the same model and excitation, at the grid points of the stored curve.
@@ -186,16 +201,9 @@ def test_tolerance_picks_a_step_whose_error_is_within_it() -> None:
     # at 1 deg plain RK4 misses 1e-3 mm somewhere: that point went on to dopri or a halving
     lanes = ev.scalars["integrator_used"] == INTEGRATORS.index("lanes")
     assert ((used < 1.0) | ~lanes).any()
-    scene = plan.scene
-    state = scene.start(plan.points, plan.settings, [], [])
-    ((key, idx),) = state.groups.items()
-    fine = scene.excitation(state, key, 2.0 * acc.REFERENCE_TABLE_DEG, unclipped=True)
-    start, stop = scene.window(state, key)
-    axis = scene.curve_coordinate(plan.settings)
-    inside = (axis >= start) & (axis <= stop)
+    inside, references = reference_window_lifts(plan)
     assert np.isnan(ev.curves["actual_lift"][:, ~inside]).all()
-    for i, row in enumerate(valve_rows(plan.points, idx)):
-        reference = acc.reference_lift(fine, row, np.radians(axis[inside]), "DOP853", 1e-10)
+    for i, reference in enumerate(references):
         error = np.abs(ev.curves["actual_lift"][i, inside] * 1e-3 - reference).max() * 1e3
         assert error <= tolerance
 
@@ -477,20 +485,6 @@ equivalent_mass = 0.05387
 drive_stiffness = 25943.4"""
 
 
-def reference_window_ends(plan: Any) -> list[float]:
-    """Valve lift [m] at the last grid point of each point's window, by scipy's
-    event-restarted DOP853 at rtol 1e-10 (studies.scenes.valve.reference.valve_ivp)."""
-    scene = plan.scene
-    state = scene.start(plan.points, plan.settings, [], [])
-    ((key, idx),) = state.groups.items()
-    fine = scene.excitation(state, key, 2.0 * acc.REFERENCE_TABLE_DEG, unclipped=True)
-    start, stop = scene.window(state, key)
-    axis = scene.curve_coordinate(plan.settings)
-    inside = np.radians(axis[(axis >= start) & (axis <= stop)])
-    rows = valve_rows(plan.points, idx)
-    return [float(acc.reference_lift(fine, r, inside, "DOP853", 1e-10)[-1]) for r in rows]
-
-
 @pytest.mark.parametrize("integrator", ["lanes", "dopri"])
 def test_bounces_are_unknown_for_a_valve_off_its_seat_when_the_window_ends(
     integrator: str,
@@ -510,7 +504,7 @@ def test_bounces_are_unknown_for_a_valve_off_its_seat_when_the_window_ends(
     )
     ev = evaluate(plan, progress=False)
     seat = 171.47 / 1007265.3e3  # δ0 = Ps0/kz [m]
-    off = [end > seat for end in reference_window_ends(plan)]
+    off = [lifts[-1] > seat for lifts in reference_window_lifts(plan)[1]]
     assert off == [True, True]  # 1.7 and 4.5 mm off the seat: more bounces may follow
     assert np.isnan(ev.scalars["bounce_count"]).all()
     assert np.isnan(ev.scalars["bounce_height"][1])  # never landed: no height to give
@@ -528,7 +522,7 @@ def test_a_valve_on_its_seat_when_the_window_ends_has_its_bounces_counted() -> N
         )
     )
     ev = evaluate(plan, progress=False)
-    for i, end in enumerate(reference_window_ends(plan)):
+    for i, end in enumerate([r[-1] for r in reference_window_lifts(plan)[1]]):
         assert end < 171.47 / 1007265.3e3  # on its seat (y < δ0)
         assert ev.scalars["bounce_count"][i] >= 1
         assert ev.scalars["bounce_height"][i] > 0.0
