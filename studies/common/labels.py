@@ -31,11 +31,11 @@ class Labels:
 
 
 def check_tag(tag: str) -> None:
-    """ValueError unless ``tag`` is a letter then up to 63 letters, digits or ``._+-``: run ids
+    """ValueError unless ``tag`` is an ASCII letter then up to 63 of them, digits or ``._+-``: run ids
     start with a digit, so a tag can never be taken for an id or an id's prefix."""
     if not TAG.match(tag):
         msg = (
-            f"tag {tag!r} is not allowed: a tag starts with a letter and holds letters, digits "
+            f"tag {tag!r} is not allowed: a tag starts with an ASCII letter and holds ASCII letters, digits "
             "and . _ + - (at most 64), so that it can never be mistaken for a run id"
         )
         raise StudyError(msg)

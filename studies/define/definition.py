@@ -7,7 +7,7 @@ one :class:`StudyFileError` listing them all before anything runs.
 
 File layout (see ``studies/catalog/*.toml`` and the README)::
 
-    name = "isac_l9"                 # letters, digits, _ and -
+    name = "isac_l9"                 # ASCII letters, digits, _ and -
     scene = "cam"
     description = "..."
     responses = ["max_contact_stress", "max_jerk"]
@@ -194,7 +194,7 @@ class _Parser(ValueParser):
             self.problem(f"unknown top-level key {key!r}{suggest(key, TOP_LEVEL_KEYS)}")
         name = self._string("name", required=True)
         if name and not NAME_PATTERN.fullmatch(name):
-            self.problem(f"name = {short(name)} may only contain letters, digits, '_' and '-'")
+            self.problem(f"name = {short(name)} may only contain ASCII letters (A-Z, a-z), digits, '_' and '-'")
         elif name and len(name) > MAX_NAME_LENGTH:
             self.problem(
                 f"name = {short(name)} has {len(name)} characters: at most {MAX_NAME_LENGTH} "

@@ -76,14 +76,16 @@ class Parameter:
         """Human description of the allowed values."""
         if self.choices:
             return "one of " + ", ".join(repr(c) for c in self.choices)
-        if self.vector:
-            return "a list of finite numbers"
         if self.text:
             return "a string"
         lo = "-inf" if self.minimum is None else f"{self.minimum:g}"
         hi = "inf" if self.maximum is None else f"{self.maximum:g}"
         bracket = "(" if self.exclusive_minimum or self.minimum is None else "["
         close = ")" if self.maximum is None else "]"
+        if self.vector:
+            bounded = self.minimum is not None or self.maximum is not None
+            inside = f" in {bracket}{lo}, {hi}{close} {self.units}" if bounded else ""
+            return f"a list of finite numbers{inside}"
         kind = "whole number" if self.integer else "number"
         return f"a {kind} in {bracket}{lo}, {hi}{close} {self.units}"
 
@@ -107,6 +109,10 @@ class Parameter:
             bad = next((i for i, v in enumerate(value) if not is_finite_number(v)), None)
             if bad is not None:
                 return f"{self.name}[{bad}] = {not_a_number(value[bad])} (use {self.allowed()})"
+            bad = next((i for i, v in enumerate(value) if self._outside(v)), None)
+            if bad is not None:
+                given = f"{value[bad]:g} {self.units}"
+                return f"{self.name}[{bad}] = {given} is physically impossible: use {self.allowed()}"
             return None
         if not is_finite_number(value):
             return f"{self.name} = {not_a_number(value)} (expected {self.allowed()})"
@@ -120,14 +126,17 @@ class Parameter:
         shown = value
         if units is not None and units != self.units:
             shown = value * UNITS[units].to_si / UNITS[self.units].to_si
-        too_low = self.minimum is not None and (
-            shown < self.minimum or (self.exclusive_minimum and shown <= self.minimum)
-        )
-        too_high = self.maximum is not None and shown > self.maximum
-        if too_low or too_high:
+        if self._outside(shown):
             given = f"{value:g} {units or self.units}"
             return f"{self.name} = {given} is physically impossible: must be {self.allowed()}"
         return None
+
+    def _outside(self, value: float) -> bool:
+        """True if ``value`` (in ``units``) is outside the parameter's bounds."""
+        too_low = self.minimum is not None and (
+            value < self.minimum or (self.exclusive_minimum and value <= self.minimum)
+        )
+        return too_low or (self.maximum is not None and value > self.maximum)
 
     def to_si(self, value: float, units: str | None = None) -> float:
         return to_si(float(value), units or self.units)

@@ -75,12 +75,13 @@ def test_a_name_too_long_for_a_folder_is_refused(
     assert len(problem) < 120  # the name is shown cut short
 
 
-@pytest.mark.parametrize("name", ["isac\\n", "tab\\there", "bell\\u0007"])
-def test_a_name_with_control_characters_is_refused(
+@pytest.mark.parametrize("name", ["isac\\n", "tab\\there", "bell\\u0007", "ventilstößel"])
+def test_a_name_with_control_or_non_ascii_characters_is_refused(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str
 ) -> None:
     problem = refusal(tmp_path, capsys, f'name = "{name}"\n{CAM}{SPEED}')
-    assert problem.endswith("may only contain letters, digits, '_' and '-'")
+    # the rule names the letters it means: "ß" and "ö" are letters, but not ASCII ones
+    assert problem.endswith("may only contain ASCII letters (A-Z, a-z), digits, '_' and '-'")
 
 
 def test_a_boolean_is_not_an_array_column(
@@ -119,13 +120,25 @@ def test_a_boolean_is_not_a_sweep_base(tmp_path: Path, capsys: pytest.CaptureFix
                 "[parameters]\nmotor_ratings = [50.0, inf]\n"
                 "[factors.motor_speed]\nlevels = [1000.0, 2000.0]\n"
             ),
-            "motor_ratings[1] = inf is not a finite number (use a list of finite numbers)",
+            "motor_ratings[1] = inf is not a finite number (use a list of finite numbers "
+            "in (0, 1e+08] W)",
+        ),
+        (
+            # an audit: the largest double passed check, then overflowed in the analysis
+            # (numpy warnings) and the figures (one drew nothing)
+            (
+                'name = "luff"\nscene = "luffing"\nresponses = ["checks_passed"]\n'
+                "[parameters]\nmotor_ratings = [50.0, 1.7976931348623157e308]\n"
+                "[factors.motor_speed]\nlevels = [1000.0, 2000.0]\n"
+            ),
+            "motor_ratings[1] = 1.79769e+308 W is physically impossible: use a list of finite "
+            "numbers in (0, 1e+08] W",
         ),
     ],
-    ids=["nan-polydyne", "inf-motor-rating"],
+    ids=["nan-polydyne", "inf-motor-rating", "huge-motor-rating"],
 )
 @pytest.mark.parametrize("command", ["check", "run"])
-def test_a_vector_parameter_must_be_finite(
+def test_a_vector_parameter_must_be_finite_and_possible(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], text: str, expected: str, command: str
 ) -> None:
     assert refusal(tmp_path, capsys, text, command) == expected

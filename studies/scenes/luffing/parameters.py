@@ -58,6 +58,9 @@ PARAMETERS: tuple[Parameter, ...] = (
         "W",
         [50.0, 100.0, 200.0, 400.0, 750.0],
         "rated powers of the available motors, ascending (the source picks 100 W)",
+        0.0,
+        1e8,  # the largest electric motors built are rated ~100 MW
+        True,
         vector=True,
         source=ASSUMED,
     ),
