@@ -14,6 +14,7 @@ import threading
 
 from studies.cli import main
 from studies.common.errors import EXIT_OUTPUT_ERROR
+from studies.common.matplotlib_folder import writable_config_folder
 
 
 def leave(code: int) -> None:
@@ -38,4 +39,5 @@ def leave(code: int) -> None:
 
 
 if __name__ == "__main__":  # not when a worker process imports it
+    writable_config_folder()
     leave(main())
