@@ -116,3 +116,50 @@ def test_table_excitation_is_the_kernels_hermite_interpolant():
     assert valve.excitation_at(table, step, (0.05 - nodes[0]) / step, 1.0)[0] == pytest.approx(
         cubic(0.05), abs=1e-15
     )
+
+
+def test_an_undamped_seat_returns_the_valve_to_its_height_bounce_after_bounce():
+    # No seat, drive or external damping, drive far below: the valve falls on its spring,
+    # lands on the seat and leaves it again with the same energy (the seat is a linear spring
+    # while y < δ0), so every apex is the start height y0 and the energy
+    # ½Mẏ² + ½ks y² + Ps0 y + ½kz (δ0 − y)²(y < δ0) stays what it was (closed form). With no
+    # seat damping the seat force kz (δ0 − y) and the gap δ0 − y switch at one root: the
+    # reference restarted each on the other at one angle until it gave up (an audit's valve).
+    params = PARAMS.copy()
+    params[[valve.P_DRIVE_DAMPING, valve.P_SEAT_DAMPING]] = 0.0
+    params[valve.P_SPEED] = 2 * math.pi * 500 / 60
+    params[valve.P_INITIAL_LIFT] = 1e-4
+    theta = np.linspace(0.0, 1.0, 20001)
+
+    def far_below(th):
+        th = np.asarray(th, dtype=float)
+        return np.full_like(th, -1.0), np.zeros_like(th), np.zeros_like(th)
+
+    solution = valve_reference(far_below, params, theta, rtol=1e-12, atol=1e-15)
+    mass, ks, ps0, kz = params[[1, 4, 5, 6]]
+    y, v = solution.lift, solution.velocity
+    depth = ps0 / kz
+    energy = 0.5 * mass * v**2 + 0.5 * ks * y**2 + ps0 * y
+    energy += np.where(y < depth, 0.5 * kz * (depth - y) ** 2, 0.0)
+    landings = sum(name == "seat_gap" for _, name in solution.switches) // 2
+    assert landings >= 3  # it bounced, and more than once
+    np.testing.assert_allclose(energy, energy[0], rtol=1e-8)
+    apexes = y[1:-1][(y[1:-1] >= y[:-2]) & (y[1:-1] >= y[2:])]
+    np.testing.assert_allclose(apexes, 1e-4, rtol=1e-6)
+
+
+def test_an_undamped_seat_is_solved_through_grazing_bounces():
+    # The audit's case in small: 500 rpm, seat 1e11 N/m with no seat damping, through closure
+    # into the bounces, where a grazing bounce made the reference give up (more than 10 000
+    # switches at one angle). Expected: the same reference with the seat damping at 1e-3
+    # N·s/m (a damping ratio of 8e-9: nothing the lift feels), where the seat force and the
+    # gap are two switches with two roots.
+    params = PARAMS.copy()
+    params[valve.P_SEAT_STIFFNESS] = 1e11
+    params[valve.P_SPEED] = 2 * math.pi * 500 / 60
+    theta = np.linspace(-1.6, 1.42, 201)
+    lifts = []
+    for damping in (0.0, 1e-3):
+        params[valve.P_SEAT_DAMPING] = damping
+        lifts.append(valve_reference(cosine_event, params, theta, rtol=1e-10, atol=1e-14).lift)
+    np.testing.assert_allclose(lifts[0], lifts[1], rtol=0, atol=1e-10)  # m

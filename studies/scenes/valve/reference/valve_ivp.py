@@ -97,6 +97,20 @@ def _functions(params, excitation, theta, state):
     return float(drive), float(gap), float(seat)
 
 
+def _seat_force_watched(params) -> bool:
+    """False with no seat damping: the seat force kz (δ0 − y) is then the seat gap times kz,
+    one switch with one root, watched as the gap alone (watched twice, each event's restart
+    fired the other at the same angle without end: 10 000 switches at one angle)."""
+    return bool(params[valve.P_SEAT_DAMPING] != 0.0)
+
+
+def _tied(params, signs):
+    """``signs`` with the seat force's tied to the gap's where only the gap is watched."""
+    if not _seat_force_watched(params):
+        signs[2] = signs[1]
+    return signs
+
+
 def _guards(params, excitation, theta, lift, velocity, signs):
     """The event functions (drive force, seat gap, seat force, each with its hysteresis
     offset) at the angles ``theta`` [rad] for the states there, times their sign at the
@@ -109,12 +123,15 @@ def _guards(params, excitation, theta, lift, velocity, signs):
     ] * (speed * drive_slope - velocity)
     gap = depth - lift
     seat = params[valve.P_SEAT_STIFFNESS] * gap - params[valve.P_SEAT_DAMPING] * velocity
-    return np.stack(
+    guards = np.stack(
         [
             sign * (value + sign * hysteresis)
             for sign, value, hysteresis in zip(signs, (drive, gap, seat), HYSTERESIS, strict=True)
         ]
     )
+    if not _seat_force_watched(params):
+        guards[2] = np.inf
+    return guards
 
 
 def _missed_switch(
@@ -192,7 +209,9 @@ def valve_reference(
     theta = float(theta_eval[0])
     end = float(theta_eval[-1])
     state = np.array([params[valve.P_INITIAL_LIFT], params[valve.P_INITIAL_VELOCITY]])
-    signs = [1.0 if f > 0 else -1.0 for f in _functions(params, excitation, theta, state)]
+    signs = _tied(
+        params, [1.0 if f > 0 else -1.0 for f in _functions(params, excitation, theta, state)]
+    )
     lift = np.empty_like(theta_eval)
     velocity = np.empty_like(theta_eval)
     switches: list[tuple[float, str]] = []
@@ -216,6 +235,8 @@ def valve_reference(
             # below the solver tolerance, so an identically zero function (the drive force on
             # the base circle) does not fire at every restart.
             def event(th, x, index=index, offset=signs[index] * HYSTERESIS[index]):
+                if index == 2 and not _seat_force_watched(params):
+                    return 1.0  # never crosses: the gap's event is this switch
                 return _functions(params, excitation, th, x)[index] + offset
 
             event.terminal = True  # type: ignore[attr-defined]
@@ -251,5 +272,6 @@ def valve_reference(
         signs = [1.0 if f > 0 else -1.0 for f in values]
         for i in fired:
             signs[i] = events[i].direction  # type: ignore[attr-defined]
+        signs = _tied(params, signs)
         switches.append((theta, "+".join(("drive", "seat_gap", "seat_force")[i] for i in fired)))
     raise RuntimeError(f"valve reference: more than {MAX_SEGMENTS} mode switches")
