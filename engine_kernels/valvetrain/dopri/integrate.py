@@ -359,7 +359,7 @@ def dopri_response(
             fresh = True
         h *= min(FAC_MAX, max(FAC_MIN, SAFETY * error**-0.2)) if error > 0.0 else FAC_MAX
         h = min(h, longest)
-    finish_observations(record, 0, 1, grid_step, lift, velocity, out)
+    finish_observations(record, 0, 1, grid_step, lift, velocity, out, tolerance)
     out[O_SUBSTEPS] = accepted
     out[O_STEP_RATIO] = largest_ratio
 

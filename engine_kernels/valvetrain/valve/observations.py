@@ -323,10 +323,12 @@ def settling_energy(record, at, w, lift, velocity):
 
 
 @jit
-def finish_observations(record, at, w, step_angle, lift, velocity, out):
+def finish_observations(record, at, w, step_angle, lift, velocity, out, resolution=0.0):
     """Write the ``O_*`` outputs of one case from its observations and final state.
 
     step_angle : float      Grid step Δθ [rad] (jump duration = separated grid points × Δθ).
+    resolution : float      Lift the integrator resolves [m] (0 for RK4; see
+                            :func:`engine_kernels.valvetrain.valve.energy_balance.energy_pumped`).
     out        : 1-D array  Output row (``O_*``).
     Bounce count and height are unknown (NaN) where the valve's energy when the window ends
     (:func:`settling_energy`) could still lift it off its seat, and above its largest bounce.
@@ -366,7 +368,7 @@ def finish_observations(record, at, w, step_angle, lift, velocity, out):
     out[O_MAX_CONTACT_FORCE] = record[at + K_MASS * w] * record[at + ST_MAX_FORCE * w]
     out[O_TRANSITIONS] = record[at + ST_TRANSITIONS * w]
     status = STATUS_OK
-    if energy_pumped(record, at, w):
+    if energy_pumped(record, at, w, resolution):
         status = STATUS_UNSTABLE
     if not (math.isfinite(lift) and math.isfinite(velocity)):
         status = STATUS_NONFINITE
