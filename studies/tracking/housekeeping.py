@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from studies.common import labels
-from studies.common.errors import RunNotFound, RunStateError, StudyError
+from studies.common.errors import OutputsError, RunNotFound, RunStateError, StudyError
 from studies.tracking import registry, trash
 from studies.tracking.liveness import current_status, is_locked, liveness, lock_folder
 from studies.tracking.registry_file import writing
@@ -53,7 +53,8 @@ def parse_age(text: str) -> dt.timedelta:
 def remove_run(store: RunStore, row: dict[str, Any], force: bool = False) -> Path | None:
     """Move a run of ``store`` to the trash and delete its registry rows; return where it went
     (None when its folder was gone already). RunStateError while it runs, or if tagged and not
-    ``force``; RunNotFound if another process moved it meanwhile."""
+    ``force``; RunNotFound if another process moved it meanwhile; OutputsError if its folder
+    cannot move (read-only): then nothing changed."""
     run_id = row["run_id"]
     tags = store.tags_and_notes()[0].get(run_id, [])
     if tags and not force:
@@ -77,7 +78,15 @@ def remove_run(store: RunStore, row: dict[str, Any], force: bool = False) -> Pat
         record = read_record(folder)
         if record is not None and liveness(record) == "running":
             raise RunStateError(f"run {run_id} is still running: not removed")
-        target = trash.move_in(store.trash, folder, str(row["study"]))
+        try:
+            target = trash.move_in(store.trash, folder, str(row["study"]))
+        except OSError as exc:
+            refused = OutputsError(
+                f"run {run_id}: {folder} cannot move into the trash ({exc.strerror or exc}); "
+                f"the folder and {folder.parent} must be writable"
+            )
+            refused.add_note("nothing was removed")
+            raise refused from None
         try:
             with store.connection() as con, writing(con):
                 registry.delete_run(con, run_id)

@@ -11,6 +11,7 @@ the trash folder ``outputs/.trash`` (:attr:`RunStore.trash <studies.tracking.sto
 
 from __future__ import annotations
 
+import contextlib
 import datetime as dt
 import glob
 import shutil
@@ -77,11 +78,18 @@ def holds(root: Path, run_id: str) -> bool:
 
 
 def move_in(root: Path, folder: Path, study: str) -> Path:
-    """Move a run folder into the trash folder ``root`` (one rename); return where it went."""
+    """Move a run folder into the trash folder ``root`` (one rename); return where it went.
+    A folder that cannot move (read-only, say) leaves no empty folder in the trash."""
     stamp = dt.datetime.now(dt.UTC).strftime(STAMP)
     target = root / stamp / study / folder.name
     target.parent.mkdir(parents=True, exist_ok=True)
-    folder.rename(target)
+    try:
+        folder.rename(target)
+    except OSError:
+        for made in (target.parent, target.parent.parent):
+            with contextlib.suppress(OSError):
+                made.rmdir()  # only when empty
+        raise
     return target
 
 

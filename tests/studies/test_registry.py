@@ -4,6 +4,7 @@ restoring and collecting at once), tags, notes, rm and gc."""
 from __future__ import annotations
 
 import datetime as dt
+import errno
 import json
 import math
 import multiprocessing
@@ -17,7 +18,7 @@ from pathlib import Path
 import pytest
 from registry_writers import RUNS_EACH, register_many, run_id
 
-from studies.cli import main
+from studies.cli import EXIT_OUTPUT_ERROR, main
 from studies.common import labels
 from studies.pipeline import run_study
 from studies.tracking import registry, trash
@@ -280,6 +281,34 @@ def test_rm_keeps_the_folder_when_the_registry_cannot_change(
     assert (Path(row["folder"]) / "results.nc").exists()
     assert RunStore(outputs).find_run(row["run_id"]) is not None
     assert RunStore(outputs).trash_entries() == []
+
+
+def test_rm_of_a_run_whose_folder_cannot_move_is_one_line_and_leaves_nothing_in_the_trash(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # An audit's case: a read-only run folder refused the move, but the trash folder made for
+    # it was left behind, empty. The kernel refuses as it would a user (root is not refused).
+    outputs = tmp_path / "out"
+    run_id = tiny_run(tmp_path, outputs)
+    folder = Path(RunStore(outputs).find_run(run_id)["folder"])
+    before = tree(folder)
+    rename = Path.rename
+
+    def read_only(self: Path, target: Path) -> Path:
+        if self == folder:
+            raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), str(self))
+        return rename(self, target)
+
+    monkeypatch.setattr(Path, "rename", read_only)
+    assert main(["rm", run_id, "--outputs", str(outputs)]) == EXIT_OUTPUT_ERROR
+    err = capsys.readouterr().err
+    assert err == (
+        f"error: run {run_id}: {folder} cannot move into the trash (Permission denied); the "
+        f"folder and {folder.parent} must be writable; nothing was removed\n"
+    )
+    assert tree(folder) == before
+    assert RunStore(outputs).find_run(run_id) is not None
+    assert [p.name for p in (outputs / trash.TRASH).rglob("*")] == []
 
 
 def test_gc_moves_old_runs_to_the_trash_and_empties_it_by_age(
