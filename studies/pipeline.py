@@ -289,9 +289,10 @@ def _execute(
 
 
 def _start(store: RunStore, record: records.RunRecord, fresh: bool) -> None:
-    """Write run.json and register the run; a new run the registry refuses leaves nothing."""
-    record.beat()
+    """Write run.json and register the run; a new run whose run.json cannot be written (a
+    full disk) or that the registry refuses leaves nothing."""
     try:
+        record.beat()
         store.register(record)
     except BaseException as exc:
         if fresh:

@@ -20,6 +20,7 @@ their index; :class:`studies.tracking.store.RunStore` keeps both.
 
 from __future__ import annotations
 
+import contextlib
 import datetime as dt
 import hashlib
 import json
@@ -66,13 +67,20 @@ class RunRecord:
     warnings: list[str] = field(default_factory=list)  # e.g. a figure that could not be drawn
 
     def write(self) -> None:
-        """Write ``run.json`` (under a temporary name renamed into place: never half a file)."""
+        """Write ``run.json`` (under a temporary name renamed into place: never half a file;
+        a write that fails, on a full disk say, removes the temporary file and names run.json)."""
         path = Path(self.folder) / "run.json"
         tmp = path.with_name("run.json.writing")
         with _WRITING:
             text = json.dumps(asdict(self), indent=2, default=str) + "\n"
-            tmp.write_text(text, encoding="utf-8")
-            tmp.replace(path)
+            try:
+                tmp.write_text(text, encoding="utf-8")
+                tmp.replace(path)
+            except OSError as exc:
+                with contextlib.suppress(OSError):
+                    tmp.unlink(missing_ok=True)
+                exc.filename = exc.filename or str(path)
+                raise
 
     def beat(self) -> None:
         """Record that the run is alive now (the heartbeat thread calls this)."""

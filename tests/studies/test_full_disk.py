@@ -11,6 +11,7 @@ from __future__ import annotations
 import errno
 import json
 import os
+import re
 import resource
 import shutil
 import subprocess
@@ -30,6 +31,7 @@ from studies.define.plan import plan_text
 from studies.run import results_writer
 from studies.run.runner import evaluate
 from studies.tracking.checkpoints import checkpoint_bytes
+from studies.tracking.records import RunRecord
 from studies.tracking.store import RunStore
 
 STUDY = """
@@ -54,9 +56,12 @@ def hdf() -> RuntimeError:
 KEPT = {"study.toml", "run.json", "chunks"}
 
 
-def _report_md(original):  # type: ignore[no-untyped-def]
+def _cut_short(original, *names: str):  # type: ignore[no-untyped-def]
+    """``Path.write_text`` (``original``), except that files called one of ``names`` get a
+    prefix of the text and then ENOSPC, as on a disk that fills."""
+
     def write_text(self: Path, *args: object, **kwargs: object) -> int:
-        if self.name in ("report.md", "report.html"):
+        if self.name in names:
             with self.open("w") as cut:
                 cut.write("# cut sh")  # what a full disk leaves: a prefix
             raise enospc()
@@ -121,9 +126,50 @@ def test_a_full_disk_while_writing_the_report_leaves_no_cut_report(
     study.write_text(STUDY)
     outputs = tmp_path / "out"
     with monkeypatch.context() as patch:
-        patch.setattr(Path, "write_text", _report_md(Path.write_text))
+        patch.setattr(Path, "write_text", _cut_short(Path.write_text, "report.md", "report.html"))
         assert run(study, outputs) == EXIT_OUTPUT_ERROR
     check_failed_run(outputs, capsys, os.strerror(errno.ENOSPC))
+
+
+def test_a_full_disk_before_run_json_is_written_leaves_no_run_folder(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # An audit's case: the run folder was left holding run.json.writing, which `runs` does
+    # not list, and the error named no file.
+    study = tmp_path / "full.toml"
+    study.write_text(STUDY)
+    outputs = tmp_path / "out"
+    with monkeypatch.context() as patch:
+        patch.setattr(Path, "write_text", _cut_short(Path.write_text, "run.json.writing"))
+        assert run(study, outputs) == EXIT_OUTPUT_ERROR
+    assert list((outputs / "full").iterdir()) == []
+    assert RunStore(outputs).list_runs() == []
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    folder = re.escape(str(outputs / "full")) + r"/[\w-]+"
+    assert re.fullmatch(
+        f"error: No space left on device: ({folder})/run.json; nothing was run: the run "
+        r"folder \1 was removed again",
+        line,
+    ), line
+
+
+def test_a_run_json_that_cannot_be_rewritten_stays_as_it_was(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    record = RunRecord(
+        run_id="r", study="full", scene="cam", design="sweep", runs=1, status="running",
+        started="2026-12-07T00:00:00+00:00", git_commit="c", git_dirty=False,
+        definition_sha256="d", folder=str(tmp_path),
+    )  # fmt: skip
+    record.write()
+    before = (tmp_path / "run.json").read_bytes()
+    record.status = "failed"
+    monkeypatch.setattr(Path, "write_text", _cut_short(Path.write_text, "run.json.writing"))
+    with pytest.raises(OSError, match="No space left on device") as failed:
+        record.write()
+    assert [p.name for p in tmp_path.iterdir()] == ["run.json"]
+    assert (tmp_path / "run.json").read_bytes() == before
+    assert str(failed.value) == f"[Errno 28] No space left on device: '{tmp_path / 'run.json'}'"
 
 
 def test_the_clean_up_never_raises_again(
