@@ -138,23 +138,32 @@ def code_differences(records: list[dict[str, Any]]) -> list[Difference]:
     scenes = [c.get("scene", {}) for c in codes]
     names = "/".join(sorted({str(s.get("scene")) for s in scenes if s}))
     engine_words = [f"{e.get('distribution', '?')} {e.get('version', '?')}" for e in engines]
-    out += _code_difference("engine", engines, engine_words)
+    ids = [str(x.get("run_id", "?")) for x in records]
+    out += _code_difference("engine", engines, engine_words, ids)
     if any(s.get("plugin") for s in scenes):  # a built-in scene's code is the engine's
         words = [describe_scene_code(s).rsplit(", source", 1)[0] for s in scenes]
-        out += _code_difference(f"scene {names}", scenes, words)
+        out += _code_difference(f"scene {names}", scenes, words, ids)
     return out
 
 
 def _code_difference(
-    what: str, entries: list[dict[str, Any]], words: list[str]
+    what: str, entries: list[dict[str, Any]], words: list[str], ids: list[str]
 ) -> list[Difference]:
-    """One difference when the distributions, versions or source hashes differ."""
+    """One difference when the distributions, versions or source hashes differ; with more
+    than two runs its note names the runs (``ids``) whose source differs from the first's."""
     hashes = [str(e.get("source_sha256", ""))[:8] or MISSING for e in entries]
     if len(set(words)) == 1 and len(set(hashes)) == 1:
         return []
     note = detail = None
     if len(set(hashes)) > 1:
-        note = "source changed" + (f" ({' → '.join(hashes)})" if len(hashes) == 2 else "")
+        note = "source changed"
+        if len(hashes) == 2:
+            note += f" ({' → '.join(hashes)})"
+        else:
+            changed = [
+                f"{i} {h}" for i, h in zip(ids[1:], hashes[1:], strict=True) if h != hashes[0]
+            ]
+            note += f" in {', '.join(changed)} (reference {ids[0]} {hashes[0]})"
         detail = [f"source {h}" for h in hashes]
     return [Difference("code", what, words, note or "", detail or [])]
 

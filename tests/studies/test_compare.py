@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import re
 from pathlib import Path
 
@@ -106,6 +107,24 @@ def test_different_designs_compare_on_their_common_points(
         "base_radius [18, 20, 22, 24] mm",
     ]
     assert "points" in capsys.readouterr().out
+
+
+def test_three_runs_name_the_run_whose_code_differs(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # An audit's case: with three runs or more, compare said "source changed" and not whose.
+    outputs = tmp_path / "out"
+    a, b, c = (
+        run_text(tmp_path, outputs, n, CAM.format(base_radius="[16.0, 18.0]")) for n in "abc"
+    )
+    for run_id, source in ((a, "1" * 64), (b, "2" * 64), (c, "1" * 64)):  # b: edited code
+        path = Path(RunStore(outputs).find_run(run_id)["folder"]) / "run.json"
+        record = json.loads(path.read_text(encoding="utf-8"))
+        record["code"]["engine"]["source_sha256"] = source
+        path.write_text(json.dumps(record), encoding="utf-8")
+    assert main(["compare", a, b, c, "--outputs", str(outputs)]) == 0
+    (line,) = [x for x in capsys.readouterr().out.splitlines() if "code engine" in x]
+    assert line.endswith(f"source changed in {b} 22222222 (reference {a} 11111111)")
 
 
 def test_bad_input_is_one_line_and_exit_2(
