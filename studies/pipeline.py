@@ -117,6 +117,7 @@ def run_plan(
         host=provenance.host(),
         settings=dict(d.settings),
         chunk_size=chunk_size,
+        workdir=str(Path.cwd()),
     )
     try:
         return _execute(plan, store, record, progress, {}, executor, fresh=True)
@@ -169,8 +170,9 @@ def resume_run(run_id: str, outputs: Path | None = None, progress: bool = True) 
                 f"{record.host.get('node', '?')}, last heartbeat {record.heartbeat}): not resumed"
             )
             raise RunStateError(msg)
-        _check_unchanged(folder / "study.toml", record.definition_sha256)
-        plan = plan_study(folder / "study.toml")
+        inputs = Path(record.workdir) if record.workdir else None  # relative paths: as it did
+        _check_unchanged(folder / "study.toml", record.definition_sha256, inputs)
+        plan = plan_study(folder / "study.toml", folder=inputs)
         code = provenance.code(type(plan.scene))
         if record.code_sha256 and provenance.code_hash(code) != record.code_sha256:
             msg = (
@@ -314,18 +316,20 @@ def _remove_new_files(folder: Path, before: set[Path]) -> None:
             path.unlink()
 
 
-def _check_unchanged(study: Path, sha256: str) -> None:
-    """Refuse to resume a run whose study file, or a file the study reads, changed since it
-    started (its checkpoints would be mixed with points of another definition)."""
+def _check_unchanged(study: Path, sha256: str, folder: Path | None) -> None:
+    """Refuse to resume a run whose study file, or a file the study reads (a relative path in
+    ``folder``), changed since it started (its checkpoints would be mixed with points of
+    another definition)."""
     text = study.read_text(encoding="utf-8")
-    definition, _ = parse_study(text, str(study))
+    definition, _ = parse_study(text, str(study), folder)
     inputs = definition.input_files() if definition is not None else ()
     if records.definition_hash(text, inputs) == sha256:
         return
     original = _recorded_text(study.parent)
     if original == text:
+        read = ", ".join(str(path) for _, path in inputs)
         msg = (
-            f"a file that {study} reads ({', '.join(map(str, inputs))}) changed after the run "
+            f"a file that {study} reads ({read}) changed after the run "
             "started. Resuming would mix design points of two inputs; run the study anew: "
             f"python -m studies run {study}"
         )

@@ -102,15 +102,21 @@ class StudyDefinition:
     samples: int = 0  # a sampling design's base sample (studies.define.sampling)
     seed: int = 1
     second_order: bool = False  # a saltelli design's second-order indices
+    folder: Path | None = None  # where relative input paths are read (None: the working folder)
 
-    def input_files(self) -> tuple[Path, ...]:
-        """The files the study reads (its text parameters, e.g. ``lift_table``), in order."""
+    def input_files(self) -> tuple[tuple[Path, Path], ...]:
+        """The files the study reads (its text parameters, e.g. ``lift_table``), in order: each
+        path as written and the file it names (:meth:`input_path`)."""
         scene = get_scene(self.scene)
         return tuple(
-            Path(value)
+            (Path(value), self.input_path(value))
             for name, (value, _) in self.parameters.items()
             if (p := scene.parameter(name)) is not None and p.kind == "text" and value
         )
+
+    def input_path(self, value: str) -> Path:
+        """The file an input path names: a relative one in :attr:`folder`."""
+        return (self.folder or Path()) / value
 
 
 def find_study(name_or_path: str | Path) -> Path:
@@ -132,19 +138,25 @@ def catalog_names() -> list[str]:
     return sorted(p.stem for p in CATALOG.glob("*.toml"))
 
 
-def read_study(name_or_path: str | Path) -> tuple[StudyDefinition | None, list[str]]:
+def read_study(
+    name_or_path: str | Path, folder: Path | None = None
+) -> tuple[StudyDefinition | None, list[str]]:
     """Parse a study file; return the definition (None if unusable) and the problems found.
-    The file must be a regular file of at most ``STUDY_FILE_BYTES`` (StudyFileError otherwise)."""
+    The file must be a regular file of at most ``STUDY_FILE_BYTES`` (StudyFileError otherwise).
+    ``folder``: where its relative input paths are read (default: the working folder)."""
     path = find_study(name_or_path)
     try:
         text = read_bounded_text(path, "study file", STUDY_FILE_BYTES)
     except InputFileError as exc:
         raise StudyFileError(str(path), [str(exc)]) from None
-    return parse_study(text, str(path))
+    return parse_study(text, str(path), folder)
 
 
-def parse_study(text: str, source: str = "<string>") -> tuple[StudyDefinition | None, list[str]]:
+def parse_study(
+    text: str, source: str = "<string>", folder: Path | None = None
+) -> tuple[StudyDefinition | None, list[str]]:
     """Parse TOML text; return the definition (None if unusable) and every problem found.
+    ``folder``: where its relative input paths are read (default: the working folder).
     A leading UTF-8 byte-order mark is dropped; arrays and tables nested deeper than
     ``MAX_NESTING`` are refused before anything looks at the values."""
     text = text.removeprefix(UTF8_BOM)
@@ -159,7 +171,7 @@ def parse_study(text: str, source: str = "<string>") -> tuple[StudyDefinition | 
     deep = _too_deep(data)
     if deep:
         return None, [deep]
-    return _Parser(data, text, source).parse()
+    return _Parser(data, text, source, folder).parse()
 
 
 def _too_deep(data: dict[str, Any]) -> str:
@@ -184,9 +196,9 @@ def _too_deep(data: dict[str, Any]) -> str:
 
 
 class _Parser(ValueParser):
-    def __init__(self, data: dict[str, Any], text: str, source: str) -> None:
+    def __init__(self, data: dict[str, Any], text: str, source: str, folder: Path | None) -> None:
         super().__init__()
-        self.data, self.text, self.source = data, text, source
+        self.data, self.text, self.source, self.folder = data, text, source, folder
 
     def parse(self) -> tuple[StudyDefinition | None, list[str]]:
         d = self.data
@@ -255,6 +267,7 @@ class _Parser(ValueParser):
             samples=samples,
             seed=seed,
             second_order=second_order,
+            folder=self.folder,
         )
         return definition, self.problems
 

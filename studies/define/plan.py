@@ -78,13 +78,16 @@ class Plan:
         return np.asarray(factor.levels)[self.design.levels[name][part]]
 
 
-def plan_study(name_or_path: str | Path, *, quick: bool = False) -> Plan:
+def plan_study(
+    name_or_path: str | Path, *, quick: bool = False, folder: Path | None = None
+) -> Plan:
     """Read, validate and plan a catalogue study or a TOML file (StudyError if not runnable).
 
     ``quick`` (``check`` without ``--full``): draw no sample that needs ``scipy.stats`` (a
     second to import) and start no compiler; what that leaves unchecked is in
-    :attr:`Plan.unchecked`, and such a plan is for reporting only, never for running."""
-    definition, problems = read_study(name_or_path)
+    :attr:`Plan.unchecked`, and such a plan is for reporting only, never for running.
+    ``folder``: where relative input paths are read (default: the working folder)."""
+    definition, problems = read_study(name_or_path, folder)
     return _plan(definition, problems, str(find_study(name_or_path)), quick)
 
 
@@ -383,6 +386,8 @@ def _points(scene: Scene, d: StudyDefinition, design: designs.Design) -> DesignP
             fixed[p.name] = p.to_si(value, units)
         elif p.kind == "vector":
             fixed[p.name] = np.asarray(value, dtype=float) * p.to_si(1.0)
+        elif p.kind == "text" and value:
+            fixed[p.name] = np.array(str(d.input_path(value)), dtype=object)
         else:
             fixed[p.name] = np.array(value, dtype=object)
     order = [p.name for p in scene.parameters]

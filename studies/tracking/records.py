@@ -8,7 +8,9 @@
         labels.json                its tags and notes (studies.common.labels)
         run.json                   id, status, code (engine and scene distributions, versions
                                    and source hashes), git commit + dirty flag, versions,
-                                   host, start/end, seconds per phase, accuracy settings
+                                   host, start/end, seconds per phase, accuracy settings,
+                                   the working folder it started in (relative input paths,
+                                   e.g. a lift table, are read from it, on a resume too)
         results.nc                 the labelled results (see studies.run.results)
         analysis.txt               range analysis and ANOVA tables
         *.png                      figures
@@ -65,6 +67,7 @@ class RunRecord:
     code: dict[str, Any] = field(default_factory=dict)
     code_sha256: str = ""
     warnings: list[str] = field(default_factory=list)  # e.g. a figure that could not be drawn
+    workdir: str = ""  # the working folder at the start ("": recorded before it was)
 
     def write(self) -> None:
         """Write ``run.json`` (under a temporary name renamed into place: never half a file;
@@ -105,13 +108,14 @@ def now() -> str:
     return dt.datetime.now(dt.UTC).isoformat(timespec="seconds")
 
 
-def definition_hash(text: str, inputs: tuple[Path, ...] = ()) -> str:
+def definition_hash(text: str, inputs: tuple[tuple[Path, Path], ...] = ()) -> str:
     """The SHA-256 of a study's text and of the contents of every file it reads (``inputs``,
-    e.g. a lift table): the cache key, so a changed table is never served from a stale run.
-    With no input files it is the hash of the text alone."""
+    e.g. a lift table: its path as written, and the file read): the cache key, so a changed
+    table is never served from a stale run, wherever a relative path was read from. With no
+    input files it is the hash of the text alone."""
     digest = hashlib.sha256(text.encode("utf-8"))
-    for path in inputs:
-        digest.update(b"\0" + str(path).encode("utf-8") + b"\0")
+    for written, path in inputs:
+        digest.update(b"\0" + str(written).encode("utf-8") + b"\0")
         try:
             digest.update(read_bounded_bytes(path, "input file", TABLE_FILE_BYTES))
         except InputFileError as exc:  # planning reports the unreadable file; the key differs

@@ -335,27 +335,39 @@ def test_the_cache_key_covers_the_contents_of_a_lift_table(
     assert "reusing run" in capsys.readouterr().out
 
 
-def test_resume_refuses_a_lift_table_changed_after_the_run_started(
+def test_resume_from_any_folder_reads_a_relative_lift_table_and_refuses_it_changed(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    table = lift_table(tmp_path / "lift.csv", peak_mm=10.0)
+    # An audit's case: lift_table = "lift.csv", resumed from another folder than the run's,
+    # was refused as changed (a lift.csv there, or none, was read instead)
+    started, elsewhere = tmp_path / "started", tmp_path / "elsewhere"
+    started.mkdir()
+    elsewhere.mkdir()
+    table = lift_table(started / "lift.csv", peak_mm=10.0)
+    lift_table(elsewhere / "lift.csv", peak_mm=5.0)  # the same name, another table
     text = (
-        f'name = "table"\nscene = "cam"\nresponses = ["max_lift", "min_radius_of_curvature"]\n'
-        f'[parameters]\nlaw = "table"\nlift_table = "{table}"\nrise_angle = 75.0\n'
+        'name = "table"\nscene = "cam"\nresponses = ["max_lift", "min_radius_of_curvature"]\n'
+        '[settings]\ntable_smoothing = 0.0\n[parameters]\nlaw = "table"\nlift_table = "lift.csv"\n'
+        "rise_angle = 75.0\n"
         "[factors.base_radius]\n"
         "levels = [14.0, 15.0, 16.0, 17.0, 18.0, 19.0]\n"
     )
+    monkeypatch.chdir(started)
     plan = plan_text(text)
     fail_on_call(monkeypatch, plan, 3, RuntimeError("simulated crash"))
     with pytest.raises(RuntimeError):
         run_plan(plan, tmp_path, chunk_size=2, progress=False)
     (folder,) = (tmp_path / "table").iterdir()
+    monkeypatch.chdir(elsewhere)
     lift_table(table, peak_mm=5.0)
     run_id = json.loads((folder / "run.json").read_text())["run_id"]
     with pytest.raises(ValueError, match=f"a file that .* reads \\({table}\\) changed after"):
         resume_run(run_id, tmp_path, progress=False)
     lift_table(table, peak_mm=10.0)  # the original contents: resumable again
-    assert resume_run(run_id, tmp_path, progress=False).record.status == "finished"
+    resumed = resume_run(run_id, tmp_path, progress=False)
+    assert resumed.record.status == "finished"
+    # the spline interpolates the table's peak: the run's table, not the one beside the resume
+    np.testing.assert_allclose(resumed.dataset["max_lift"].values, 10.0, rtol=1e-9)
 
 
 def test_resume_refuses_a_run_whose_code_changed_since_it_started(
