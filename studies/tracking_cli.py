@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -45,7 +46,8 @@ def add_commands(sub: Any, outputs_help: str) -> None:
         action="append",
         metavar="EXPR",
         help='e.g. "cam_speed>=5000", "bore>=80 mm", "max_jerk.max<900", "status==finished", '
-        '"integrator=rk4" (numbers in the scene\'s units unless one follows; repeat: all hold)',
+        "\"integrator=rk4\" (numbers in each run's scene's units unless one follows; a run "
+        "whose units it does not convert to is skipped; repeat: all hold)",
     )
     runs.add_argument(
         "--columns",
@@ -150,9 +152,11 @@ def _runs(args: argparse.Namespace) -> int:
     from studies.tracking import query
 
     store = _store(args)
-    rows = query.find_runs(
+    rows, skipped = query.find_runs(
         store, args.study, args.scene, args.status, args.since, args.where, args.tag
     )
+    for line in skipped:  # on stderr: --json and --csv stay whole on stdout
+        print(f"note: {line}", file=sys.stderr)
     if args.json or args.csv:
         rows = query.with_values(store, rows)
         print(query.as_json(rows) if args.json else query.as_csv(rows), end="\n" * args.json)

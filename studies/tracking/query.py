@@ -7,8 +7,10 @@ started, finished), a parameter (fixed or left at its default) or setting (its v
 A number is in the units the scene declares for NAME (those of ``python -m studies scenes``,
 whatever units each study file wrote) unless a unit follows it (``bore>=80 mm``; one that
 does not measure what NAME measures, ``cam_speed>=80 mm``, is refused); values are compared in
-SI, ``==`` to 12 significant digits. Anything else compares as text (quotes
-optional).
+SI, ``==`` to 12 significant digits. Each run is compared in its own scene's units: where two
+scenes declare NAME in different units a bare number is read in each run's, and a run whose
+units a written unit does not convert to does not match (:func:`find_runs` says how many runs
+that skipped). Anything else compares as text (quotes optional).
 """
 
 from __future__ import annotations
@@ -54,13 +56,15 @@ class Condition:
     value: str | float
     units: str = ""  # of a number, when written
 
-    def sql(self, known: dict[str, tuple[str, str]]) -> tuple[str, list[Any]]:
+    def sql(self, known: dict[str, tuple[str, list[str]]]) -> tuple[str, list[Any]]:
         """A WHERE clause on ``runs`` and its arguments (``known``: value name → (kind, the
-        scene's units))."""
+        units the scenes of the runs declare for it)). A number is compared, in each run, in
+        SI of the units its scene declares: a bare number is in those units; a run whose
+        units the number's do not convert to does not match (:meth:`unconvertible`)."""
         op = "=" if self.op == "==" else self.op
         if self.name in COLUMNS:
             return f"runs.{self.name} {op} ?", [self.value]
-        kind, declared = known.get(self.name, ("", ""))
+        kind, declared = known.get(self.name, ("", []))
         if not kind:
             responses = {n.rsplit(".", 1)[0] for n, (k, _) in known.items() if k == "response"}
             if self.name in responses:
@@ -81,27 +85,41 @@ class Condition:
                 )
                 raise StudyError(msg)
             return head + f"AND v.text {op} ?)", [self.name, self.value]
-        si = self.si(declared)
-        if op in ("=", "!="):
-            near = "ABS(v.num - ?) <= ? * ABS(?)"
-            test = near if op == "=" else f"NOT ({near})"
-            return head + f"AND {test})", [self.name, si, SAME, si]
-        return head + f"AND v.num {op} ?)", [self.name, si]
+        away = self.unconvertible(declared)
+        convertible = [d for d in declared if d not in away]
+        if not convertible:
+            msg = (
+                f"--where {self.name}: {self.units!r} measures {UNITS[self.units].dimension}, "
+                f"{self.name} is in {' or '.join(map(repr, away))} (use one of "
+                f"{', '.join(dict.fromkeys(u for a in away for u in compatible_units(a)))})"
+            )
+            raise StudyError(msg)
+        tests, args = [], []
+        for units in convertible:
+            si = self.si(units)
+            if op in ("=", "!="):
+                near = "ABS(v.num - ?) <= ? * ABS(?)"
+                tests.append(near if op == "=" else f"NOT ({near})")
+                args += [units, si, SAME, si]
+            else:
+                tests.append(f"v.num {op} ?")
+                args += [units, si]
+        either = " OR ".join(f"(IFNULL(v.declared_units, '') = ? AND {t})" for t in tests)
+        return head + f"AND ({either}))", [self.name, *args]
+
+    def unconvertible(self, declared: list[str]) -> list[str]:
+        """Those of the units ``declared`` for the name that the number's written units do
+        not convert to (``m/s^2`` and ``mm/rad^2``, say)."""
+        if not isinstance(self.value, float) or self.units not in UNITS:
+            return []
+        written = UNITS[self.units].dimension
+        return [d for d in declared if d in UNITS and UNITS[d].dimension != written]
 
     def si(self, declared: str) -> float:
         """The number in SI: in its own units if written, else in the scene's (``declared``)."""
         assert isinstance(self.value, float)
         units = self.units or declared
-        if units not in UNITS:
-            return self.value
-        if declared in UNITS and UNITS[units].dimension != UNITS[declared].dimension:
-            msg = (
-                f"--where {self.name}: {units!r} measures {UNITS[units].dimension}, "
-                f"{self.name} is in {declared!r} (use one of "
-                f"{', '.join(compatible_units(declared))})"
-            )
-            raise StudyError(msg)
-        return to_si(self.value, units)
+        return to_si(self.value, units) if units in UNITS else self.value
 
 
 def parse_condition(text: str) -> Condition:
@@ -154,12 +172,14 @@ def find_runs(
     since: str | None = None,
     where: list[str] | None = None,
     tag: str | None = None,
-) -> list[dict[str, Any]]:
+) -> tuple[list[dict[str, Any]], list[str]]:
     """Registry rows of ``store`` that satisfy every filter, newest first, each with its
-    current status, tags, notes and folder under the outputs root."""
+    current status, tags, notes and folder under the outputs root; and a line for each
+    ``where`` whose number left out runs that meet every other filter because their scene's
+    units for its name are not those the number's convert to."""
     store.reconcile()
     if not store.registry.exists():
-        return []
+        return [], []
     conditions = [parse_condition(w) for w in where or []]
     current = [c for c in conditions if c.name == STATUS]
     conditions = [c for c in conditions if c.name != STATUS]
@@ -178,30 +198,55 @@ def find_runs(
     if tag:
         clauses.append("runs.run_id IN (SELECT run_id FROM tags WHERE tag = ?)")
         args.append(tag)
+    skips: list[tuple[Condition, list[str]]] = []  # conditions that leave runs out by units
+    flags, flag_args = "", []
     with store.connection() as con:
-        known = {
-            r["name"]: (r["kind"], r["declared_units"] or "")
-            for r in con.execute("SELECT DISTINCT name, kind, declared_units FROM run_values")
-        }
+        known: dict[str, tuple[str, list[str]]] = {}
+        for r in con.execute("SELECT DISTINCT name, kind, declared_units FROM run_values"):
+            known.setdefault(r["name"], (r["kind"], []))[1].append(r["declared_units"] or "")
         for c in conditions:
             clause, extra = c.sql(known)
+            away = c.unconvertible(known.get(c.name, ("", []))[1])
+            if away:
+                other_units = (
+                    "EXISTS (SELECT 1 FROM run_values v WHERE v.run_id = runs.run_id AND "
+                    f"v.name = ? AND v.declared_units IN ({', '.join('?' * len(away))}))"
+                )
+                clause, extra = f"({clause} OR {other_units})", [*extra, c.name, *away]
+                flags += f", {other_units} AS skipped_{len(skips)}"
+                flag_args += [c.name, *away]
+                skips.append((c, away))
             clauses.append(clause)
             args += extra
-        query = "SELECT * FROM runs" + (" WHERE " + " AND ".join(clauses) if clauses else "")
-        rows = [dict(r) for r in con.execute(query + " ORDER BY started DESC, run_id DESC", args)]
+        query = f"SELECT runs.*{flags} FROM runs" + (
+            " WHERE " + " AND ".join(clauses) if clauses else ""
+        )
+        order = " ORDER BY started DESC, run_id DESC"
+        rows = [dict(r) for r in con.execute(query + order, [*flag_args, *args])]
     tags, notes = store.tags_and_notes()
     out = []
+    left_out = [0] * len(skips)
     for row in rows:
+        skipped = [bool(row.pop(f"skipped_{i}")) for i in range(len(skips))]
         row["folder"] = str(store.folder(row))
         row["status"], _ = current_status(row)
         if status and row["status"] != status:
             continue
         if any((row["status"] == str(c.value)) != (c.op != "!=") for c in current):
             continue
+        if any(skipped):
+            left_out = [n + s for n, s in zip(left_out, skipped, strict=True)]
+            continue
         row["tags"] = tags.get(row["run_id"], [])
         row["notes"] = notes.get(row["run_id"], [])
         out.append(row)
-    return out
+    said = [
+        f"skipped {n} run{'s' * (n != 1)} whose {c.name} is in {' or '.join(map(repr, away))}: "
+        f"{c.units!r} measures {UNITS[c.units].dimension}"
+        for (c, away), n in zip(skips, left_out, strict=True)
+        if n
+    ]
+    return out, said
 
 
 def with_values(store: RunStore, rows: list[dict[str, Any]]) -> list[dict[str, Any]]:

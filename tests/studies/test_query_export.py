@@ -139,6 +139,50 @@ def test_runs_shows_value_columns_in_the_scenes_units(
     assert " 0.25 " in fast_line
 
 
+def test_where_reads_a_number_in_each_runs_units_and_skips_runs_it_cannot_convert_to(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # An audit's case: the cam scene's max_acceleration is in mm/rad^2, the valve scene's in
+    # m/s^2, and "max_acceleration.max<5000 m/s^2" listed the cam run, compared in m/rad^2
+    outputs = tmp_path / "out"
+    highest = {}
+    for scene, factor in (("cam", "base_radius"), ("valve", "cam_speed")):
+        levels = "[16.0, 18.0]" if scene == "cam" else "[2000.0, 3000.0]"
+        path = tmp_path / f"{scene}.toml"
+        path.write_text(
+            f'name = "{scene}_acc"\nscene = "{scene}"\nresponses = ["max_acceleration"]\n'
+            f"[factors.{factor}]\nlevels = {levels}\n",
+            encoding="utf-8",
+        )
+        result = run_study(path, outputs=outputs, progress=False)
+        with xr.open_dataset(result.folder / "results.nc") as ds:
+            units = ds["max_acceleration"].attrs["units"]
+            highest[units] = (result.record.run_id, float(ds["max_acceleration"].max()))
+    (cam, cam_max), (valve, valve_max) = highest["mm/rad^2"], highest["m/s^2"]
+    assert cam_max < valve_max  # read in either scene's units, a bound between them picks one
+
+    where = f"max_acceleration.max<{valve_max * 1.01} m/s^2"
+    assert main(["runs", "--outputs", str(outputs), "--where", where]) == 0
+    listed = capsys.readouterr()
+    assert valve in listed.out
+    assert cam not in listed.out
+    assert listed.err == (
+        "note: skipped 1 run whose max_acceleration.max is in 'mm/rad^2': 'm/s^2' measures "
+        "acceleration\n"
+    )
+    # a bare number is in each run's own units: above the cam's largest in mm/rad^2, and far
+    # below the valve's in m/s^2
+    above = runs_out(capsys, outputs, "--where", f"max_acceleration.max>{cam_max * 0.99}")
+    assert {cam, valve} <= set(above.split())
+    below = runs_out(capsys, outputs, "--where", f"max_acceleration.max<{cam_max * 1.01}")
+    assert cam in below
+    assert valve not in below
+    assert main(["runs", "--outputs", str(outputs), "--where", "max_acceleration.max<5 N"]) == 2
+    assert capsys.readouterr().err.startswith(
+        "error: --where max_acceleration.max: 'N' measures force, max_acceleration.max is in "
+    )
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [
