@@ -293,6 +293,11 @@ def _runs(view: xr.Dataset, an: xr.Dataset, responses: list[str]) -> list[str]:
         return [*lines, f"{n} runs: see `results.nc`.", ""]
     factors = taguchi.factor_names(view)
     means = [taguchi.mean_name(view, r) for r in responses]
+    # the analysis keeps a mean only for the responses it analysed (not one that is +inf in
+    # every run and noise case)
+    view = taguchi.with_means(
+        view, [r for r, m in zip(responses, means, strict=True) if m not in view]
+    )
     header = ["run"] + [label(f, units_of(view, f)) for f in factors]
     header += [label(r, units_of(view, m)) for r, m in zip(responses, means, strict=True)]
     rows = []

@@ -372,3 +372,29 @@ def test_the_sd_interval_is_bonetts_and_covers_a_skewed_response() -> None:
         chi2 += bounds[0] <= true_sd <= bounds[1]
     assert chi2 / 200 < 0.8  # the defect: a normal-theory interval on a skewed response
     assert ours / 200 >= 0.95
+
+
+def test_a_response_inf_in_every_noise_case_is_reported_without_a_robust_point(
+    tmp_path: Path,
+) -> None:
+    # An audit: a cycloidal cam concave at every design point (physics §3: max_contact_stress
+    # is +inf where the cam is not convex) under an outer L9 crashed the report with a
+    # KeyError (no max_contact_stress_mean: the analysis leaves such a response out), and
+    # once that was mended named run 1 "most robust" with a mean of "—".
+    text = (
+        'name = "all_inf"\nscene = "cam"\nresponses = ["max_contact_stress"]\n'
+        '[design]\ntype = "L4"\n[parameters]\nlaw = "cycloidal"\ncam_speed = 2400\n'
+        "[factors.base_radius]\nlevels = [16.73, 18.16]\n"
+        "[factors.rise_angle]\nlevels = [60.9, 64.1]\n"
+        '[noise]\ntype = "L4"\n[noise.spring_rate]\ndistribution = "uniform"\n'
+        "half_width = 10\nrelative = true\n"
+    )
+    result = run_plan(plan_text(text), tmp_path, progress=False)
+    stress = result.dataset["max_contact_stress"].values
+    assert np.isposinf(stress).all()  # concave everywhere: the case this test is about
+    report = (result.folder / "report.md").read_text(encoding="utf-8")
+    assert "| 1 | 16.73 | 60.9 | inf |" in report  # the run's mean over its noise cases
+    assert "Most robust" not in report  # no value anywhere: nothing to call robust
+    import xarray as xr
+
+    assert int(xr.open_dataset(result.folder / "analysis.nc")["robust_run"][0]) == -1

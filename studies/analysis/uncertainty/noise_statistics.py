@@ -124,10 +124,12 @@ def _robust_run(y: xr.DataArray, i: int, out: dict[str, np.ndarray], quantile: n
         return -1
     worse_side = quantile[i, :, 0] if better == "larger" else -quantile[i, :, -1]
     p = out["violation_probability"][i]
-    key_p = np.where(np.isfinite(p), p, np.inf) if np.isfinite(p).any() else np.zeros(p.size)
+    limited = bool(np.isfinite(p).any())
+    key_p = np.where(np.isfinite(p), p, np.inf) if limited else np.zeros(p.size)
     key_q = np.where(np.isfinite(worse_side), -worse_side, np.inf)
-    order = np.lexsort((key_q, key_p))
-    return int(order[0]) if np.isfinite(key_q[order[0]]) or np.isfinite(key_p[order[0]]) else -1
+    first = int(np.lexsort((key_q, key_p))[0])
+    ranked = np.isfinite(key_q[first]) or (limited and np.isfinite(key_p[first]))
+    return first if ranked else -1  # no limit and no quantile anywhere: nothing to rank
 
 
 def moments(
