@@ -37,7 +37,8 @@ a full factorial) and ``level_a`` × ``level_b`` for two-way tables of means.
   everything above; a Sobol' or Latin-hypercube sample
   (:mod:`studies.analysis.uncertainty.sample_statistics`): moments, quantiles and correlations instead;
 * several responses: the trade-off (``chosen_level``, ``decided_by``, ``conflict`` per term,
-  ``compromise``, ``compromise_worst``, ``compromise_half_width`` per response and
+  ``compromise``, ``compromise_worst``, ``compromise_half_width`` and
+  ``compromise_confirmation_half_width`` per response and
   ``compromise_at`` per condition).
 
 Coordinates ``term_role`` ("control", "operating", "model" or "column") and ``condition`` (the
@@ -219,8 +220,9 @@ def _analyze(
         lazy = base.assign({n: replaced.get(n, view[n].variable) for n in optimised})
         analysis_optimum.trade(out, lazy, optimised, tables, optima, grid)
     for r in names:  # run means and S/N of replicated responses (or under noise), per run
-        if taguchi.mean_name(view, r) != r and taguchi.mean_name(view, r) in analysed:
-            out[taguchi.mean_name(view, r)] = view[taguchi.mean_name(view, r)]
+        mean = taguchi.mean_name(view, r)
+        if mean != r:  # analysed or not (inf in every run): the runs table shows it
+            out[mean] = (view if mean in view else taguchi.with_means(ds, r))[mean]
             if taguchi.sn_name(r) in analysed:
                 out[taguchi.sn_name(r)] = view[taguchi.sn_name(r)]
     out = with_violation_maps(out.assign(counts).merge(robust_statistics(ds, names)), ds)

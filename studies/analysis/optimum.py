@@ -17,7 +17,9 @@ none): ``optimum_level`` (response, term; -1 for operating factors and interacti
 (response, term, side), the array's ``predicted``, ``half_width``, ``confirmation_half_width``,
 ``n_eff``, ``error_ms``, ``error_dof``, ``model_terms``; the trade-off's ``chosen_level``,
 ``decided_by``, ``conflict`` (term), ``compromise``, ``compromise_worst``,
-``compromise_half_width`` (response) and ``compromise_at`` (response, condition).
+``compromise_half_width`` and ``compromise_confirmation_half_width`` (response; the intervals
+of the mean and of a confirmation run at the chosen levels) and ``compromise_at`` (response,
+condition).
 """
 
 from __future__ import annotations
@@ -205,6 +207,7 @@ def trade(
     nr, nc = out.sizes["response"], out.sizes["condition"]
     columns = {"compromise": "compromise", "compromise_worst": "worst"}
     columns["compromise_half_width"] = "half width"
+    columns["compromise_confirmation_half_width"] = "confirmation half width"
     values = {v: np.full(nr, np.nan) for v in columns}
     at = np.full((nr, nc), np.nan)
     for n, row in result.predictions.iterrows():

@@ -151,7 +151,7 @@ class _Model:
         ms_e, dof_e = number(self.table, "error", "MS"), int(number(self.table, "error", "dof"))
         at = self.over(levels, conditions)
         half = confirm = np.nan
-        if dof_e > 0 and np.isfinite(ms_e):
+        if dof_e > 0 and np.isfinite(ms_e) and ms_e > 0.0:  # an exact fit estimates no error
             f = f_quantile(1.0 - alpha, 1, dof_e)
             half = math.sqrt(f * ms_e / self.n_eff)
             confirm = math.sqrt(f * ms_e * (1.0 / self.n_eff + 1.0 / runs))

@@ -89,16 +89,18 @@ def tradeoff(
         if grid is not None:
             runs = grid.row(grid.combination(levels))  # read at these runs only
             values = ds[r].isel(run=runs).values.astype(float)
-            half = np.nan
+            half = confirm = np.nan
         else:
             p: Prediction = predict(ds, r, levels, alpha=alpha, table=tables[r])
             values, half = np.asarray(p.at), p.half_width
+            confirm = p.confirmation_half_width
         at[r] = values
         preds[r] = {
             "own optimum": optima[r].mean,
             "compromise": float(np.mean(values)),
             "worst": float(values.max() if sense == "smaller" else values.min()),
             "half width": half,
+            "confirmation half width": confirm,
             "units": str(ds[r].attrs.get("units", "")),
             "sense": sense,
         }

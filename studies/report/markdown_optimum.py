@@ -35,6 +35,19 @@ from studies.report.markdown_terms import (
 MAX_CONDITION_ROWS = 12  # operating conditions listed one per row; more: see analysis.nc
 MAX_LISTED_RUNS = 12  # runs named per level in "rests on runs …"
 
+LACK_OF_FIT = (
+    "The responses are computed, not measured: V_e is the additive model's lack of fit (the "
+    "interactions it leaves out), and the intervals hold at their level only where that lack "
+    "of fit behaves like random error; a confirmation run outside them shows such an "
+    "interaction, not bad luck."
+)
+EXACT_FIT = (
+    "the error mean square is 0 (an exact fit: the model's terms reproduce every run), so "
+    "nothing estimates the model's error. With computed responses that is no proof of "
+    "accuracy: an interaction the array does not separate (one on the columns of assigned "
+    "factors) is read as their main effects. The confirmation run is the check."
+)
+
 
 def _nothing_to_choose(an: xr.Dataset) -> str:
     what = "an operating condition or a model rung" if model_terms(an) else "an operating condition"
@@ -338,10 +351,12 @@ def _predicted(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, shown: str) -> l
         lines.append(
             f"{100 * (1 - alpha):g} % confidence interval of the mean: {num(mean - half)} … "
             f"{num(mean + half)}{units} (± {num(half)}; n_eff = {num(float(r.n_eff))}, V_e = "
-            f"{num(float(r.error_ms))} with {int(r.error_dof)} dof). A confirmation run should "
-            f"fall in {num(mean - confirm)} … {num(mean + confirm)}{units} (± {num(confirm)}, "
-            f"{runs} run)."
+            f"{num(float(r.error_ms))} with {int(r.error_dof)} dof); a confirmation run: "
+            f"{num(mean - confirm)} … {num(mean + confirm)}{units} (± {num(confirm)}, "
+            f"{runs} run). {LACK_OF_FIT}"
         )
+    elif int(r.error_dof) > 0:
+        lines.append(f"No interval: {EXACT_FIT}")
     else:
         lines.append("No interval: the error term has no degrees of freedom.")
     if int(r.pass_fail) and not 0.0 <= float(r.predicted) <= 1.0:

@@ -133,7 +133,8 @@ def _report(
     if len(optimised) > 1:
         section, levels = tradeoff_section(an, view, optimised)
         lines += section
-    toml, section = _next_study(ds, view, an, levels) if optimised else ("", [])
+    several = len(optimised) > 1
+    toml, section = _next_study(ds, view, an, levels, several) if optimised else ("", [])
     lines += section
     lines += other_figures(lines, figures)
     return "\n".join(lines).rstrip() + "\n", toml
@@ -157,10 +158,10 @@ def _has_value(ds: xr.Dataset, response: str) -> bool:
 
 
 def _next_study(
-    ds: xr.Dataset, view: xr.Dataset, an: xr.Dataset, levels: dict[str, int]
+    ds: xr.Dataset, view: xr.Dataset, an: xr.Dataset, levels: dict[str, int], several: bool
 ) -> tuple[str, list[str]]:
     """The confirmation run of an array, or the refinement grid of a full factorial: the study
-    text and the report's section on it."""
+    text and the report's section on it (``several``: the levels are a trade-off's)."""
     written = bool(ds.attrs.get("study_toml"))
     if computed(an):
         flat = [f for f in levels if not (an["R"].sel(term=f).values > 0).any()]
@@ -184,7 +185,11 @@ def _next_study(
             + (
                 f"It is also written to `{CONFIRMATION_NAME}` in the run folder: run it with "
                 f"`python -m studies run <run folder>/{CONFIRMATION_NAME}` and compare the "
-                "result with the confirmation intervals above."
+                + (
+                    "results with the trade-off's confirmation intervals above (at these levels)."
+                    if several
+                    else "result with the confirmation interval above."
+                )
                 if written
                 else "Add it to the study's other tables to run it."
             )
@@ -293,11 +298,6 @@ def _runs(view: xr.Dataset, an: xr.Dataset, responses: list[str]) -> list[str]:
         return [*lines, f"{n} runs: see `results.nc`.", ""]
     factors = taguchi.factor_names(view)
     means = [taguchi.mean_name(view, r) for r in responses]
-    # the analysis keeps a mean only for the responses it analysed (not one that is +inf in
-    # every run and noise case)
-    view = taguchi.with_means(
-        view, [r for r, m in zip(responses, means, strict=True) if m not in view]
-    )
     header = ["run"] + [label(f, units_of(view, f)) for f in factors]
     header += [label(r, units_of(view, m)) for r, m in zip(responses, means, strict=True)]
     rows = []

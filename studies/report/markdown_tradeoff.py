@@ -108,11 +108,11 @@ def tradeoff_section(
         row = [shown.get(m, m), str(r.sense.values), own,
                _value(view, m, float(r.compromise), at_chosen)]  # fmt: skip
         row += [num(float(r.compromise_worst))] if several else []
-        row += [] if grid else [num(float(r.compromise_half_width))]
+        row += [] if grid else [num(float(r.compromise_confirmation_half_width))]
         rows.append([*row, units if units != "1" else ""])
     header = ["response", "better", "own optimum", "chosen levels"]
     header += ["worst condition at the chosen levels"] if several else []
-    header += [] if grid else ["± (CI)"]
+    header += [] if grid else ["± (a confirmation run)"]
     what = "Computed" if grid else "Predicted"
     over = (
         " (means over the operating conditions; the last value column is the worst condition "

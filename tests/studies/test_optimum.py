@@ -497,3 +497,47 @@ def test_a_grid_in_run_order_computes_the_runs_the_order_table_holds(seed: int) 
         np.testing.assert_array_equal(a.runs, b.runs)
         np.testing.assert_array_equal(a.best_runs, b.best_runs)
         assert a.levels == b.levels
+
+
+def test_an_exact_fit_gives_no_interval_and_its_confirmation_run_shows_why(
+    tmp_path: Path,
+) -> None:
+    # An audit's L27: with bore and max_pressure on columns 6 and 7 their interaction falls
+    # on the columns of stroke and rod_ratio, the model reproduces all 27 runs (error SS 0),
+    # and the report printed a "95 %" interval of width 0, 134.3 … 134.3 kN, for a point whose
+    # gas force is 153.8 kN. Expected: that point's value from the scene itself (the
+    # confirmation study the run wrote, run as a study: a brute-force check of the model).
+    text = scene_study(
+        "crank",
+        responses='["max_gas_force"]',
+        factors="\n".join(
+            f"[factors.{name}]\nlevels = {levels}"
+            for name, levels in (
+                ("stroke", [151.5, 160.3, 193.1]),
+                ("engine_speed", [2064.0, 2206.0, 2492.0]),
+                ("bore", [111.7, 120.7, 147.0]),
+                ("max_pressure", [15.8, 19.73, 20.03]),
+                ("rod_ratio", [0.251, 0.278, 0.295]),
+            )
+        ),
+        settings="angle_step = 1.0",
+    ).replace(
+        "[factors.stroke]",
+        '[design]\ntype = "L27"\ninteractions = [["stroke", "engine_speed"], '
+        '["engine_speed", "rod_ratio"]]\n[factors.stroke]',
+    )
+    plan = plan_text(text)
+    ds = build_dataset(plan, evaluate(plan, progress=False), {})
+    an = analyze(ds, ["max_gas_force"])
+    r = an.sel(response="max_gas_force")
+    assert float(r.error_ms) == 0.0  # the exact fit this test is about
+    assert np.isnan(float(r.half_width))
+    assert np.isnan(float(r.confirmation_half_width))
+    report = report_text(ds, an, ["max_gas_force"])
+    assert "No interval: the error mean square is 0 (an exact fit" in report
+    assert "confidence interval of the mean" not in report
+    levels = {t: int(v) for t, v in zip(r.term.values, r.optimum_level.values, strict=True)}
+    chosen = {t: v for t, v in levels.items() if v >= 0}
+    point = plan_text(confirmation.confirmation_toml(ds, chosen))  # the study, at those levels
+    computed = float(evaluate(point, progress=False).scalars["max_gas_force"][0])
+    assert abs(float(r.predicted) - computed) > 0.1 * computed  # the model is 13 % off there

@@ -441,3 +441,24 @@ def test_sn_goes_to_measured_varying_responses_of_arrays_or_replicates() -> None
     assert taguchi.sn_responses(ds, names) == ["rep"]
     assert not taguchi.varies(ds, "flat")
     assert taguchi.varies(ds, "y")
+
+
+def test_the_tradeoff_gives_each_responses_confirmation_interval_at_the_chosen_levels() -> None:
+    # The confirmation study runs the trade-off's chosen levels, and the report told the user
+    # to compare its result with intervals given at each response's own optimum (and showed
+    # the interval of the mean at the chosen levels). Expected: statsmodels' interval of a new
+    # observation (obs_ci) at the chosen levels, least squares on the same terms.
+    design = oa("L9", "AB", errors=["C", "D"])
+    rng = np.random.default_rng(21)
+    a, b = design.levels["A"].astype(float), design.levels["B"].astype(float)
+    ys = {"y1": 10 * a + b + rng.normal(0, 0.3, 9), "y2": -a + 10 * b + rng.normal(0, 0.3, 9)}
+    ds = make_dataset(design, ys)
+    result = tradeoff.tradeoff(ds, ["y1", "y2"])
+    for name, y in ys.items():
+        ref = statsmodels_prediction(
+            make_dataset(design, y), "C(xA) + C(xB)", ["A", "B"], result.levels
+        )
+        half = (ref["obs_ci_upper"] - ref["obs_ci_lower"]) / 2
+        row = result.predictions.loc[name]
+        assert row["compromise"] == pytest.approx(ref["mean"], rel=1e-12)
+        assert row["confirmation half width"] == pytest.approx(half, rel=1e-10)
