@@ -315,13 +315,16 @@ def _neighbours(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, units: str) -> 
     return lines
 
 
-def _rests_on(view: xr.Dataset, terms: list[str], levels: dict[str, int]) -> str:
+def _rests_on(view: xr.Dataset, name: str, terms: list[str], levels: dict[str, int]) -> str:
+    """The runs each model term's effect is the mean of: those at its level with a value of
+    ``name`` (a run without one is left out of the analysis)."""
     parts = []
+    valued = ~np.isnan(view[name].values)
     for t in terms:
         if t not in levels:
             parts.append(f"the interaction column {md_escape(t)}")
             continue
-        runs = np.flatnonzero(view[f"{t}_level"].values == levels[t]) + 1
+        runs = np.flatnonzero((view[f"{t}_level"].values == levels[t]) & valued) + 1
         listed = ", ".join(str(i) for i in runs[:MAX_LISTED_RUNS])
         more = f", … ({runs.size} runs)" if runs.size > MAX_LISTED_RUNS else ""
         parts.append(f"{md_escape(t)} at level {levels[t] + 1} (runs {listed}{more})")
@@ -341,7 +344,7 @@ def _predicted(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, shown: str) -> l
         + (" (mean over the operating conditions)" if an.sizes["condition"] > 1 else "")
         + f" — Taguchi's additive model: the grand mean {num(float(r.grand_mean))}{units} plus "
         "the effect of each model term at its level, each effect the mean of the runs at that "
-        f"level: {_rests_on(view, terms, levels) or 'no term'}."
+        f"level: {_rests_on(view, name, terms, levels) or 'no term'}."
     )
     half = float(r.half_width)
     if np.isfinite(half):
@@ -397,7 +400,8 @@ def sn_optimum_line(an: xr.Dataset, sn: str) -> str:
         return f"Best computed S/N: {num(value)} dB{where}."
     half = float(r.half_width)
     interval = (
-        f" ± {num(half)} dB ({100 * (1 - float(an.attrs['alpha'])):g} % confidence)"
+        f" ± {num(half)} dB ({100 * (1 - float(an.attrs['alpha'])):g} % confidence where the "
+        "lack of fit behaves like noise)"
         if np.isfinite(half)
         else ""
     )

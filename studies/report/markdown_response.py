@@ -124,9 +124,16 @@ def _anova_lines(view: xr.Dataset, an: xr.Dataset, name: str, units: str) -> lis
 
 def _error_source(view: xr.Dataset, r: xr.Dataset, pooled: list[str]) -> str:
     """Where the error row's degrees of freedom come from: the empty columns, and the dof the
-    array's columns leave beyond them (an L18's 2: the interaction of its first two columns)."""
+    array's columns leave beyond them (an L18's 2: the interaction of its first two columns);
+    with runs left out (no value), the dof the terms leave over the runs that have one."""
     errors = json.loads(view.attrs.get("error_columns", "[]"))
     dof = dict(zip(map(str, r["source"].values), r.dof.values.astype(int), strict=True))
+    runs = dof.get("total", -1) + 1
+    if 0 < runs < view.sizes["run"]:  # runs without a value left out: no column is whole
+        own = dof.get("error", 0) - sum(dof[p] for p in pooled)
+        if own == 0:
+            return f"Over the {runs} runs with a value the terms leave the error no dof"
+        return f"Error from the {own} dof the terms leave over the {runs} runs with a value"
     empty = sum(level_count(view[f"{e}_level"].variable) - 1 for e in errors)
     left = dof.get("error", 0) - sum(dof[p] for p in pooled) - empty
     if not errors:

@@ -392,3 +392,32 @@ def test_a_figure_that_fails_costs_that_figure_only_and_each_phase_is_timed(
     saved = xr.open_dataset(tmp_path / "broken" / "analysis.nc")
     expected = xr.open_dataset(tmp_path / "ok" / "analysis.nc")
     xr.testing.assert_identical(saved, expected)
+
+
+def test_the_error_row_counts_only_the_runs_with_a_value(tmp_path: Path) -> None:
+    # An audit: with runs left out (no value) the note still counted the empty column's
+    # nominal dof ("e4 (2 dof)") where the table, like statsmodels, had 1 from a pooled term.
+    # Expected: statsmodels' residual dof of the same terms over the runs that have a value.
+    import pandas as pd
+    from statsmodels.formula.api import ols
+
+    study = tmp_path / "s.toml"
+    levels = "".join(f"[factors.{f}]\nlevels = [10.0, 20.0, 30.0]\n" for f in "ABC")
+    study.write_text(
+        f'name = "s"\nscene = "cam"\nresponses = ["y"]\n[design]\ntype = "L9"\n{levels}',
+        encoding="utf-8",
+    )
+    ds = study_dataset(study)
+    codes = {f: ds[f"{f}_level"].values for f in ("A", "B", "C", "e4")}
+    y = codes["A"] + 2.0 * codes["B"] + 3.0 * codes["C"] + 0.1 * codes["e4"]
+    ds["y"].values[:] = np.where(np.arange(9) == 0, np.nan, y)  # run 1 has no value
+    ds["y"].attrs["better"] = "smaller"  # level 1 of every factor is best; run 1 is there
+    an = analyze(ds, ["y"])
+    text = report_text(ds, an, ["y"])
+    kept = ds.isel(run=slice(1, None))
+    frame = {f"x{f}": kept[f"{f}_level"].values for f in "ABC"} | {"y": kept["y"].values}
+    residual = int(ols("y ~ C(xA) + C(xB) + C(xC)", pd.DataFrame(frame)).fit().df_resid)
+    assert residual == int(an.dof.sel(response="y", source="error")) == 1
+    assert f"Error from the {residual} dof the terms leave over the 8 runs with a value. " in text
+    assert "e4 (2 dof)" not in text
+    assert "C at level 1 (runs 6, 8)" in text  # the runs with a value its effect rests on
