@@ -218,7 +218,9 @@ WINDOW_SETTINGS: tuple[Parameter, ...] = (
         "jump_speed_tolerance",
         "1",
         1e-3,
-        "jump speed: relative width of the final bisection bracket",
+        "jump speed: relative width of the final bisection bracket (the integrator's own "
+        "error in where the valve separates adds to it: lanes at 0.5 deg was within 1e-5 to "
+        "3.7e-4 of an independent DOP853 reference at 6 random points, tolerance mode alike)",
         1e-9,
         0.5,
     ),
