@@ -206,7 +206,9 @@ class _Parser(ValueParser):
             self.problem(f"unknown top-level key {key!r}{suggest(key, TOP_LEVEL_KEYS)}")
         name = self._string("name", required=True)
         if name and not NAME_PATTERN.fullmatch(name):
-            self.problem(f"name = {short(name)} may only contain ASCII letters (A-Z, a-z), digits, '_' and '-'")
+            self.problem(
+                f"name = {short(name)} may only contain ASCII letters (A-Z, a-z), digits, '_' and '-'"
+            )
         elif name and len(name) > MAX_NAME_LENGTH:
             self.problem(
                 f"name = {short(name)} has {len(name)} characters: at most {MAX_NAME_LENGTH} "

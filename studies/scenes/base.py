@@ -112,7 +112,9 @@ class Parameter:
             bad = next((i for i, v in enumerate(value) if self._outside(v)), None)
             if bad is not None:
                 given = f"{value[bad]:g} {self.units}"
-                return f"{self.name}[{bad}] = {given} is physically impossible: use {self.allowed()}"
+                return (
+                    f"{self.name}[{bad}] = {given} is physically impossible: use {self.allowed()}"
+                )
             return None
         if not is_finite_number(value):
             return f"{self.name} = {not_a_number(value)} (expected {self.allowed()})"

@@ -122,7 +122,7 @@ MISTAKES = [
     (
         "bad study name",
         lambda t: t.replace('name = "ok"', 'name = "my study/1"'),
-        ["may only contain letters"],
+        ["may only contain ASCII letters"],
     ),
     (
         "setting out of range",
