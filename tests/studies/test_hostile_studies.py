@@ -120,8 +120,10 @@ def test_a_boolean_is_not_a_sweep_base(tmp_path: Path, capsys: pytest.CaptureFix
                 "[parameters]\nmotor_ratings = [50.0, inf]\n"
                 "[factors.motor_speed]\nlevels = [1000.0, 2000.0]\n"
             ),
-            "motor_ratings[1] = inf is not a finite number (use a list of finite numbers "
-            "in (0, 1e+08] W)",
+            (
+                "motor_ratings[1] = inf is not a finite number (use a list of finite numbers "
+                "in (0, 1e+08] W)"
+            ),
         ),
         (
             # an audit: the largest double passed check, then overflowed in the analysis
@@ -131,8 +133,10 @@ def test_a_boolean_is_not_a_sweep_base(tmp_path: Path, capsys: pytest.CaptureFix
                 "[parameters]\nmotor_ratings = [50.0, 1.7976931348623157e308]\n"
                 "[factors.motor_speed]\nlevels = [1000.0, 2000.0]\n"
             ),
-            "motor_ratings[1] = 1.79769e+308 W is physically impossible: use a list of finite "
-            "numbers in (0, 1e+08] W",
+            (
+                "motor_ratings[1] = 1.79769e+308 W is physically impossible: use a list of "
+                "finite numbers in (0, 1e+08] W"
+            ),
         ),
     ],
     ids=["nan-polydyne", "inf-motor-rating", "huge-motor-rating"],
