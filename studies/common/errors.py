@@ -58,3 +58,8 @@ class StudyFileError(StudyError):
         lines = "\n".join(f"  - {p}" for p in problems)
         n = len(problems)
         super().__init__(f"study {source} has {n} problem{'s' if n != 1 else ''}:\n{lines}")
+
+
+class NotDrawn(Exception):
+    """A figure the results give no readable picture of (a factor with too many levels to lay
+    out); the message says which and why in one line, which the run records as a warning."""

@@ -3,7 +3,11 @@ labelling values, so a scene's ``figures.py`` (built-in or a plugin's) only draw
 
 A figure has one line per level of a "line" factor and one panel per combination of up to two
 other factors (:class:`Layout`); further factors are held at their middle level (named in the
-title). :func:`save_figures` writes the figures a scene declares (``Scene.figures``).
+title). A factor of more than ``MAX_LEVELS`` levels (under a sampled design every sampled value
+is a level) is neither laid out nor held: :func:`many_levels` tells a figure to draw every
+design point instead (:func:`scatter_figure`), and where it cannot, :class:`Layout` and
+:func:`line_levels` raise :class:`NotDrawn`, which the run records as a warning.
+:func:`save_figures` writes the figures a scene declares (``Scene.figures``).
 """
 
 from __future__ import annotations
@@ -16,13 +20,17 @@ from typing import Any
 import numpy as np
 import xarray as xr
 from matplotlib import colormaps
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from studies.common.blocks import blocks, first_run, runs_matching
+from studies.common.errors import NotDrawn
 from studies.common.figure_style import axis_label, pretty_units
 
 DPI = 120
 PANEL = (3.6, 2.8)  # inches per panel
+MAX_LEVELS = 12  # levels of a factor laid out as panels or lines, or held, at most
+MAX_POINTS = 20_000  # design points a scatter draws at most (evenly spread over the runs)
 
 
 def design_factors(ds: xr.Dataset) -> list[str]:
@@ -35,6 +43,23 @@ def factor_levels(ds: xr.Dataset, factor: str) -> list[int]:
     for codes in blocks(ds[f"{factor}_level"].variable):
         found.update(np.unique(codes).tolist())
     return sorted(found)
+
+
+def many_levels(ds: xr.Dataset, factors: Sequence[str | None]) -> bool:
+    """Whether one of ``factors`` has more than ``MAX_LEVELS`` levels."""
+    return any(f is not None and len(factor_levels(ds, f)) > MAX_LEVELS for f in factors)
+
+
+def few_levels(ds: xr.Dataset, factor: str) -> list[int]:
+    """The level codes of ``factor``, to lay out or hold; :class:`NotDrawn` when it has more
+    than ``MAX_LEVELS``."""
+    levels = factor_levels(ds, factor)
+    if len(levels) > MAX_LEVELS:
+        raise NotDrawn(
+            f"{factor} has {len(levels)} distinct values (more than {MAX_LEVELS}): too many to "
+            "lay out a panel or line per value, or to hold one"
+        )
+    return levels
 
 
 def raw_value(ds: xr.Dataset, factor: str, level: int):
@@ -75,13 +100,12 @@ class Layout:
     ) -> None:
         self.names = names or {}
         others = [f for f in design_factors(ds) if f not in used]
+        levels = {f: few_levels(ds, f) for f in others}
         self.row = others[0] if len(others) > 1 else None
         self.col = others[1] if len(others) > 1 else others[0] if others else None
-        self.held = {
-            f: factor_levels(ds, f)[(len(factor_levels(ds, f)) - 1) // 2] for f in others[2:]
-        }
-        self.rows = factor_levels(ds, self.row) if self.row else [0]
-        self.cols = factor_levels(ds, self.col) if self.col else [0]
+        self.held = {f: levels[f][(len(levels[f]) - 1) // 2] for f in others[2:]}
+        self.rows = levels[self.row] if self.row else [0]
+        self.cols = levels[self.col] if self.col else [0]
         self.ds = ds
 
     def figure(self, size: tuple[float, float] = PANEL) -> tuple[Figure, np.ndarray]:
@@ -117,10 +141,43 @@ class Layout:
 
 
 def line_levels(ds: xr.Dataset, factor: str | None) -> list[tuple[str, dict[str, int]]]:
-    """(label, level condition) per line; one unlabelled line when there is no line factor."""
+    """(label, level condition) per line; one unlabelled line when there is no line factor;
+    :class:`NotDrawn` when it has more than ``MAX_LEVELS`` levels."""
     if factor is None or factor not in design_factors(ds):
         return [("", {})]
-    return [(value_text(ds, factor, lv), {factor: lv}) for lv in factor_levels(ds, factor)]
+    return [(value_text(ds, factor, lv), {factor: lv}) for lv in few_levels(ds, factor)]
+
+
+def spread_runs(ds: xr.Dataset) -> np.ndarray:
+    """Every run, or ``MAX_POINTS`` of them evenly spread over the runs when there are more."""
+    runs = ds.sizes["run"]
+    return np.unique(np.linspace(0, runs - 1, min(runs, MAX_POINTS)).astype(np.int64))
+
+
+def scatter_figure(
+    ds: xr.Dataset,
+    x: str,
+    y: str,
+    colour: np.ndarray,
+    label: str,
+    ticks: Sequence[float] | None = None,
+    **style: Any,
+) -> tuple[Figure, Axes]:
+    """Every design point (:func:`spread_runs`) at its ``x`` and ``y``, coloured by ``colour``
+    (a value per run drawn, ``style`` passed to ``scatter``) with a colour bar ``label`` (at
+    ``ticks``, if given): the picture of factors with too many levels for panels or lines
+    (:func:`many_levels`)."""
+    runs = spread_runs(ds)
+    fig = Figure(figsize=(5.8, 4.4), layout="constrained")
+    ax = fig.subplots()
+    dots = ax.scatter(
+        ds[x].isel(run=runs).values, ds[y].isel(run=runs).values, c=colour, s=10, **style
+    )
+    fig.colorbar(dots, ax=ax, label=label, ticks=ticks)
+    ax.set_xlabel(long_label(ds[x], x))
+    ax.set_ylabel(long_label(ds[y], y))
+    ax.grid(alpha=0.3)
+    return fig, ax
 
 
 def long_label(da: xr.DataArray, name: str) -> str:
@@ -180,11 +237,15 @@ def save_figures(
     ds: xr.Dataset, folder: Path, builders: dict[str, Callable[[xr.Dataset], Figure | None]]
 ) -> list[Path]:
     """Write ``<name>.png`` for each builder that draws a figure from ``ds`` (a builder returns
-    None when the Dataset lacks its variables); return the paths."""
+    None when the Dataset lacks its variables); return the paths. A builder's
+    :class:`NotDrawn` is raised again naming the figure (the run draws one builder per call)."""
     folder = Path(folder)
     paths = []
     for name, build in builders.items():
-        fig = build(ds)
+        try:
+            fig = build(ds)
+        except NotDrawn as exc:
+            raise NotDrawn(f"{name}.png not drawn: {exc}") from None
         if fig is None:
             continue
         folder.mkdir(parents=True, exist_ok=True)

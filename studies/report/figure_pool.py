@@ -33,7 +33,7 @@ from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 from typing import Any
 
-from studies.common.errors import StudyError
+from studies.common.errors import NotDrawn, StudyError
 
 WORKERS = 1
 PRELOAD = ["studies.report.write"]  # imports matplotlib, xarray and every generic renderer
@@ -127,7 +127,8 @@ class Drawing:
     the list while this process takes them from the back, so neither waits while figures
     remain once the worker runs; a figure whose worker died is drawn here.
 
-    ``problems`` gets one line per figure kind and error that drew nothing; a
+    ``problems`` gets one line per figure kind and error that drew nothing (a figure the
+    results give no readable picture of: its own line, :class:`NotDrawn`); a
     full disk or exhausted memory is the run's failure, not the figure's: it propagates.
     ``timings['figures_s']`` gets the seconds :meth:`paths` took."""
 
@@ -180,6 +181,8 @@ class Drawing:
         except Exception as exc:  # noqa: BLE001  (any other failure of one figure job)
             name = getattr(figures, "__name__", "figures")
             line = f"{name} drew nothing: {type(exc).__name__}: {exc}"
+            if isinstance(exc, NotDrawn):  # says which figure and why
+                line = str(exc)
             if line not in self.problems:  # once, not per response
                 self.problems.append(line)
             return []

@@ -13,7 +13,7 @@ from studies.common.figure_layout import (
     PANEL,
     Layout,
     design_factors,
-    factor_levels,
+    few_levels,
     line_levels,
     long_label,
     runs_where,
@@ -101,7 +101,7 @@ def approximation_error_figure(ds: xr.Dataset) -> Figure | None:
         return None
     speed = "engine_speed" if "engine_speed" in design_factors(ds) else None
     others = [f for f in design_factors(ds) if f not in ("rod_ratio", speed)]
-    held = {f: factor_levels(ds, f)[(len(factor_levels(ds, f)) - 1) // 2] for f in others}
+    held = {f: few_levels(ds, f)[(len(few_levels(ds, f)) - 1) // 2] for f in others}
     cols = min(3, len(names))
     rows = -(-len(names) // cols)
     fig = Figure(figsize=(PANEL[0] * cols, PANEL[1] * rows + 0.6), layout="constrained")

@@ -1,5 +1,7 @@
 """Figures of the ``luffing`` scene: ``pass_fail_map.png`` (every design point: passes, or
 which checks fail) and ``motor_power.png`` (required motor power against the rated sizes).
+Where a factor has too many levels for panels, lines or cells (a sampled design), each is a
+scatter of every design point instead.
 """
 
 from __future__ import annotations
@@ -16,8 +18,11 @@ from studies.common.figure_layout import (
     factor_levels,
     line_levels,
     long_label,
+    many_levels,
     raw_value,
     runs_where,
+    scatter_figure,
+    spread_runs,
 )
 from studies.common.figure_style import text_colour
 
@@ -31,6 +36,8 @@ def pass_fail_map_figure(ds: xr.Dataset) -> Figure | None:
     if not flags or len(factors) < 2:
         return None
     x, y = factors[0], factors[1]
+    if many_levels(ds, factors):
+        return _pass_fail_scatter(ds, x, y, flags)
     layout = Layout(ds, [x, y])
     fig, axes = layout.figure((3.8, 3.2))
     xs = [str(raw_value(ds, x, lv)) for lv in factor_levels(ds, x)]
@@ -75,6 +82,22 @@ def pass_fail_map_figure(ds: xr.Dataset) -> Figure | None:
     return fig
 
 
+def _pass_fail_scatter(ds: xr.Dataset, x: str, y: str, flags: list[str]) -> Figure:
+    """Every design point on the first two factors, coloured by its number of failing checks."""
+    runs = spread_runs(ds)
+    failing = sum(ds[f"{f}_ok"].isel(run=runs).values == 0 for f in flags)
+    cmap, norm = _failure_colours(len(flags))
+    count = "number of failing checks"
+    ticks = range(len(flags) + 1)
+    fig, _ = scatter_figure(ds, x, y, failing, count, ticks, cmap=cmap, norm=norm)
+    fig.suptitle(
+        f"Design checks that fail at each design point\n(checked: {', '.join(flags)}; "
+        "the other factors vary)",
+        fontsize="medium",
+    )
+    return fig
+
+
 def _failure_colours(checks: int) -> tuple[ListedColormap, BoundaryNorm]:
     """Green for "every check passes" only; any failing check from orange (one) to dark red
     (all), one colour per count."""
@@ -90,6 +113,8 @@ def motor_power_figure(ds: xr.Dataset) -> Figure | None:
         return None
     x = factors[0]
     line = factors[1] if len(factors) > 1 else None
+    if many_levels(ds, factors):
+        return _motor_power_scatter(ds, x, line)
     layout = Layout(ds, [x, *([line] if line else [])])
     fig, axes = layout.figure()
     for i, j, where in layout.panels():
@@ -122,4 +147,24 @@ def motor_power_figure(ds: xr.Dataset) -> Figure | None:
     if line:
         axes[0, 0].legend(title=line, fontsize="x-small", title_fontsize="x-small")
     fig.suptitle(f"Required motor power (dotted: the rated motor chosen){layout.held_note()}")
+    return fig
+
+
+def _motor_power_scatter(ds: xr.Dataset, x: str, line: str | None) -> Figure:
+    """Required motor power of every design point against the first factor, coloured by the
+    second (by the power itself when there is none)."""
+    shade = line or "motor_power"
+    runs = spread_runs(ds)
+    fig, ax = scatter_figure(
+        ds, x, "motor_power", ds[shade].isel(run=runs).values, long_label(ds[shade], shade)
+    )
+    rated = "motor_rated_power" in ds
+    if rated:
+        chosen = ds["motor_rated_power"].isel(run=runs).values
+        ax.scatter(ds[x].isel(run=runs).values, chosen, marker="_", color="0.4", lw=0.8)
+    note = "grey dashes: the rated motor chosen; " if rated else ""
+    fig.suptitle(
+        f"Required motor power at each design point\n({note}the other factors vary)",
+        fontsize="medium",
+    )
     return fig

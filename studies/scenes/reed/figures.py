@@ -1,6 +1,7 @@
 """Figures of the ``reed`` scene: ``frequency_map.png`` (f₁ over length × thickness, band
-edges and in-band cells marked), ``mode_shapes.png`` (stored mode shapes); the Campbell
-diagram is :mod:`studies.scenes.reed.campbell`.
+edges and in-band cells marked; a scatter of every design point where a factor has too many
+levels for cells, as under a sampled design), ``mode_shapes.png`` (stored mode shapes); the
+Campbell diagram is :mod:`studies.scenes.reed.campbell`.
 """
 
 from __future__ import annotations
@@ -14,6 +15,9 @@ from studies.common.figure_layout import (
     design_factors,
     grid_of,
     level_values,
+    many_levels,
+    scatter_figure,
+    spread_runs,
 )
 from studies.common.figure_style import text_colour
 
@@ -22,6 +26,8 @@ def frequency_map_figure(ds: xr.Dataset) -> Figure | None:
     """First natural frequency over length × thickness, excitation band marked."""
     if not {"length", "thickness"} <= set(design_factors(ds)) or "first_frequency" not in ds:
         return None
+    if many_levels(ds, design_factors(ds)):
+        return _frequency_scatter(ds)
     layout = Layout(ds, ["length", "thickness"])
     fig, axes = layout.figure((3.8, 3.2))
     x, y = level_values(ds, "length"), level_values(ds, "thickness")
@@ -73,6 +79,25 @@ def frequency_map_figure(ds: xr.Dataset) -> Figure | None:
     fig.suptitle(
         f"First natural frequency [Hz]\nexcitation band{band_text}; red cells lie "
         f"inside it{layout.held_note()}",
+        fontsize="medium",
+    )
+    return fig
+
+
+def _frequency_scatter(ds: xr.Dataset) -> Figure:
+    """Every design point over length × thickness, coloured by f₁, ringed red inside the band."""
+    runs = spread_runs(ds)
+    f1 = ds["first_frequency"].isel(run=runs).values
+    fig, ax = scatter_figure(ds, "length", "thickness", f1, "first natural frequency [Hz]")
+    if "first_margin" in ds:
+        inside = ds["first_margin"].isel(run=runs).values <= 0
+        length = ds["length"].isel(run=runs).values
+        thickness = ds["thickness"].isel(run=runs).values
+        ax.scatter(length[inside], thickness[inside], s=40, facecolors="none", edgecolors="red",
+                   lw=0.8)  # fmt: skip
+    fig.suptitle(
+        "First natural frequency at each design point\n(red rings: inside the excitation band; "
+        "the other factors vary)",
         fontsize="medium",
     )
     return fig

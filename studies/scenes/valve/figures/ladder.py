@@ -11,12 +11,14 @@ the median of repeats, with a horizontal bar over their interquartile range
 from __future__ import annotations
 
 import itertools
+import math
 
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter
 
+from studies.common.errors import NotDrawn
 from studies.common.figure_layout import (
     apart_labels,
     design_factors,
@@ -35,6 +37,7 @@ COMPARED = (
 )
 PANEL = (3.6, 3.0)
 COLUMNS = 3
+MAX_LINES = 128  # combinations of the other factors drawn (ohc125_spring_surge: 101 speeds)
 
 
 def _rung_label(masses: float) -> str:
@@ -47,7 +50,14 @@ def ladder_figure(ds: xr.Dataset) -> Figure | None:
     if "cost_per_case" not in ds or "spring_masses" not in design_factors(ds) or not names:
         return None
     others = [f for f in design_factors(ds) if f != "spring_masses"]
-    combos = list(itertools.product(*(factor_levels(ds, f) for f in others)))
+    levels = [factor_levels(ds, f) for f in others]
+    lines = math.prod(len(lv) for lv in levels)
+    if lines > MAX_LINES:
+        raise NotDrawn(
+            f"{', '.join(others)} make {lines} combinations (more than {MAX_LINES}): too many "
+            "to draw a line each"
+        )
+    combos = list(itertools.product(*levels))
     columns = min(len(names), COLUMNS)
     rows = -(-len(names) // columns)
     fig = Figure(figsize=(PANEL[0] * columns, PANEL[1] * rows + 0.8), layout="constrained")

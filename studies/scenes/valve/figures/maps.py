@@ -1,5 +1,6 @@
 """Figures of the ``valve`` and ``valve_accuracy`` scenes: ``jump_speed_map.png`` (jump speed
-over the first two factors) and ``error_vs_cost.png`` (error against the reference vs cost
+over the first two factors; a scatter of every design point where a factor has too many levels
+for cells, as under a sampled design) and ``error_vs_cost.png`` (error against the reference vs cost
 per case, a line per integrator, points labelled by step where the labels stay apart).
 """
 
@@ -17,8 +18,11 @@ from studies.common.figure_layout import (
     grid_of,
     level_ticks,
     line_levels,
+    many_levels,
     runs_where,
+    scatter_figure,
     short_label,
+    spread_runs,
 )
 from studies.common.figure_style import text_colour
 
@@ -29,6 +33,8 @@ def jump_speed_map_figure(ds: xr.Dataset) -> Figure | None:
     if "jump_speed" not in ds or len(factors) < 2:
         return None
     x, y = factors[0], factors[1]
+    if many_levels(ds, factors):
+        return _jump_speed_scatter(ds, x, y)
     layout = Layout(ds, [x, y])
     fig, axes = layout.figure((4.6, 3.6))
     (xs, x_labels), (ys, y_labels) = level_ticks(ds, x), level_ticks(ds, y)
@@ -72,6 +78,23 @@ def jump_speed_map_figure(ds: xr.Dataset) -> Figure | None:
         "Jump speed: lowest camshaft speed with separation\n"
         "(none: none in the searched range, or not run)"
         f"{layout.held_note()}",
+        fontsize="medium",
+    )
+    return fig
+
+
+def _jump_speed_scatter(ds: xr.Dataset, x: str, y: str) -> Figure:
+    """Every design point over the first two factors, coloured by its jump speed (grey crosses:
+    none)."""
+    runs = spread_runs(ds)
+    jump = ds["jump_speed"].isel(run=runs).values
+    fig, ax = scatter_figure(ds, x, y, jump, short_label(ds, "jump_speed"))
+    none = ~np.isfinite(jump)
+    ax.scatter(ds[x].isel(run=runs).values[none], ds[y].isel(run=runs).values[none], s=14,
+               marker="x", color="0.5", lw=0.8)  # fmt: skip
+    fig.suptitle(
+        "Jump speed at each design point\n(grey crosses: none in the searched range, or not "
+        "run; the other factors vary)",
         fontsize="medium",
     )
     return fig
