@@ -280,7 +280,7 @@ def _neighbours(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, units: str) -> 
                 # Named levels (a material) have no order: nothing lies beyond the first or last.
                 numeric = np.isfinite(an["level_value"].sel(term=f).values[level])
                 cells.append("— (edge of the grid)" if numeric else "—")
-                if numeric and len(levels_of(an, f)) > 1:
+                if numeric and len(levels_of(an, f)) > 1 and _edge_matters(r, f, 1 - s):
                     edges.append(f)
                 continue
             if not np.isfinite(value):
@@ -313,6 +313,17 @@ def _neighbours(view: xr.Dataset, an: xr.Dataset, r: xr.Dataset, units: str) -> 
             "",
         ]
     return lines
+
+
+def _edge_matters(r: xr.Dataset, factor: str, inwards: int) -> bool:
+    """Whether the optimum at an edge level of ``factor`` differs beyond round-off from its
+    neighbour one level inwards (``neighbour_value`` side ``inwards``): where they are equal,
+    the response does not change with ``factor`` there and nothing says a better value lies
+    beyond; without a value there, it may."""
+    both = np.array(
+        [float(r.neighbour_value.sel(term=factor).values[inwards]), float(r.optimum_value)]
+    )
+    return not np.isfinite(both).all() or abs(both[0] - both[1]) > round_off_of(both)
 
 
 def _rests_on(view: xr.Dataset, name: str, terms: list[str], levels: dict[str, int]) -> str:
