@@ -327,11 +327,12 @@ def _check_unchanged(study: Path, sha256: str, folder: Path | None) -> None:
         return
     original = _recorded_text(study.parent)
     if original == text:
+        missing = [str(path) for _, path in inputs if not path.is_file()]
         read = ", ".join(str(path) for _, path in inputs)
+        what = f"is gone: {', '.join(missing)}" if missing else "changed after the run started"
         msg = (
-            f"a file that {study} reads ({read}) changed after the run "
-            "started. Resuming would mix design points of two inputs; run the study anew: "
-            f"python -m studies run {study}"
+            f"a file that {study} reads ({read}) {what}. Resuming would mix design points of "
+            f"two inputs; run the study anew: python -m studies run {study}"
         )
         raise RunStateError(msg)
     changed = [

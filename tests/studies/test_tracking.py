@@ -363,6 +363,9 @@ def test_resume_from_any_folder_reads_a_relative_lift_table_and_refuses_it_chang
     run_id = json.loads((folder / "run.json").read_text())["run_id"]
     with pytest.raises(ValueError, match=f"a file that .* reads \\({table}\\) changed after"):
         resume_run(run_id, tmp_path, progress=False)
+    table.unlink()  # a missing file is said to be gone, not changed
+    with pytest.raises(ValueError, match=f"reads \\({table}\\) is gone: {table}\\. "):
+        resume_run(run_id, tmp_path, progress=False)
     lift_table(table, peak_mm=10.0)  # the original contents: resumable again
     resumed = resume_run(run_id, tmp_path, progress=False)
     assert resumed.record.status == "finished"
