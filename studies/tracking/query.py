@@ -318,12 +318,14 @@ def _header(name: str, units: str | None) -> str:
 
 def as_table(rows: list[dict[str, Any]], columns: list[str] | None = None) -> str:
     """The runs as a text table; ``columns`` adds values (``bore``, ``cam_speed`` for a
-    factor's levels, ``max_jerk.max``) in the units the scene declares (rows need
+    factor's levels, ``max_jerk.max``) in the units the scene declares, named in the header
+    or, where the listed runs' scenes declare different units, in each cell (rows need
     :func:`with_values`)."""
     columns = columns or []
-    shown = [[_column(r, c) for c in columns] for r in rows]
-    units = {c: _declared(rows, c) for c in columns}
-    heads = [_header(c, units[c]) for c in columns]
+    declared = {c: {_locate(r, c)[1] for r in rows} - {""} for c in columns}
+    mixed = {c for c in columns if len(declared[c]) > 1}  # scenes declaring other units
+    shown = [[_column(r, c, c in mixed) for c in columns] for r in rows]
+    heads = [_header(c, "" if c in mixed else _declared(rows, c)) for c in columns]
     widths = [max([len(h)] + [len(v[i]) for v in shown]) for i, h in enumerate(heads)]
     extra = "".join(f" {h:>{w}}" for h, w in zip(heads, widths, strict=True))
     lines = [
@@ -360,10 +362,13 @@ def _declared(rows: list[dict[str, Any]], column: str) -> str:
     return next((_locate(r, column)[1] for r in rows if _locate(r, column)[1]), "")
 
 
-def _column(row: dict[str, Any], column: str) -> str:
-    """One value of a run in the unit its scene declares ("-" when the run has none)."""
+def _column(row: dict[str, Any], column: str, with_units: bool = False) -> str:
+    """One value of a run in the unit its scene declares ("-" when the run has none), that
+    unit written after it ``with_units`` (where the listed runs' scenes declare different
+    units for the column, its header has none)."""
     value, declared = _locate(row, column)
-    return _shown(value, declared)
+    text = _shown(value, declared)
+    return f"{text} {declared}" if with_units and value is not None and declared else text
 
 
 def _locate(row: dict[str, Any], column: str) -> tuple[Any, str]:

@@ -177,6 +177,13 @@ def test_where_reads_a_number_in_each_runs_units_and_skips_runs_it_cannot_conver
     below = runs_out(capsys, outputs, "--where", f"max_acceleration.max<{cam_max * 1.01}")
     assert cam in below
     assert valve not in below
+    # --columns over both: each cell in its scene's unit, the header naming none (it named
+    # the cam's mm/rad^2 above the valve's value in m/s^2)
+    table = runs_out(capsys, outputs, "--columns", "max_acceleration.max").splitlines()
+    assert table[0].split()[-2:] == ["max_acceleration.max", "tags"]
+    rows = {line.split()[0]: line for line in table[1:]}
+    assert rows[cam].split()[-1] == "mm/rad^2"
+    assert rows[valve].split()[-1] == "m/s^2"
     assert main(["runs", "--outputs", str(outputs), "--where", "max_acceleration.max<5 N"]) == 2
     assert capsys.readouterr().err.startswith(
         "error: --where max_acceleration.max: 'N' measures force, max_acceleration.max is in "
