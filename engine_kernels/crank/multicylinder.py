@@ -254,8 +254,9 @@ def crank_multicylinder_batch(
     """Summed crankshaft torque, its harmonic orders, free forces and moments  [F1]–[F2].
 
     Every cylinder has the same pressure curve; cylinder c's torque is the single-cylinder
-    torque shifted by its firing angle (periodic linear interpolation, exact when the firing
-    angles fall on the grid).
+    torque shifted by its firing angle less cylinder 1's, so the summed curve is on cylinder
+    1's crank angle like the single-cylinder curves (periodic linear interpolation, exact when
+    the firing angles fall on the grid).
 
     params       : float[n, N_PARAMS]  Case parameters; CYLINDERS = z cylinders used.
     pressure     : float[n_p, m]       Cylinder pressure [Pa] on the cycle grid; n_p = n or 1.
@@ -288,7 +289,7 @@ def crank_multicylinder_batch(
         crank_torque_curve(row, prow, single)
         total = np.zeros(m)
         for c in range(z):
-            shift = firing[c] / step
+            shift = (firing[c] - firing[0]) / step  # on cylinder 1's crank angle
             for j in range(m):
                 total[j] += periodic_interpolate(single, j - shift)
         mean = total.sum() / m

@@ -121,6 +121,28 @@ def test_v12_torque_runs_with_curves_figures_and_energy_balance(tmp_path: Path) 
     assert (ds["dominant_torque_order"] == 3.0).all()
 
 
+def test_the_engine_torque_is_on_cylinder_1s_crank_angle_whenever_cylinder_1_fires() -> None:
+    # An audit: an inline twin firing cylinder 1 at 270 deg and cylinder 2 at 0 deg stored the
+    # summed torque shifted by cylinder 1's firing angle (off by 10 951 N·m at a peak of
+    # 11 929 N·m), while the axis it is on, like the cylinder curves', is cylinder 1's crank
+    # angle. Expected, by hand from the single-cylinder curve on the same 1 deg grid:
+    # cylinder 2 runs 270 deg ahead of cylinder 1, T(a) = T1(a) + T1(a + 270 deg).
+    ev = run(
+        scene_study(
+            "crank",
+            responses='["mean_torque"]',
+            curves='["cylinder_torque", "engine_torque"]',
+            parameters='cylinders = 2\nlayout = "inline"\nfiring_order = [2, 1]\n'
+            'firing = "given"\nfiring_angles = [270.0, 0.0]',
+            factors="[factors.engine_speed]\nlevels = [3000.0, 4000.0]",
+            settings="angle_step = 1.0",
+        )
+    )
+    single = ev.curves["cylinder_torque"]
+    expected = single + np.roll(single, -270, axis=1)
+    np.testing.assert_allclose(ev.curves["engine_torque"], expected, rtol=1e-12, atol=1e-9)
+
+
 # --- bad parameters give clear messages -------------------------------------------------------
 @pytest.mark.parametrize(
     ("parameters", "factors", "expected"),
