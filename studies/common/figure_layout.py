@@ -24,6 +24,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from studies.common.blocks import blocks, first_run, runs_matching
+from studies.common.design_kinds import SAMPLING_DESIGNS
 from studies.common.errors import NotDrawn
 from studies.common.figure_style import axis_label, pretty_units
 
@@ -46,14 +47,24 @@ def factor_levels(ds: xr.Dataset, factor: str) -> list[int]:
 
 
 def many_levels(ds: xr.Dataset, factors: Sequence[str | None]) -> bool:
-    """Whether one of ``factors`` has more than ``MAX_LEVELS`` levels."""
+    """Whether one of ``factors`` has more than ``MAX_LEVELS`` levels, or is sampled (a
+    sampled design's points share no value: a panel per value holds one point)."""
+    if ds.attrs.get("design") in SAMPLING_DESIGNS:
+        return any(f is not None for f in factors)
     return any(f is not None and len(factor_levels(ds, f)) > MAX_LEVELS for f in factors)
 
 
 def few_levels(ds: xr.Dataset, factor: str) -> list[int]:
     """The level codes of ``factor``, to lay out or hold; :class:`NotDrawn` when it has more
-    than ``MAX_LEVELS``."""
+    than ``MAX_LEVELS`` or is sampled (holding one sampled value of it and one of another
+    factor selects no design point: every panel was empty)."""
     levels = factor_levels(ds, factor)
+    design = str(ds.attrs.get("design", ""))
+    if design in SAMPLING_DESIGNS:
+        raise NotDrawn(
+            f"{factor} is sampled ({len(levels)} distinct values in a {design} design): no "
+            "panel or line per value, and no value to hold"
+        )
     if len(levels) > MAX_LEVELS:
         raise NotDrawn(
             f"{factor} has {len(levels)} distinct values (more than {MAX_LEVELS}): too many to "

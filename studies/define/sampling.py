@@ -30,9 +30,9 @@ from typing import Any
 
 import numpy as np
 
+from studies.common.design_kinds import SAMPLING_DESIGNS
 from studies.scenes.base import short
 
-SAMPLING_DESIGNS = ("saltelli", "sobol", "lhs")
 POWER_OF_TWO = ("saltelli", "sobol")
 DEFAULT_SEED = 1
 MAX_BASE_SAMPLES = 1 << 20
