@@ -79,6 +79,13 @@ FAULTS = {
 }
 
 
+def full_study(folder: Path) -> tuple[Path, Path]:
+    """The study file ``STUDY`` written in ``folder``, and the outputs folder beside it."""
+    study = folder / "full.toml"
+    study.write_text(STUDY, encoding="utf-8")
+    return study, folder / "out"
+
+
 def run(study: Path, outputs: Path, *extra: str) -> int:
     return main(["run", str(study), "--outputs", str(outputs), "--no-progress", *extra])
 
@@ -107,9 +114,7 @@ def test_a_full_disk_at_each_write_is_one_line_and_resumable(
     fault: str,
 ) -> None:
     owner, name, error, call = FAULTS[fault]
-    study = tmp_path / "full.toml"
-    study.write_text(STUDY)
-    outputs = tmp_path / "out"
+    study, outputs = full_study(tmp_path)
     with monkeypatch.context() as patch:
         patch.setattr(owner, name, failing_on_call(getattr(owner, name), call, error()))
         assert run(study, outputs, "--chunk-size", "2") == EXIT_OUTPUT_ERROR
@@ -122,9 +127,7 @@ def test_a_full_disk_at_each_write_is_one_line_and_resumable(
 def test_a_full_disk_while_writing_the_report_leaves_no_cut_report(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    study = tmp_path / "full.toml"
-    study.write_text(STUDY)
-    outputs = tmp_path / "out"
+    study, outputs = full_study(tmp_path)
     with monkeypatch.context() as patch:
         patch.setattr(Path, "write_text", _cut_short(Path.write_text, "report.md", "report.html"))
         assert run(study, outputs) == EXIT_OUTPUT_ERROR
@@ -136,9 +139,7 @@ def test_a_full_disk_before_run_json_is_written_leaves_no_run_folder(
 ) -> None:
     # An audit's case: the run folder was left holding run.json.writing, which `runs` does
     # not list, and the error named no file.
-    study = tmp_path / "full.toml"
-    study.write_text(STUDY)
-    outputs = tmp_path / "out"
+    study, outputs = full_study(tmp_path)
     with monkeypatch.context() as patch:
         patch.setattr(Path, "write_text", _cut_short(Path.write_text, "run.json.writing"))
         assert run(study, outputs) == EXIT_OUTPUT_ERROR
@@ -177,9 +178,7 @@ def test_the_clean_up_never_raises_again(
 ) -> None:
     """Before: closing the half-written netCDF file raised a second HDF error inside the
     handler, and run.json still said "running"."""
-    study = tmp_path / "full.toml"
-    study.write_text(STUDY)
-    outputs = tmp_path / "out"
+    study, outputs = full_study(tmp_path)
     with monkeypatch.context() as patch:
         patch.setattr(netCDF4.Dataset, "close", failing_on_call(netCDF4.Dataset.close, 1, hdf()))
         patch.setattr(
@@ -194,9 +193,7 @@ def test_the_clean_up_never_raises_again(
 def test_analyze_onto_a_full_disk_leaves_nothing_behind(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    study = tmp_path / "full.toml"
-    study.write_text(STUDY)
-    outputs = tmp_path / "out"
+    study, outputs = full_study(tmp_path)
     assert run(study, outputs) == 0
     (row,) = RunStore(outputs).list_runs()
     target = tmp_path / "again"
@@ -214,9 +211,7 @@ def test_analyze_onto_a_full_disk_leaves_nothing_behind(
 def test_analyze_to_another_runs_folder_is_refused(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    study = tmp_path / "full.toml"
-    study.write_text(STUDY)
-    outputs = tmp_path / "out"
+    study, outputs = full_study(tmp_path)
     assert run(study, outputs) == 0
     assert run(study, outputs, "--force") == 0
     first, second = (Path(r["folder"]) for r in RunStore(outputs).list_runs())
@@ -278,9 +273,7 @@ def test_what_the_checkpoints_take_is_what_a_run_computes() -> None:
 def test_a_run_that_cannot_fit_on_the_disk_is_refused_before_it_starts(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    study = tmp_path / "full.toml"
-    study.write_text(STUDY, encoding="utf-8")
-    outputs = tmp_path / "out"
+    study, outputs = full_study(tmp_path)
     real = shutil.disk_usage
 
     def small(path: str | Path) -> Any:
