@@ -217,6 +217,7 @@ def valve_reference(
     switches: list[tuple[float, str]] = []
     segments: list[Segment] = []
 
+    watched = _seat_force_watched(params)  # once, not at every event evaluation
     for _ in range(MAX_SEGMENTS):
         contact, seated = _modes(signs)
 
@@ -234,8 +235,14 @@ def valve_reference(
             # Fire only when a function crosses away from its current sign, by a margin far
             # below the solver tolerance, so an identically zero function (the drive force on
             # the base circle) does not fire at every restart.
-            def event(th, x, index=index, offset=signs[index] * HYSTERESIS[index]):
-                if index == 2 and not _seat_force_watched(params):
+            def event(
+                th,
+                x,
+                index=index,
+                offset=signs[index] * HYSTERESIS[index],
+                never=index == 2 and not watched,
+            ):
+                if never:
                     return 1.0  # never crosses: the gap's event is this switch
                 return _functions(params, excitation, th, x)[index] + offset
 
