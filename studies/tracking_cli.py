@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from studies.common.errors import RunNotFound, RunStateError, StudyError
+from studies.common.errors import EXIT_OUTPUT_ERROR, RunNotFound, RunStateError, StudyError
 
 if TYPE_CHECKING:
     from studies.tracking.store import RunStore
@@ -290,7 +290,9 @@ def _gc(args: argparse.Namespace) -> int:
     for e in done.purged:
         print(f"{delete} {e.run_id} ({e.study}, trashed {e.removed:%Y-%m-%d %H:%M}) for good")
     print(f"{move} {len(done.trashed)} run(s) to the trash, {delete} {len(done.purged)} from it")
-    return 0
+    for line in done.refused:
+        sys.stderr.write(f"error: {line}\n")
+    return EXIT_OUTPUT_ERROR if done.refused else 0
 
 
 def _reindex(args: argparse.Namespace) -> int:

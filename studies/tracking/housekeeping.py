@@ -134,10 +134,12 @@ def restore_run(store: RunStore, ref: str) -> tuple[trash.Trashed, Path, list[st
 
 @dataclass
 class Collected:
-    """What ``gc`` moved to the trash and what it deleted from it."""
+    """What ``gc`` moved to the trash, what it deleted from it, and why the runs it could not
+    move stayed where they are (one line each)."""
 
     trashed: list[dict[str, Any]] = field(default_factory=list)
     purged: list[trash.Trashed] = field(default_factory=list)
+    refused: list[str] = field(default_factory=list)
 
 
 def collect_garbage(
@@ -146,7 +148,8 @@ def collect_garbage(
     """Move the runs of ``store`` that started more than ``older_than`` ago to the trash (not
     running ones; not tagged ones with ``keep_tagged``), delete for good the runs removed more
     than ``older_than`` ago (with ``keep_tagged``, not a tagged one: it stays in the trash), and
-    what killed processes left behind."""
+    what killed processes left behind. A run whose folder cannot move (read-only) stays,
+    registered and whole, with its reason in ``refused``; the others are collected all the same."""
     cutoff = dt.datetime.now(dt.UTC) - older_than
     tags, _ = store.tags_and_notes()
     chosen = []
@@ -168,6 +171,9 @@ def collect_garbage(
             remove_run(store, row, force=True)
         except (ValueError, KeyError):
             continue  # started again (a resume), or removed by another process, since listed
+        except OutputsError as exc:
+            done.refused.append("; ".join([str(exc), *getattr(exc, "__notes__", [])]))
+            continue
         done.trashed.append(row)
     done.purged = [e for e in expired if trash.purge(e)]
     trash.sweep(store.trash)

@@ -340,6 +340,41 @@ def test_gc_moves_old_runs_to_the_trash_and_empties_it_by_age(
     assert main(["gc", "--older-than", "99999999999w", "--dry-run", *out]) == 2  # > 1000 years
 
 
+def test_gc_moves_every_run_it_can_and_names_the_one_it_cannot(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # gc stopped at the first run whose folder could not move (read-only): the runs after it
+    # stayed, the trash was not emptied, and the runs it had moved were not listed.
+    outputs = tmp_path / "out"
+    first, stuck, last = (tiny_run(tmp_path, outputs, s) for s in (1000.0, 1100.0, 1200.0))
+    out = ["--outputs", str(outputs)]
+    expired = tiny_run(tmp_path, outputs, 1300.0)
+    assert main(["rm", expired, *out]) == 0
+    folder = Path(RunStore(outputs).find_run(stuck)["folder"])
+    before = tree(folder)
+    rename = Path.rename
+
+    def read_only(self: Path, target: Path) -> Path:
+        if self == folder:
+            raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), str(self))
+        return rename(self, target)
+
+    monkeypatch.setattr(Path, "rename", read_only)
+    capsys.readouterr()
+    assert main(["gc", "--older-than", "0s", *out]) == EXIT_OUTPUT_ERROR
+    said = capsys.readouterr()
+    assert f"moved {first}" in said.out
+    assert f"moved {last}" in said.out
+    assert "moved 2 run(s) to the trash, deleted 1 from it" in said.out
+    assert said.err == (
+        f"error: run {stuck}: {folder} cannot move into the trash (Permission denied); the "
+        f"folder and {folder.parent} must be writable; nothing was removed\n"
+    )
+    assert [r["run_id"] for r in RunStore(outputs).list_runs()] == [stuck]
+    assert tree(folder) == before
+    assert {e.run_id for e in RunStore(outputs).trash_entries()} == {first, last}
+
+
 def test_gc_keep_tagged_never_deletes_a_tagged_run_from_the_trash(tmp_path: Path) -> None:
     # An audit's case: a tagged run removed with rm (tags travel into the trash) was deleted
     # for good by `gc --keep-tagged`, whose help says it never removes a tagged run.
