@@ -77,6 +77,33 @@ def test_identical_definition_on_clean_commit_is_reused(
     assert len(RunStore(outputs).list_runs()) == 2
 
 
+def test_a_reused_run_answers_without_the_pipeline_or_a_figure_worker(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # A reused run took 2.2 s to say so: the command imported the whole pipeline (xarray,
+    # numba, scipy) and waited for a figure worker that had nothing to draw.
+    study = tmp_path / "resumable.toml"
+    study.write_text(STUDY)
+    outputs = tmp_path / "outputs"
+    args = ["run", str(study), "--outputs", str(outputs), "--no-progress"]
+    warmed: list[int] = []
+    monkeypatch.setattr("studies.report.figure_pool.warm", lambda: warmed.append(1))
+    assert main(args) == 0
+    assert warmed == [1]  # a computed run warms the workers
+    assert main(args) == 0
+    assert warmed == [1]
+    heavy = ("studies.pipeline", "xarray", "numba", "scipy", "matplotlib")
+    probe = (
+        "import sys; from studies.cli import main; code = main(sys.argv[1:]); "
+        f"print(code, [m for m in {heavy!r} if m in sys.modules])"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", probe, *args], capture_output=True, text=True, check=True
+    )
+    assert "reusing run" in done.stdout
+    assert done.stdout.splitlines()[-1] == "0 []"
+
+
 class ClosedPipe:
     """Standard output after ``| head -1`` has exited: every write raises BrokenPipeError."""
 
