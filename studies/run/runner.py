@@ -199,6 +199,13 @@ def dask_executor(scheduler: str) -> Executor:
     return dask_client(scheduler).get_executor()
 
 
+LOCAL_CLUSTER = {"dashboard_address": None, "scheduler_kwargs": {"dashboard_address": ":0"}}
+"""Options of a local Dask cluster (``LocalCluster``, ``Client``): no dashboard, and the
+scheduler's HTTP server (health and metrics) on a free port. Without a dashboard that server
+still takes port 8787, and a second cluster on the machine (another run, a notebook's) then
+warns that the port is in use and perhaps a cluster runs already."""
+
+
 def dask_client(scheduler: str) -> Any:
     """A client of a Dask cluster: ``scheduler`` is an address or ``local``.
 
@@ -213,7 +220,7 @@ def dask_client(scheduler: str) -> Any:
         msg = "--scheduler needs dask.distributed: pip install -e '.[cluster]'"
         raise ClusterError(msg) from None
     if scheduler == "local":
-        return Client(dashboard_address=None)
+        return Client(**LOCAL_CLUSTER)
     client = _connect(Client, scheduler)
     try:
         client.wait_for_workers(1, timeout=WORKERS_TIMEOUT_S)

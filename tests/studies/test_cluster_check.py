@@ -12,6 +12,7 @@ import pytest
 
 from studies.cli import main
 from studies.run import cluster, provenance
+from studies.run.runner import LOCAL_CLUSTER
 from studies.scenes import SCENES, get_scene
 
 distributed = pytest.importorskip("dask.distributed")
@@ -35,7 +36,7 @@ levels = [16.0, 18.0]
 @pytest.fixture(scope="module")
 def address():
     with distributed.LocalCluster(
-        n_workers=1, processes=True, threads_per_worker=1, dashboard_address=None
+        n_workers=1, processes=True, threads_per_worker=1, **LOCAL_CLUSTER
     ) as cluster:
         yield cluster.scheduler_address
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import multiprocessing
 import pickle
+import socket
 from concurrent.futures import Executor, Future, ProcessPoolExecutor, ThreadPoolExecutor
 
 import numpy as np
@@ -11,7 +12,7 @@ import pytest
 
 from studies.define.plan import plan_text
 from studies.run import runner
-from studies.run.runner import evaluate
+from studies.run.runner import LOCAL_CLUSTER, evaluate
 
 STUDY = """
 name = "executors"
@@ -61,7 +62,7 @@ def test_process_pool_gives_identical_results(serial) -> None:
 def test_dask_cluster_gives_identical_results(serial) -> None:
     distributed = pytest.importorskip("dask.distributed")
     with distributed.Client(
-        processes=False, n_workers=1, threads_per_worker=2, dashboard_address=None
+        processes=False, n_workers=1, threads_per_worker=2, **LOCAL_CLUSTER
     ) as client:
         clustered = evaluate(
             plan_text(STUDY), chunk_size=4, progress=False, executor=client.get_executor()
@@ -73,7 +74,7 @@ def test_dask_local_cluster_of_worker_processes_gives_identical_results(serial) 
     distributed = pytest.importorskip("dask.distributed")
     with (
         distributed.LocalCluster(
-            n_workers=2, processes=True, threads_per_worker=1, dashboard_address=None
+            n_workers=2, processes=True, threads_per_worker=1, **LOCAL_CLUSTER
         ) as cluster,
         distributed.Client(cluster) as client,
     ):
@@ -161,3 +162,24 @@ def test_an_unreachable_scheduler_is_one_line_and_writes_nothing(
     assert err.startswith(f"error: --scheduler {address}: could not connect to a Dask scheduler")
     assert "within 0.5 s" in err
     assert not outputs.exists()
+
+
+def test_a_local_cluster_starts_quietly_beside_another_one_on_port_8787() -> None:
+    # `--scheduler local` while another cluster (a notebook's, a second run's) held port 8787
+    # warned "Port 8787 is already in use. Perhaps you already have a cluster running?": with
+    # the dashboard off, the scheduler's HTTP server still took 8787. The suite turns warnings
+    # into errors, so that warning would fail the start here.
+    pytest.importorskip("dask.distributed")
+    from studies.run.cluster import cluster_executor
+
+    taken = socket.socket()
+    try:
+        taken.bind(("0.0.0.0", 8787))
+        taken.listen()
+    except OSError:
+        pass  # held by another process already: the same situation
+    try:
+        with cluster_executor("local", ["cam"]) as executor:
+            assert executor.submit(int, "7").result() == 7
+    finally:
+        taken.close()

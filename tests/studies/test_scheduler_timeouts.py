@@ -56,7 +56,7 @@ def test_an_address_that_never_answers_is_given_up(
 @pytest.mark.filterwarnings("ignore::DeprecationWarning")
 def test_a_scheduler_without_workers_is_named(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(runner, "WORKERS_TIMEOUT_S", 1.0)
-    with LocalCluster(n_workers=0, processes=False, dashboard_address=None) as cluster:
+    with LocalCluster(n_workers=0, processes=False, **runner.LOCAL_CLUSTER) as cluster:
         address = cluster.scheduler_address
         with pytest.raises(ValueError, match="has no workers") as refused:
             runner.dask_executor(address)
