@@ -283,15 +283,9 @@ def test_rm_keeps_the_folder_when_the_registry_cannot_change(
     assert RunStore(outputs).trash_entries() == []
 
 
-def test_rm_of_a_run_whose_folder_cannot_move_is_one_line_and_leaves_nothing_in_the_trash(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
-) -> None:
-    # An audit's case: a read-only run folder refused the move, but the trash folder made for
-    # it was left behind, empty. The kernel refuses as it would a user (root is not refused).
-    outputs = tmp_path / "out"
-    run_id = tiny_run(tmp_path, outputs)
-    folder = Path(RunStore(outputs).find_run(run_id)["folder"])
-    before = tree(folder)
+def refuse_to_move(monkeypatch: pytest.MonkeyPatch, folder: Path) -> None:
+    """Make ``folder`` refuse to move, as a read-only folder does (the kernel refuses as it
+    would a user; root is not refused)."""
     rename = Path.rename
 
     def read_only(self: Path, target: Path) -> Path:
@@ -300,6 +294,18 @@ def test_rm_of_a_run_whose_folder_cannot_move_is_one_line_and_leaves_nothing_in_
         return rename(self, target)
 
     monkeypatch.setattr(Path, "rename", read_only)
+
+
+def test_rm_of_a_run_whose_folder_cannot_move_is_one_line_and_leaves_nothing_in_the_trash(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # An audit's case: a read-only run folder refused the move, but the trash folder made for
+    # it was left behind, empty.
+    outputs = tmp_path / "out"
+    run_id = tiny_run(tmp_path, outputs)
+    folder = Path(RunStore(outputs).find_run(run_id)["folder"])
+    before = tree(folder)
+    refuse_to_move(monkeypatch, folder)
     assert main(["rm", run_id, "--outputs", str(outputs)]) == EXIT_OUTPUT_ERROR
     err = capsys.readouterr().err
     assert err == (
@@ -352,14 +358,7 @@ def test_gc_moves_every_run_it_can_and_names_the_one_it_cannot(
     assert main(["rm", expired, *out]) == 0
     folder = Path(RunStore(outputs).find_run(stuck)["folder"])
     before = tree(folder)
-    rename = Path.rename
-
-    def read_only(self: Path, target: Path) -> Path:
-        if self == folder:
-            raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), str(self))
-        return rename(self, target)
-
-    monkeypatch.setattr(Path, "rename", read_only)
+    refuse_to_move(monkeypatch, folder)
     capsys.readouterr()
     assert main(["gc", "--older-than", "0s", *out]) == EXIT_OUTPUT_ERROR
     said = capsys.readouterr()
