@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from engine_kernels._jit import call_small, claim
+from engine_kernels.cam import kinematics as cb
 from engine_kernels.cam import lift_laws, multi_segment
 from studies.scenes.base import Parameter
 
@@ -56,7 +57,7 @@ def ramp_parameters(
             "ramp_height",
             "mm",
             height,
-            "lash take-up ramp height (0 = no ramp)",
+            "lash take-up ramp height (0 = no ramp: ramp_width and ramp_velocity unused)",
             0.0,
             5.0,
             source=source,
@@ -74,6 +75,16 @@ def ramp_parameters(
             "ramp_velocity", "mm/rad", velocity, "ramp end velocity", 0.0, 100.0, source=source
         ),
     )
+
+
+def drop_empty_ramps(params: np.ndarray) -> None:
+    """No ramp where ``ramp_height`` is 0, as the parameter says: the rows' ramp width and end
+    velocity (``cam_kinematics_batch`` parameters, SI) are set to 0. The kernel would otherwise
+    build the nearest feasible ramp of that width and velocity, v·W/2 high (0.17 mm for 50°
+    at 0.4 mm/rad), and lift the whole profile by it."""
+    empty = params[:, cb.P_RAMP_HEIGHT] == 0.0
+    params[empty, cb.P_RAMP_WIDTH] = 0.0
+    params[empty, cb.P_RAMP_VELOCITY] = 0.0
 
 
 def segment_parameters() -> tuple[Parameter, ...]:

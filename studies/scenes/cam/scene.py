@@ -36,6 +36,7 @@ from studies.scenes.cam_laws import (
     LAW_CODES,
     SHAPE_CODES,
     codes,
+    drop_empty_ramps,
     fitted_widths,
     polydyne_problems,
 )
@@ -312,6 +313,7 @@ def _pack(points: dict[str, np.ndarray]) -> np.ndarray:
         params[:, col] = codes(points["law"], LAW_CODES) if name == "law" else points[name]
     table = points["law"] == "table"
     params[table, cb.P_LIFT] = 0.0
+    drop_empty_ramps(params)
     return params
 
 

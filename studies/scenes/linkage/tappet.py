@@ -20,7 +20,7 @@ from engine_kernels.cam import kinematics as cb
 from engine_kernels.cam import lift_laws, multi_segment
 from engine_kernels.valvetrain import rocker, rocker_batches
 from studies.scenes import cam_radius
-from studies.scenes.cam_laws import LAW_CODES, SHAPE_CODES, codes
+from studies.scenes.cam_laws import LAW_CODES, SHAPE_CODES, codes, drop_empty_ramps
 from studies.scenes.checks import PointProblems, convex_advice, more_concave_line, take
 
 HALF_TURN_DEG = 180.0
@@ -115,6 +115,7 @@ def tappet_parameters(
         ("ramp_velocity", cb.P_RAMP_VELOCITY),
     ):
         params[:, where] = np.where(six, column(name), 0.0)
+    drop_empty_ramps(params)
     for k in range(multi_segment.N_SEGMENTS):
         params[:, cb.P_SEG_WIDTH0 + k] = column(f"seg{k + 1}_width")
         params[:, cb.P_SEG_ACCEL0 + k] = column(f"seg{k + 1}_accel")
