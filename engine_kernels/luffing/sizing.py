@@ -20,7 +20,10 @@ Choices the physics reference leaves open (documented here, applied in :func:`lu
 * the belt speed needed at the pulley implies a reduction ratio i = ω_motor d/(2V); it is
   checked against the belt ratio as built (1:1 in the source) within a relative tolerance.
 
-Every check is written as (value, limit, pass) with pass = 1.0 or 0.0; all quantities SI
+Every check is written as (value, limit, pass) with pass = 1.0 or 0.0, or NaN (stored as −1,
+"not evaluated") where the value could not be computed: the coupling torque, the key stress
+and the bearing life need the selected motor, and none is selected where no listed motor
+covers the required power (``motor_ok`` = 0 says so); all quantities SI
 (the coupling-torque formula 9550·P[kW]·K/n[rpm] is T = P K/ω in SI; bearing life in seconds:
 L10h = life/3600).
 
@@ -201,12 +204,16 @@ OUTPUT_UNITS = (
 
 
 @jit
-def check_flag(passed):
-    """Pass flag of a design check: 1.0 if it passes, else 0.0.
+def check_flag(passed, value):
+    """Pass flag of a design check: 1.0 if it passes, 0.0 if not, NaN (not evaluated) where
+    the checked ``value`` is NaN (it needs a motor and none was selected).
 
-    passed: bool  Outcome of the comparison (comparisons with NaN are False, so NaN fails).
+    passed: bool   Outcome of the comparison of ``value`` with its limit.
+    value : float  The checked quantity.
     Reference: physics §7 (checks as value, limit, pass).
     """
+    if math.isnan(value):
+        return math.nan
     return 1.0 if passed else 0.0
 
 
@@ -271,7 +278,7 @@ def luffing_batch(params, rated_powers, out):
         out[i, OUT_DRIVE_EFFICIENCY] = efficiency
         out[i, OUT_MOTOR_POWER] = required
         out[i, OUT_MOTOR_RATED_POWER] = rated
-        out[i, OUT_MOTOR_PASS] = check_flag(required <= rated)
+        out[i, OUT_MOTOR_PASS] = check_flag(required <= rated, required)
         out[i, OUT_MOTOR_INDEX] = index if index != NO_MOTOR else math.nan
         out[i, OUT_BELT_DESIGN_POWER] = design
         out[i, OUT_PULLEY_DIAMETER] = diameter
@@ -279,21 +286,23 @@ def luffing_batch(params, rated_powers, out):
         out[i, OUT_IMPLIED_RATIO] = ratio
         out[i, OUT_BELT_RATIO] = row[BELT_RATIO]
         out[i, OUT_RATIO_PASS] = check_flag(
-            abs(ratio - row[BELT_RATIO]) <= row[RATIO_TOLERANCE] * row[BELT_RATIO]
+            abs(ratio - row[BELT_RATIO]) <= row[RATIO_TOLERANCE] * row[BELT_RATIO], ratio
         )
         out[i, OUT_COUPLING_TORQUE] = torque
         out[i, OUT_COUPLING_LIMIT] = row[COUPLING_RATED_TORQUE]
-        out[i, OUT_COUPLING_PASS] = check_flag(torque <= row[COUPLING_RATED_TORQUE])
+        out[i, OUT_COUPLING_PASS] = check_flag(torque <= row[COUPLING_RATED_TORQUE], torque)
         out[i, OUT_TUBE_SECOND_MOMENT] = inertia
         out[i, OUT_DEFLECTION] = deflection
         out[i, OUT_DEFLECTION_LIMIT] = row[ALLOWABLE_DEFLECTION]
-        out[i, OUT_DEFLECTION_PASS] = check_flag(deflection <= row[ALLOWABLE_DEFLECTION])
+        out[i, OUT_DEFLECTION_PASS] = check_flag(
+            deflection <= row[ALLOWABLE_DEFLECTION], deflection
+        )
         out[i, OUT_SLOPE] = slope
         out[i, OUT_SLOPE_LIMIT] = row[ALLOWABLE_SLOPE]
-        out[i, OUT_SLOPE_PASS] = check_flag(slope <= row[ALLOWABLE_SLOPE])
+        out[i, OUT_SLOPE_PASS] = check_flag(slope <= row[ALLOWABLE_SLOPE], slope)
         out[i, OUT_KEY_STRESS] = stress
         out[i, OUT_KEY_LIMIT] = row[ALLOWABLE_CRUSHING_STRESS]
-        out[i, OUT_KEY_PASS] = check_flag(stress <= row[ALLOWABLE_CRUSHING_STRESS])
+        out[i, OUT_KEY_PASS] = check_flag(stress <= row[ALLOWABLE_CRUSHING_STRESS], stress)
         out[i, OUT_BEARING_LIFE] = life
         out[i, OUT_BEARING_LIMIT] = row[REQUIRED_BEARING_LIFE]
-        out[i, OUT_BEARING_PASS] = check_flag(life >= row[REQUIRED_BEARING_LIFE])
+        out[i, OUT_BEARING_PASS] = check_flag(life >= row[REQUIRED_BEARING_LIFE], life)

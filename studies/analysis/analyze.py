@@ -159,6 +159,7 @@ def _analyze(
     ds: xr.Dataset, responses: Sequence[str] | None, pool: Sequence[str] | None
 ) -> xr.Dataset:
     names = list(responses or json.loads(ds.attrs.get("responses", "[]")))
+    ds = missing.not_evaluated_as_missing(ds, names)
     design = str(ds.attrs.get("design", ""))
     attrs = {
         "design": design,

@@ -28,6 +28,7 @@ import numpy as np
 import xarray as xr
 
 from studies.common.blocks import finite_summary, run_slices
+from studies.run.results import NOT_EVALUATED, is_status
 from studies.scenes.base import NONE_MEANINGS
 
 DEFAULT = "unknown"
@@ -228,3 +229,25 @@ def nothing_to_analyse(y: xr.DataArray) -> str:
         return "NaN in every design point"
     shown = "±inf" if infinite.size > 1 else ("inf" if infinite[0] > 0 else "-inf")
     return f"{shown} in every design point with a value"
+
+
+def not_evaluated_as_missing(ds: xr.Dataset, responses: Sequence[str]) -> xr.Dataset:
+    """``ds`` with each pass/fail flag that was not evaluated at some run (stored −1: a check
+    whose value could not be computed there, as the luffing drive's coupling check where no
+    listed motor fits) as float, NaN there: the analysis then leaves such runs out of the
+    flag's means like any response without a value (its ``none_means``), instead of averaging
+    −1 with the passes and fails. Flags are scanned a block of runs at a time; only those with
+    a −1 are read whole."""
+    flags = [
+        r
+        for r in responses
+        if "flag_values" in ds[r].attrs
+        and not is_status(ds[r])
+        and any(
+            (np.asarray(ds[r].variable[part]) == NOT_EVALUATED).any()
+            for part in run_slices(ds.sizes["run"])
+        )
+    ]
+    return ds.assign(
+        {r: ds[r].where(ds[r] != NOT_EVALUATED).assign_attrs(ds[r].attrs) for r in flags}
+    )

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import xarray as xr
 
 from studies.define.definition import StudyFileError
 from studies.define.plan import plan_study, plan_text
@@ -107,13 +108,43 @@ def test_no_listed_motor_fails_the_motor_check() -> None:
         progress=False,
     )
     flags = np.stack([ev.scalars[f"{c}_ok"] for c in CHECKS])
-    np.testing.assert_array_equal(ev.scalars["checks_passed"], flags.sum(axis=0))
-    np.testing.assert_array_equal(ev.scalars["all_checks_ok"], flags.min(axis=0))
+    # Without a motor the checks that need one are not evaluated (stored as -1), not failed.
+    needs_motor = [list(CHECKS).index(c) for c in ("coupling", "key", "bearing")]
+    assert np.isnan(flags[needs_motor, 1]).all()
+    assert not np.isnan(np.delete(flags[:, 1], needs_motor)).any()
+    assert not np.isnan(flags[:, 0]).any()
+    np.testing.assert_array_equal(ev.scalars["checks_passed"], (flags == 1.0).sum(axis=0))
+    assert ev.scalars["all_checks_ok"].tolist() == [flags[:, 0].min(), 0.0]  # the motor fails
     assert ev.scalars["motor_ok"].tolist() == [1.0, 0.0]
     assert ev.scalars["selected_motor"][0] == 2.0
     assert ev.scalars["motor_power"][1] == pytest.approx(220.1 * 0.5 / (0.96 * 0.99 * 0.98 * 0.98))
     assert np.isnan(ev.scalars["motor_rated_power"][1])
     assert np.isnan(ev.scalars["selected_motor"][1])
+
+
+def test_checks_not_evaluated_are_left_out_of_the_level_means(tmp_path: Path) -> None:
+    # Without a motor the coupling check is stored as -1 ("not evaluated"); averaged as a
+    # value, it gave a pass flag the level means -0.75 and -1 (an audit's study).
+    text = study(
+        parameters="motor_ratings = [50.0, 100.0]",
+        responses='["coupling_ok", "motor_ok"]',
+        factors="[factors.trolley_mass]\nlevels = [5.0, 6.0, 10.0]\n"
+        "[factors.trolley_speed]\nlevels = [0.4, 0.5]",
+    )
+    result = run_plan(plan_text(text), tmp_path, progress=False)
+    flags = result.dataset["coupling_ok"].values
+    assert (flags == -1).any()
+    assert (flags >= 0).any()
+    analysis = xr.open_dataset(result.folder / "analysis.nc")
+    for term in ("trolley_mass", "trolley_speed"):
+        codes = result.dataset[f"{term}_level"].values
+        k = analysis["k"].sel(response="coupling_ok", term=term).values
+        left = analysis["left_out"].sel(response="coupling_ok", term=term).values
+        for level in range(k.size):
+            mine = flags[(codes == level) & (flags >= 0)]  # brute force over the runs
+            expected = mine.mean() if mine.size else np.nan
+            np.testing.assert_equal(k[level], expected)
+            assert left[level] == ((codes == level) & (flags == -1)).sum()
 
 
 @pytest.mark.parametrize(

@@ -142,7 +142,7 @@ PARAMETERS: tuple[Parameter, ...] = (
         "allowable_deflection",
         "mm",
         1467.0 / 250.0,
-        "allowed mid-span deflection (span/250)",
+        "allowed mid-span deflection (default: the default span/250; it does not follow tube_span)",
         0.0,
         1e4,
         True,
@@ -222,6 +222,7 @@ PARAMETERS: tuple[Parameter, ...] = (
 )
 
 NEEDS = ("sizing",)
+NO_MOTOR = " (−1, not evaluated, where no listed motor covers the required power: motor_ok 0)"
 
 # (name, units, long name, sense); checks come as value, limit, flag in the kernel's order.
 _VALUES = (
@@ -240,7 +241,7 @@ _VALUES = (
     ("ratio_ok", "1", "implied ratio equals the belt ratio within the tolerance", "larger"),
     ("coupling_torque", "N*m", "coupling design torque Tc", "smaller"),
     ("coupling_limit", "N*m", "coupling rated torque (the limit)", "smaller"),
-    ("coupling_ok", "1", "coupling torque within its rating", "larger"),
+    ("coupling_ok", "1", f"coupling torque within its rating{NO_MOTOR}", "larger"),
     ("tube_second_moment", "mm^4", "tube second moment of area I", "larger"),
     ("deflection", "mm", "guide-tube mid-span deflection", "smaller"),
     ("deflection_limit", "mm", "allowed deflection (the limit)", "smaller"),
@@ -250,10 +251,15 @@ _VALUES = (
     ("slope_ok", "1", "slope within the limit", "larger"),
     ("key_stress", "MPa", "key crushing stress σp = 2T/(k l d)", "smaller"),
     ("key_limit", "MPa", "allowed crushing stress (the limit)", "smaller"),
-    ("key_ok", "1", "key stress within the limit", "larger"),
-    ("bearing_life", "h", "bearing basic rating life L10h", "larger"),
+    ("key_ok", "1", f"key stress within the limit{NO_MOTOR}", "larger"),
+    (
+        "bearing_life",
+        "h",
+        "bearing basic rating life L10h (pulley shaft at motor speed/belt_ratio, load Fr)",
+        "larger",
+    ),
     ("bearing_limit", "h", "required bearing life (the limit)", "larger"),
-    ("bearing_ok", "1", "bearing life at least the required life", "larger"),
+    ("bearing_ok", "1", f"bearing life at least the required life{NO_MOTOR}", "larger"),
 )
 KERNEL_NAMES = tuple(name for name, *_ in _VALUES)
 """Response names in the column order of :data:`engine_kernels.luffing.sizing.OUTPUTS`."""
@@ -268,5 +274,12 @@ RESPONSES: tuple[Response, ...] = (
     Response(
         "checks_passed", "1", f"number of the {len(CHECKS)} checks that pass", NEEDS, "larger"
     ),
-    Response("all_checks_ok", "1", "every check passes", NEEDS, "larger", flag=True),
+    Response(
+        "all_checks_ok",
+        "1",
+        "every check passes (0 once one fails, −1 where none fails but one is not evaluated)",
+        NEEDS,
+        "larger",
+        flag=True,
+    ),
 )

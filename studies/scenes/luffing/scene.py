@@ -125,8 +125,10 @@ class LuffingScene(Scene[LuffingState]):
         si = dict(zip(KERNEL_NAMES, state.out.T, strict=True))
         si["selected_motor"] = si["selected_motor"] + 1.0
         flags = np.stack([si[f"{c}_ok"] for c in CHECKS])
-        si["checks_passed"] = flags.sum(axis=0)
-        si["all_checks_ok"] = flags.min(axis=0)
+        si["checks_passed"] = (flags == 1.0).sum(axis=0).astype(float)
+        # a failed check fails the design; else one not evaluated leaves it unknown
+        unknown = np.where(np.isnan(flags).any(axis=0), np.nan, 1.0)
+        si["all_checks_ok"] = np.where((flags == 0.0).any(axis=0), 0.0, unknown)
         return SceneOutput(
             scalars={
                 r: si[r] / UNITS[self.response(r).units].to_si  # type: ignore[union-attr]
