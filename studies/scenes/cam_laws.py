@@ -4,6 +4,8 @@ initial design, physics §9), and the conditions a polydyne polynomial must meet
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from engine_kernels._jit import call_small, claim
@@ -85,6 +87,16 @@ def drop_empty_ramps(params: np.ndarray) -> None:
     empty = params[:, cb.P_RAMP_HEIGHT] == 0.0
     params[empty, cb.P_RAMP_WIDTH] = 0.0
     params[empty, cb.P_RAMP_VELOCITY] = 0.0
+
+
+def first_convex_mark(low: np.ndarray, convex: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+    """The smallest rise angle on a 0.1° mark [deg] at which each law is convex, from a
+    bisection that left it concave at ``low`` [deg] and convex at most 0.1° above: the mark at
+    or above ``low`` if ``convex`` (rise angles [deg] → convex or not) says so, else the next
+    one. Rounding the convex end up instead could name a mark 0.1° late, one that is not the
+    first convex one (an audit: 73.8° where 73.7° is convex)."""
+    mark = np.ceil(np.round(low * 10.0, 9)) / 10.0
+    return np.where(convex(mark), mark, mark + 0.1)
 
 
 def segment_parameters() -> tuple[Parameter, ...]:

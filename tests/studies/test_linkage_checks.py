@@ -115,8 +115,10 @@ def test_concave_chains_count_what_a_loop_over_the_points_finds() -> None:
     assert sum(map(len, listed)) + int(more.group(2)) == concave.sum()
 
 
-def test_rise_angle_advice_equals_a_bisection_one_chain_at_a_time() -> None:
-    # Reference: the plain 0.1° bisection of each law alone on its own tappet table.
+def test_rise_angle_advice_names_the_first_convex_mark_one_chain_at_a_time() -> None:
+    # The claim "convex from rise_angle = X": each law alone on its own tappet table is convex
+    # at X and concave 0.1° below. Rounding the bisection's convex end up named 73.8° for an
+    # audit's harmonic law convex from 73.684°.
     points = grid_points(12, law="poly345")
     points["rise_angle"] = np.radians(np.linspace(40.0, 60.0, 12))
     idx = np.arange(12)
@@ -126,14 +128,14 @@ def test_rise_angle_advice_equals_a_bisection_one_chain_at_a_time() -> None:
         one["rise_angle"] = np.array([math.radians(beta_deg)])
         return linkage_tappet.tappet_table(one, 0, linkage_tappet.ADVICE_STEP_DEG).min_radius > 0.0
 
-    expected = []
-    for i in idx:
-        low, high = math.degrees(points["rise_angle"][i]), linkage_tappet.ADVICE_LIMIT_DEG
-        while high - low > 0.1:
-            middle = 0.5 * (low + high)
-            low, high = (low, middle) if convex(i, middle) else (middle, high)
-        expected.append(f"it is convex from rise_angle = {math.ceil(high * 10) / 10:g} degree")
-    assert linkage_tappet._convex_from(points, idx) == expected
+    said = linkage_tappet._convex_from(points, idx)
+    for i, line in zip(idx, said, strict=True):
+        found = re.fullmatch(r"it is convex from rise_angle = ([\d.]+) degree", line)
+        assert found, line
+        mark = float(found.group(1))
+        assert round(mark * 10) == pytest.approx(mark * 10, abs=1e-9)
+        assert convex(i, mark)
+        assert not convex(i, mark - 0.1)
 
 
 def test_check_and_warnings_group_the_chains_once(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -18,7 +18,7 @@ import numpy as np
 from engine_kernels._jit import claim
 from studies.scenes import cam_radius
 from studies.scenes.cam.scene import kernel_inputs
-from studies.scenes.cam_laws import LAW_CODES, codes
+from studies.scenes.cam_laws import LAW_CODES, codes, first_convex_mark
 from studies.scenes.checks import (
     PointProblems,
     convex_advice,
@@ -45,7 +45,7 @@ SHAPE = (
 LISTED_CAMS = 10
 """At most this many concave cams are warned one by one, each with a rise-angle search; the
 others are counted in one line (a check of 10⁴ points stays short and fast)."""
-ADVICE_RESOLUTION_DEG = 0.01  # the advice is rounded up to 0.1°
+ADVICE_RESOLUTION_DEG = 0.1  # then the first convex 0.1° mark (first_convex_mark)
 NO_ADVICE = ("six_segment", "table")  # their shape does not scale with the rise angle alone
 MM = 1e3
 
@@ -146,12 +146,13 @@ def _convex_from(
         middle = 0.5 * (low + high)
         ok = convex(middle)
         high, low = np.where(ok, middle, high), np.where(ok, low, middle)
+    marks = first_convex_mark(low, convex)
     return [
-        f"it is convex from rise_angle = {math.ceil(h * 10) / 10:g} degree"
+        f"it is convex from rise_angle = {h:g} degree"
         if fine
         else (
             f"no rise angle up to {top:g} degree makes it convex: use a larger base_radius or "
             "a smaller lift"
         )
-        for h, fine in zip(high, reachable, strict=True)
+        for h, fine in zip(marks.tolist(), reachable, strict=True)
     ]

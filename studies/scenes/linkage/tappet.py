@@ -20,7 +20,13 @@ from engine_kernels.cam import kinematics as cb
 from engine_kernels.cam import lift_laws, multi_segment
 from engine_kernels.valvetrain import rocker, rocker_batches
 from studies.scenes import cam_radius
-from studies.scenes.cam_laws import LAW_CODES, SHAPE_CODES, codes, drop_empty_ramps
+from studies.scenes.cam_laws import (
+    LAW_CODES,
+    SHAPE_CODES,
+    codes,
+    drop_empty_ramps,
+    first_convex_mark,
+)
 from studies.scenes.checks import PointProblems, convex_advice, more_concave_line, take
 
 HALF_TURN_DEG = 180.0
@@ -214,15 +220,16 @@ def _convex_from(points: dict[str, np.ndarray], idx: np.ndarray) -> list[str]:
     high = np.full(len(idx), ADVICE_LIMIT_DEG)
     reachable = convex(every, high)
     low = np.degrees(np.asarray(points["rise_angle"], dtype=float)[idx])
-    high = _bisect(low, high, convex)
+    low, _ = _bisect(low, high, convex)
+    marks = first_convex_mark(low, lambda beta: convex(every, beta))
     return [
-        f"it is convex from rise_angle = {math.ceil(h * 10) / 10:g} degree"
+        f"it is convex from rise_angle = {h:g} degree"
         if fine
         else (
             f"no rise angle up to {ADVICE_LIMIT_DEG:g} degree makes it convex: use a larger "
             "base_radius or a smaller valve_lift"
         )
-        for h, fine in zip(high.tolist(), reachable.tolist(), strict=True)
+        for h, fine in zip(marks.tolist(), reachable.tolist(), strict=True)
     ]
 
 
@@ -230,8 +237,8 @@ def _bisect(
     low: np.ndarray,
     high: np.ndarray,
     convex: Callable[[np.ndarray, np.ndarray], np.ndarray],
-) -> np.ndarray:
-    """The upper ends [deg] of bisections of [low, high] (convex at high) down to 0.1°, each
+) -> tuple[np.ndarray, np.ndarray]:
+    """The ends [deg] of bisections of [low, high] (convex at high) down to 0.1°, each
     stopping at its own 0.1° as if alone: ``convex(which, beta)`` says whether laws ``which``
     are convex at rise angles ``beta``. Every midpoint the next :data:`BISECT_DEPTH` steps
     could visit is evaluated in one call (a tree of 2^depth − 1 per law), then walked."""
@@ -257,4 +264,4 @@ def _bisect(
             low = np.where(active & ~fine, middle, low)
             high = np.where(active & fine, middle, high)
             at = np.where(fine, 2 * at, 2 * at + 1)
-    return high
+    return low, high
