@@ -1,5 +1,6 @@
 """Figures of the ``cam`` scene: ``cam_curves.png`` (every stored curve over cam angle, a line
-per design point in the order of the factor values).
+per design point in the order of the factor values; at most ``MAX_LINES`` of them, evenly spread
+over that order, the title saying how many of how many).
 """
 
 from __future__ import annotations
@@ -17,6 +18,8 @@ from studies.common.figure_layout import (
 from studies.common.figure_style import axis_label
 
 MAX_LEGEND_RUNS = 12
+MAX_LINES = 200
+"""Design points drawn at most: more lines say nothing more and cost seconds each hundred."""
 
 
 def cam_curves_figure(ds: xr.Dataset) -> Figure | None:
@@ -27,10 +30,17 @@ def cam_curves_figure(ds: xr.Dataset) -> Figure | None:
     factors = json.loads(ds.attrs.get("factors", "[]"))
     fig = Figure(figsize=(6.0, 2.4 * len(names)), layout="constrained")
     axes = fig.subplots(len(names), 1, sharex=True, squeeze=False)[:, 0]
-    colours = run_colours(ds.sizes["run"])
     # Colours and legend in the order of the factor values (the first factor varying slowest).
     order = np.lexsort([ds[f].values for f in reversed(factors)]) if factors else None
     runs = order if order is not None else np.arange(ds.sizes["run"])
+    title = "Cam curves per design point"
+    if runs.size > MAX_LINES:
+        runs = runs[np.unique(np.linspace(0, runs.size - 1, MAX_LINES).round().astype(int))]
+        title = (
+            f"Cam curves of {runs.size} of {ds.sizes['run']} design points "
+            "(evenly spread in the order of the factor values)"
+        )
+    colours = run_colours(runs.size)
     for ax, name in zip(axes, names, strict=True):
         for shade, run in enumerate(runs):
             label = ", ".join(f"{f} {shown_value(ds, f, ds[f].values[run])}" for f in factors)
@@ -43,5 +53,5 @@ def cam_curves_figure(ds: xr.Dataset) -> Figure | None:
     )
     if ds.sizes["run"] <= MAX_LEGEND_RUNS:
         axes[0].legend(fontsize="x-small", loc="upper right")
-    fig.suptitle("Cam curves per design point", fontsize="medium")
+    fig.suptitle(title, fontsize="medium")
     return fig
