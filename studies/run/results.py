@@ -34,6 +34,7 @@ from studies.common.blocks import code_range, first_runs, run_slices
 from studies.common.errors import OutputsError, StudyError
 from studies.define.plan import Plan, noise_label
 from studies.run.runner import Evaluation
+from studies.scenes.base import NOT_EVALUATED
 
 COMPRESSION_LEVEL: Final = 4
 COMPRESSION = {"zlib": True, "complevel": COMPRESSION_LEVEL}
@@ -41,7 +42,6 @@ COMPRESSION = {"zlib": True, "complevel": COMPRESSION_LEVEL}
 # writing every variable of a 10⁷-run file once, in order, would fill a gigabyte of them. One
 # mebibyte holds the few chunks that sequential access touches.
 CHUNK_CACHE_BYTES = 1 << 20
-NOT_EVALUATED: Final = -1  # stored value of a flag or status code at a point that did not run
 PASS_FAIL: Final = "not_evaluated fails passes"
 ORDER_BLOCK: Final = 1 << 20  # runs placed at once when a full factorial's grid order is made
 RUN_CHUNK: Final = 4096  # runs per netCDF chunk of a variable along run (coordinates too)

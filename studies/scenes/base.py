@@ -147,6 +147,11 @@ class Parameter:
 NONE_MEANINGS = ("best", "worst", "unknown")
 
 
+NOT_EVALUATED = -1
+"""Stored value of a flag or status code where it was not evaluated: at a point that did not
+run, or a check whose value could not be computed there (a scene gives NaN)."""
+
+
 @dataclass(frozen=True)
 class Response:
     """A scalar result per design point, in ``units``; ``needs`` lists the stages it uses.

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -145,6 +146,14 @@ def test_checks_not_evaluated_are_left_out_of_the_level_means(tmp_path: Path) ->
             expected = mine.mean() if mine.size else np.nan
             np.testing.assert_equal(k[level], expected)
             assert left[level] == ((codes == level) & (flags == -1)).sum()
+    # analysis.txt counted the passes as the sum of the flags: "-56 of 64" after this change
+    text = (result.folder / "analysis.txt").read_text(encoding="utf-8")
+    passes, unknown, n = (flags == 1).sum(), (flags == -1).sum(), flags.size
+    assert re.search(rf"\n *coupling .* {passes} of {n} \({unknown} not evaluated\)\n", text)
+    motor = result.dataset["motor_ok"].values
+    lines = text.split("Failing checks per design point\n")[1].splitlines()[1:]
+    for line, fails in zip(lines, motor == 0, strict=False):
+        assert line.endswith("motor; not evaluated: coupling" if fails else "none")
 
 
 @pytest.mark.parametrize(
