@@ -73,6 +73,11 @@ def few_levels(ds: xr.Dataset, factor: str) -> list[int]:
     return levels
 
 
+def middle_level(levels: Sequence[int]) -> int:
+    """The level a figure holds a factor at: the middle one (the lower of two middles)."""
+    return levels[(len(levels) - 1) // 2]
+
+
 def raw_value(ds: xr.Dataset, factor: str, level: int):
     """The factor's value at a level (taken from the first run at that level)."""
     run = first_run(ds[f"{factor}_level"].variable, level)
@@ -114,7 +119,7 @@ class Layout:
         levels = {f: few_levels(ds, f) for f in others}
         self.row = others[0] if len(others) > 1 else None
         self.col = others[1] if len(others) > 1 else others[0] if others else None
-        self.held = {f: levels[f][(len(levels[f]) - 1) // 2] for f in others[2:]}
+        self.held = {f: middle_level(levels[f]) for f in others[2:]}
         self.rows = levels[self.row] if self.row else [0]
         self.cols = levels[self.col] if self.col else [0]
         self.ds = ds
@@ -159,10 +164,15 @@ def line_levels(ds: xr.Dataset, factor: str | None) -> list[tuple[str, dict[str,
     return [(value_text(ds, factor, lv), {factor: lv}) for lv in few_levels(ds, factor)]
 
 
+def spread(count: int, limit: int) -> np.ndarray:
+    """Indices 0 … count − 1, or ``limit`` of them evenly spread (first and last kept) when
+    there are more."""
+    return np.unique(np.linspace(0, count - 1, min(count, limit)).astype(np.int64))
+
+
 def spread_runs(ds: xr.Dataset) -> np.ndarray:
     """Every run, or ``MAX_POINTS`` of them evenly spread over the runs when there are more."""
-    runs = ds.sizes["run"]
-    return np.unique(np.linspace(0, runs - 1, min(runs, MAX_POINTS)).astype(np.int64))
+    return spread(ds.sizes["run"], MAX_POINTS)
 
 
 def scatter_figure(

@@ -325,7 +325,7 @@ def as_table(rows: list[dict[str, Any]], columns: list[str] | None = None) -> st
     declared = {c: {_locate(r, c)[1] for r in rows} - {""} for c in columns}
     mixed = {c for c in columns if len(declared[c]) > 1}  # scenes declaring other units
     shown = [[_column(r, c, c in mixed) for c in columns] for r in rows]
-    heads = [_header(c, "" if c in mixed else _declared(rows, c)) for c in columns]
+    heads = [_header(c, "" if c in mixed else next(iter(declared[c]), "")) for c in columns]
     widths = [max([len(h)] + [len(v[i]) for v in shown]) for i, h in enumerate(heads)]
     extra = "".join(f" {h:>{w}}" for h, w in zip(heads, widths, strict=True))
     lines = [
@@ -355,11 +355,6 @@ def check_columns(rows: list[dict[str, Any]], columns: list[str]) -> None:
             f"(known: {', '.join(sorted(known))})"
         )
         raise StudyError(msg)
-
-
-def _declared(rows: list[dict[str, Any]], column: str) -> str:
-    """The unit a column is shown in: the scene's for that name."""
-    return next((_locate(r, column)[1] for r in rows if _locate(r, column)[1]), "")
 
 
 def _column(row: dict[str, Any], column: str, with_units: bool = False) -> str:

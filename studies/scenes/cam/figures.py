@@ -11,10 +11,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from studies.common.figure_layout import (
-    run_colours,
-    shown_value,
-)
+from studies.common.figure_layout import run_colours, shown_value, spread
 from studies.common.figure_style import axis_label
 
 MAX_LEGEND_RUNS = 12
@@ -35,7 +32,7 @@ def cam_curves_figure(ds: xr.Dataset) -> Figure | None:
     runs = order if order is not None else np.arange(ds.sizes["run"])
     title = "Cam curves per design point"
     if runs.size > MAX_LINES:
-        runs = runs[np.unique(np.linspace(0, runs.size - 1, MAX_LINES).round().astype(int))]
+        runs = runs[spread(runs.size, MAX_LINES)]
         title = (
             f"Cam curves of {runs.size} of {ds.sizes['run']} design points "
             "(evenly spread in the order of the factor values)"

@@ -16,6 +16,7 @@ from studies.common.figure_layout import (
     few_levels,
     line_levels,
     long_label,
+    middle_level,
     runs_where,
     value_text,
 )
@@ -101,7 +102,7 @@ def approximation_error_figure(ds: xr.Dataset) -> Figure | None:
         return None
     speed = "engine_speed" if "engine_speed" in design_factors(ds) else None
     others = [f for f in design_factors(ds) if f not in ("rod_ratio", speed)]
-    held = {f: few_levels(ds, f)[(len(few_levels(ds, f)) - 1) // 2] for f in others}
+    held = {f: middle_level(few_levels(ds, f)) for f in others}
     cols = min(3, len(names))
     rows = -(-len(names) // cols)
     fig = Figure(figsize=(PANEL[0] * cols, PANEL[1] * rows + 0.6), layout="constrained")

@@ -220,7 +220,7 @@ def _convex_from(points: dict[str, np.ndarray], idx: np.ndarray) -> list[str]:
     high = np.full(len(idx), ADVICE_LIMIT_DEG)
     reachable = convex(every, high)
     low = np.degrees(np.asarray(points["rise_angle"], dtype=float)[idx])
-    low, _ = _bisect(low, high, convex)
+    low = _bisect(low, high, convex)
     marks = first_convex_mark(low, lambda beta: convex(every, beta))
     return [
         f"it is convex from rise_angle = {h:g} degree"
@@ -237,10 +237,10 @@ def _bisect(
     low: np.ndarray,
     high: np.ndarray,
     convex: Callable[[np.ndarray, np.ndarray], np.ndarray],
-) -> tuple[np.ndarray, np.ndarray]:
-    """The ends [deg] of bisections of [low, high] (convex at high) down to 0.1°, each
-    stopping at its own 0.1° as if alone: ``convex(which, beta)`` says whether laws ``which``
-    are convex at rise angles ``beta``. Every midpoint the next :data:`BISECT_DEPTH` steps
+) -> np.ndarray:
+    """The lower (concave) ends [deg] of bisections of [low, high] (convex at high) down to
+    0.1°, each stopping at its own 0.1° as if alone: ``convex(which, beta)`` says whether laws
+    ``which`` are convex at rise angles ``beta``. Every midpoint the next :data:`BISECT_DEPTH` steps
     could visit is evaluated in one call (a tree of 2^depth − 1 per law), then walked."""
     rows = np.arange(low.size)
     nodes = 2**BISECT_DEPTH
@@ -264,4 +264,4 @@ def _bisect(
             low = np.where(active & ~fine, middle, low)
             high = np.where(active & fine, middle, high)
             at = np.where(fine, 2 * at, 2 * at + 1)
-    return low, high
+    return low
